@@ -1,0 +1,3 @@
+"""The batlab application: command line, registry of bats, reports."""
+
+__version__ = "0.1.0"

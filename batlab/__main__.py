@@ -1,0 +1,5 @@
+import sys
+
+from batlab.cli import main
+
+sys.exit(main())

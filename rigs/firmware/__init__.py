@@ -1,0 +1,1 @@
+"""Reference firmware for the acquisition box (not run by the host package)."""
