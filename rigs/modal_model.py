@@ -1,0 +1,58 @@
+"""Modal model of a test object at its test points, as the virtual rig uses it.
+
+With real, mass-normalised modes phi (1/sqrt(kg)) and viscous modal damping, the
+receptance between points j and k is
+
+    H_jk(w) = sum_r phi_jr phi_kr / (w_r^2 - w^2 + 2 i zeta_r w_r w)      [m/N]
+
+and accelerance is -w^2 times receptance [(m/s^2)/N] (Ewins, Modal Testing, ch. 2).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+
+@dataclass(frozen=True)
+class ModalModel:
+    """Modes of a structure sampled at its test points.
+
+    Attributes:
+        freq_hz: (m,) undamped natural frequencies, Hz (rigid-body/suspension modes included).
+        damping_ratio: (m,) viscous modal damping ratios.
+        shapes: (n_points, m) real mass-normalised mode shapes at the points, 1/sqrt(kg).
+        x_m: (n_points,) positions of the points along the bat axis from the knob end, m.
+    """
+
+    freq_hz: np.ndarray
+    damping_ratio: np.ndarray
+    shapes: np.ndarray
+    x_m: np.ndarray
+
+    def __post_init__(self) -> None:
+        f = np.atleast_1d(np.asarray(self.freq_hz, dtype=float))
+        z = np.broadcast_to(np.asarray(self.damping_ratio, dtype=float), f.shape).copy()
+        s = np.asarray(self.shapes, dtype=float).reshape(-1, f.size)
+        x = np.atleast_1d(np.asarray(self.x_m, dtype=float))
+        if x.size != s.shape[0]:
+            raise ValueError("one position per shape row is required")
+        object.__setattr__(self, "freq_hz", f)
+        object.__setattr__(self, "damping_ratio", z)
+        object.__setattr__(self, "shapes", s)
+        object.__setattr__(self, "x_m", x)
+
+    def receptance(self, freq_hz: np.ndarray, resp: np.ndarray, ref: np.ndarray) -> np.ndarray:
+        """Receptance H[f, i, j] (m/N) between points ``resp[i]`` and ``ref[j]`` (indices)."""
+        w = 2 * np.pi * np.asarray(freq_hz, dtype=float)[:, None]
+        wr = 2 * np.pi * self.freq_hz[None, :]
+        den = wr**2 - w**2 + 2j * self.damping_ratio[None, :] * wr * w  # (F, m)
+        a = self.shapes[np.asarray(resp)]  # (n_resp, m)
+        b = self.shapes[np.asarray(ref)]  # (n_ref, m)
+        return np.einsum("im,jm,fm->fij", a, b, 1.0 / den)
+
+    def accelerance(self, freq_hz: np.ndarray, resp: np.ndarray, ref: np.ndarray) -> np.ndarray:
+        """Accelerance H[f, i, j] ((m/s^2)/N) = -w^2 times the receptance."""
+        w2 = (2 * np.pi * np.asarray(freq_hz, dtype=float)) ** 2
+        return -w2[:, None, None] * self.receptance(freq_hz, resp, ref)
