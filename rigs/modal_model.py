@@ -36,7 +36,7 @@ class ModalModel:
         z = np.broadcast_to(np.asarray(self.damping_ratio, dtype=float), f.shape).copy()
         s = np.asarray(self.shapes, dtype=float).reshape(-1, f.size)
         x = np.atleast_1d(np.asarray(self.x_m, dtype=float))
-        if x.size != s.shape[0]:
+        if x.size != s.shape[0]:  # NaN positions are allowed (off-grid sensors)
             raise ValueError("one position per shape row is required")
         object.__setattr__(self, "freq_hz", f)
         object.__setattr__(self, "damping_ratio", z)

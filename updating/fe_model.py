@@ -213,7 +213,7 @@ def with_attachments(model: BatModel, attachments: tuple[Attachment, ...]) -> Ba
     return replace(model, attachments=tuple(attachments))
 
 
-def _point_vector(model: BatModel, x_m: float) -> tuple[np.ndarray, np.ndarray]:
+def point_vector(model: BatModel, x_m: float) -> tuple[np.ndarray, np.ndarray]:
     """(dofs, N_w) of the element containing x: a point load's consistent distribution."""
     from updating.beam_element import shape_functions
 
@@ -232,10 +232,19 @@ def attachment_matrices(model: BatModel) -> tuple[np.ndarray, np.ndarray]:
     Ka = np.zeros((model.n_dof, model.n_dof))
     Ma = np.zeros_like(Ka)
     for a in model.attachments:
-        dofs, n = _point_vector(model, a.x_m)
+        dofs, n = point_vector(model, a.x_m)
         Ka[np.ix_(dofs, dofs)] += a.k_n_per_m * np.outer(n, n)
         Ma[np.ix_(dofs, dofs)] += a.mass_kg * np.outer(n, n)
     return Ka, Ma
+
+
+def displacement_at(model: BatModel, shapes: np.ndarray, x_m) -> np.ndarray:
+    """Transverse displacement of DOF vectors ``shapes`` (n, m) at positions x_m, (len(x), m)."""
+    rows = []
+    for x in np.atleast_1d(np.asarray(x_m, dtype=float)):
+        dofs, n = point_vector(model, float(x))
+        rows.append(n @ shapes[dofs])
+    return np.array(rows)
 
 
 def place(model: BatModel, element_mats: np.ndarray, factors=None) -> np.ndarray:
