@@ -35,12 +35,13 @@ class MeasuredModes:
                              self.damping_ratio[idx], self.sensor_x_m, std)
 
 
-def from_fit(fit, min_hz: float = 20.0) -> MeasuredModes:
+def from_fit(fit, sensor_x_m: float, min_hz: float = 20.0) -> MeasuredModes:
     """Elastic modes (above ``min_hz``) of an ``ema`` modal fit (duck-typed: freq_hz,
-    damping_ratio, real_shapes, x_m, freq_std_hz, driving-point position ``sensor_x_m``)."""
+    damping_ratio, real_shapes, x_m, optional freq_std_hz); ``sensor_x_m`` is the driving
+    point's position."""
     keep = np.flatnonzero(np.asarray(fit.freq_hz) >= min_hz)
     std = getattr(fit, "freq_std_hz", None)
     return MeasuredModes(
         np.asarray(fit.freq_hz)[keep], np.asarray(fit.real_shapes)[:, keep],
-        np.asarray(fit.x_m), np.asarray(fit.damping_ratio)[keep], float(fit.sensor_x_m),
+        np.asarray(fit.x_m), np.asarray(fit.damping_ratio)[keep], float(sensor_x_m),
         None if std is None else np.asarray(std)[keep])

@@ -131,3 +131,30 @@ def simulate_test(
 def with_changes(bat: VirtualBat, **changes) -> VirtualBat:
     """A copy of the set-up with some fields changed (a re-test weeks later, say)."""
     return replace(bat, **changes)
+
+
+def simulate_modes(
+    bat: VirtualBat, n_modes: int = 6, freq_noise: float = 5e-4, shape_noise: float = 0.01,
+    seed: int | None = None,
+):
+    """Modes as a good modal fit of ``bat``'s test would give them, without the FRF stage.
+
+    The truth model's elastic modes at the impact points (the accelerometer's own mass and
+    position included), mass-normalised, with relative Gaussian noise on frequencies and
+    shape entries (``shape_noise`` times each shape's RMS). For fast tests of the updating
+    stage; the full path (simulate_test + ema fit) is the real thing.
+    """
+    from updating.measured import MeasuredModes
+
+    model = bat.truth_model()
+    modes = model_modes(model, n_modes=min(model.n_dof, n_modes + 4))
+    elastic = np.flatnonzero(modes.freq_hz >= 20.0)[:n_modes]
+    points = np.asarray(bat.points_m, dtype=float)
+    shapes = displacement_at(model, modes.shapes[:, elastic], points)
+    rng = np.random.default_rng(seed)
+    f = modes.freq_hz[elastic] * (1 + freq_noise * rng.standard_normal(elastic.size))
+    rms = np.sqrt(np.mean(shapes**2, axis=0))
+    shapes = shapes + shape_noise * rms * rng.standard_normal(shapes.shape)
+    zeta = damping_ratios(modes.freq_hz[elastic], bat.zeta1, bat.zeta_exponent)
+    return MeasuredModes(f, shapes, points, zeta, float(points[bat.sensor_point()]),
+                         freq_noise * f)
