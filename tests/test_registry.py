@@ -1,0 +1,256 @@
+"""The SQLite registry: CRUD, checksums, migrations, concurrent writers, killed writers."""
+
+from __future__ import annotations
+
+import json
+import multiprocessing as mp
+import os
+import signal
+import sqlite3
+import time
+
+import pytest
+
+from batlab import registry as reg
+
+
+def make_bat(serial: str, n_points: int = 5) -> reg.BatRecord:
+    x = [0.0, 0.1, 0.1, 0.5, 0.86]
+    d = [0.04, 0.04, 0.025, 0.05, 0.065]
+    modes = {"freq_hz": [170.0, 560.0], "damping_ratio": [0.005, 0.007],
+             "shapes": [[0.1 * i, -0.2 * i] for i in range(n_points)],
+             "x_m": [0.1 * i for i in range(n_points)], "sensor_x_m": 0.4,
+             "freq_std_hz": [0.1, 0.2]}
+    return reg.BatRecord(serial=serial, profile_x_m=x, profile_diameter_m=d,
+                         meta={"serial": serial, "species": "white ash", "weight_lb": 2.2},
+                         species="white ash", reference={"E_pa": 1.2e10, "rho_kg_m3": 600.0},
+                         modes=modes)
+
+
+def test_default_path_from_env(tmp_path):
+    assert reg.default_db_path({"BATLAB_DB": str(tmp_path / "a.db")}) == tmp_path / "a.db"
+    assert reg.default_db_path({"XDG_DATA_HOME": str(tmp_path)}) == (
+        tmp_path / "batlab" / "registry.sqlite")
+    assert reg.default_db_path({}).parts[-4:] == (".local", "share", "batlab", "registry.sqlite")
+
+
+def test_register_get_list_history(tmp_path):
+    with reg.open_registry(tmp_path / "sub" / "r.sqlite") as conn:
+        assert reg.schema_version(conn) == reg.SCHEMA_VERSION
+        assert conn.execute("PRAGMA journal_mode").fetchone()[0] == "wal"
+        bat = make_bat("HX-1")
+        stored = reg.add_bat(conn, bat, "base.uff", b"UFF bytes 1")
+        assert stored.baseline_sha256 == reg.sha256_bytes(b"UFF bytes 1")
+        assert stored.profile_x_m == bat.profile_x_m
+        assert stored.profile_diameter_m == bat.profile_diameter_m
+        assert stored.modes == bat.modes and stored.reference == bat.reference
+        assert stored.baseline_name == "base.uff" and stored.species == "white ash"
+        assert reg.baseline_file(conn, stored) == b"UFF bytes 1"
+
+        with pytest.raises(ValueError, match="already registered"):
+            reg.add_bat(conn, make_bat("HX-1"), "other.uff", b"other")
+        reg.add_bat(conn, make_bat("HX-0"), "b0.uff", b"zero")
+
+        first = reg.add_inspection(conn, "HX-1", {"altered": False}, "r1.uff", "aa",
+                                   stored.baseline_sha256)
+        second = reg.add_inspection(conn, "HX-1", {"altered": True, "x": 1}, "r2.uff", "bb",
+                                    stored.baseline_sha256, report_path="/tmp/rep")
+        hist = reg.history(conn, "HX-1")
+        assert [h.id for h in hist] == [first.id, second.id]
+        assert [h.altered for h in hist] == [False, True]
+        assert hist[1].verdict == {"altered": True, "x": 1}
+        assert hist[1].report_path == "/tmp/rep" and hist[1].retest_sha256 == "bb"
+
+        bats = reg.list_bats(conn)
+        assert [b.serial for b in bats] == ["HX-0", "HX-1"]
+        assert bats[0].n_inspections == 0 and bats[0].last_altered is None
+        assert bats[1].n_inspections == 2 and bats[1].last_altered is True
+
+        with pytest.raises(ValueError, match="unknown serial"):
+            reg.get_bat(conn, "NOPE")
+        with pytest.raises(ValueError, match="unknown serial"):
+            reg.history(conn, "NOPE")
+        with pytest.raises(ValueError, match="unknown serial"):
+            reg.add_inspection(conn, "NOPE", {"altered": False}, "r", "cc", "dd")
+
+
+def test_replace_keeps_history_and_drops_orphan_baseline(tmp_path):
+    with reg.open_registry(tmp_path / "r.sqlite") as conn:
+        old = reg.add_bat(conn, make_bat("S1"), "a.uff", b"first")
+        reg.add_inspection(conn, "S1", {"altered": False}, "r.uff", "11", old.baseline_sha256)
+        shorter = reg.BatRecord(**{**make_bat("S1").__dict__, "profile_x_m": [0.0, 0.8],
+                                   "profile_diameter_m": [0.03, 0.06]})
+        new = reg.add_bat(conn, shorter, "b.uff", b"second", replace=True)
+        assert new.profile_x_m == [0.0, 0.8] and reg.baseline_file(conn, new) == b"second"
+        hist = reg.history(conn, "S1")
+        assert len(hist) == 1 and hist[0].baseline_sha256 == old.baseline_sha256
+        # the old baseline is still referenced by the inspection, so it is kept
+        assert conn.execute("SELECT count(*) FROM baseline_files").fetchone()[0] == 2
+        reg.add_bat(conn, make_bat("S1"), "c.uff", b"third", replace=True)
+        # "second" is referenced by nothing any more
+        names = {r[0] for r in conn.execute("SELECT name FROM baseline_files")}
+        assert names == {"a.uff", "c.uff"}
+
+
+def test_tampered_baseline_is_detected(tmp_path):
+    path = tmp_path / "r.sqlite"
+    with reg.open_registry(path) as conn:
+        reg.add_bat(conn, make_bat("T1"), "a.uff", b"genuine baseline data")
+    raw = sqlite3.connect(path)
+    raw.execute("UPDATE baseline_files SET content = ?", (b"genuine baseline dat4",))
+    raw.commit()
+    raw.close()
+    with reg.open_registry(path) as conn:
+        bat = reg.get_bat(conn, "T1")
+        with pytest.raises(ValueError, match="checksum"):
+            reg.baseline_file(conn, bat)
+
+
+def test_failed_transaction_leaves_nothing(tmp_path):
+    with reg.open_registry(tmp_path / "r.sqlite") as conn:
+        bad = reg.BatRecord(**{**make_bat("B1").__dict__, "profile_diameter_m": [0.04]})
+        with pytest.raises(ValueError):  # zip(strict=True) fails after the bat row went in
+            reg.add_bat(conn, bad, "a.uff", b"x")
+        assert not conn.in_transaction
+        assert reg.list_bats(conn) == []
+        assert conn.execute("SELECT count(*) FROM baseline_files").fetchone()[0] == 0
+
+
+def test_migration_from_v1(tmp_path):
+    path = tmp_path / "old.sqlite"
+    conn = reg.connect(path, target=1)
+    assert reg.schema_version(conn) == 1
+    prof = {"x_m": [0.0, 0.4, 0.86], "diameter_m": [0.03, 0.035, 0.066]}
+    blob = b"old baseline"
+    conn.execute(
+        "INSERT INTO bats VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?)",
+        ("V1", json.dumps(prof), json.dumps({"serial": "V1", "species": "maple"}),
+         json.dumps({"E_pa": 1e10}), json.dumps({"freq_hz": [1.0]}), "base.uff",
+         reg.sha256_bytes(blob), blob, "2026-01-01T00:00:00+00:00"))
+    conn.execute("INSERT INTO inspections (serial, verdict_json, retest_sha256, inspected_at) "
+                 "VALUES ('V1', ?, 'abc', '2026-02-01T00:00:00+00:00')",
+                 (json.dumps({"serial": "V1", "altered": True}),))
+    conn.close()
+
+    with reg.open_registry(path) as conn:
+        assert reg.schema_version(conn) == reg.SCHEMA_VERSION == 2
+        versions = [r[0] for r in conn.execute("SELECT version FROM schema_version")]
+        assert versions == [1, 2]
+        bat = reg.get_bat(conn, "V1")
+        assert bat.profile_x_m == prof["x_m"] and bat.profile_diameter_m == prof["diameter_m"]
+        assert bat.species == "maple" and bat.reference == {"E_pa": 1e10}
+        assert reg.baseline_file(conn, bat) == blob
+        (insp,) = reg.history(conn, "V1")
+        assert insp.altered is True and insp.retest_sha256 == "abc"
+        assert insp.baseline_sha256 == reg.sha256_bytes(blob)
+        assert conn.execute("PRAGMA foreign_key_check").fetchall() == []
+        assert conn.execute("PRAGMA integrity_check").fetchone()[0] == "ok"
+        # the migrated database is fully usable
+        reg.add_inspection(conn, "V1", {"altered": False}, "r.uff", "def", bat.baseline_sha256)
+        assert [i.altered for i in reg.history(conn, "V1")] == [True, False]
+
+
+def test_newer_schema_is_refused(tmp_path):
+    path = tmp_path / "r.sqlite"
+    reg.connect(path).close()
+    raw = sqlite3.connect(path)
+    raw.execute("INSERT INTO schema_version VALUES (99, 'future')")
+    raw.commit()
+    raw.close()
+    with pytest.raises(ValueError, match="newer"):
+        reg.connect(path)
+
+
+def test_not_a_database(tmp_path):
+    path = tmp_path / "junk.sqlite"
+    path.write_bytes(b"this is not sqlite" * 100)
+    with pytest.raises(ValueError, match="junk.sqlite"):
+        reg.connect(path)
+
+
+# --- several processes at once -----------------------------------------------------------
+
+
+def _worker(path: str, worker: int, n: int) -> None:
+    with reg.open_registry(path) as conn:
+        reg.add_bat(conn, make_bat(f"W{worker}"), f"w{worker}.uff", f"w{worker}".encode())
+        shared = None
+        for _ in range(50):  # wait for worker 0's bat
+            try:
+                shared = reg.get_bat(conn, "W0")
+                break
+            except ValueError:
+                time.sleep(0.02)
+        assert shared is not None
+        for k in range(n):
+            reg.add_inspection(conn, "W0", {"altered": k % 2 == 0, "by": worker}, "r.uff",
+                               f"{worker}-{k}", shared.baseline_sha256)
+
+
+def test_concurrent_writers(tmp_path):
+    path = str(tmp_path / "busy.sqlite")  # created by the racing workers themselves
+    ctx = mp.get_context("spawn")
+    procs = [ctx.Process(target=_worker, args=(path, w, 15)) for w in range(4)]
+    for p in procs:
+        p.start()
+    for p in procs:
+        p.join(60)
+    assert [p.exitcode for p in procs] == [0, 0, 0, 0]
+    with reg.open_registry(path) as conn:
+        assert [b.serial for b in reg.list_bats(conn)] == ["W0", "W1", "W2", "W3"]
+        hist = reg.history(conn, "W0")
+        assert len(hist) == 60
+        assert sorted(h.retest_sha256 for h in hist) == sorted(
+            f"{w}-{k}" for w in range(4) for k in range(15))
+        assert [r[0] for r in conn.execute("SELECT version FROM schema_version")] == [1, 2]
+
+
+# --- a writer killed mid-transaction -------------------------------------------------------
+
+
+def _die_mid_transaction(path: str, ready) -> None:
+    conn = reg.connect(path)
+    conn.execute("BEGIN IMMEDIATE")
+    conn.execute("INSERT INTO baseline_files VALUES ('dead', 'dead.uff', 4, x'00112233')")
+    conn.execute("INSERT INTO bats (serial, species, meta_json, reference_json, modes_json, "
+                 "baseline_sha256, registered_at) VALUES ('DEAD', '', '{}', '{}', '{}', 'dead', "
+                 "'now')")
+    ready.set()
+    time.sleep(60)  # killed here, before COMMIT
+
+
+def _inspect_forever(path: str, ready) -> None:
+    with reg.open_registry(path) as conn:
+        bat = reg.get_bat(conn, "K1")
+        k = 0
+        while True:
+            reg.add_inspection(conn, "K1", {"altered": False, "k": k, "pad": "x" * 5000},
+                               "r.uff", str(k), bat.baseline_sha256)
+            k += 1
+            if k == 20:
+                ready.set()
+
+
+def test_killed_writer_leaves_database_consistent(tmp_path):
+    path = str(tmp_path / "kill.sqlite")
+    with reg.open_registry(path) as conn:
+        reg.add_bat(conn, make_bat("K1"), "k.uff", b"k1")
+    ctx = mp.get_context("spawn")
+    for target in (_die_mid_transaction, _inspect_forever):
+        ready = ctx.Event()
+        proc = ctx.Process(target=target, args=(path, ready))
+        proc.start()
+        assert ready.wait(30)
+        os.kill(proc.pid, signal.SIGKILL)
+        proc.join(10)
+        assert proc.exitcode == -signal.SIGKILL
+    with reg.open_registry(path) as conn:
+        assert conn.execute("PRAGMA integrity_check").fetchone()[0] == "ok"
+        assert conn.execute("PRAGMA foreign_key_check").fetchall() == []
+        assert [b.serial for b in reg.list_bats(conn)] == ["K1"]  # DEAD never committed
+        hist = reg.history(conn, "K1")
+        assert len(hist) >= 20
+        assert [h.verdict["k"] for h in hist] == list(range(len(hist)))  # no gap, no torn row
+        bat = reg.get_bat(conn, "K1")
+        reg.add_inspection(conn, "K1", {"altered": True}, "r.uff", "after", bat.baseline_sha256)
+        assert reg.history(conn, "K1")[-1].retest_sha256 == "after"
