@@ -16,8 +16,9 @@ catch a missing or extra line."""
 def even_axis(freq_hz: np.ndarray, where: str) -> tuple[float, float]:
     """(f0, df) of an evenly spaced, increasing axis; ValueError naming ``where`` otherwise.
 
-    The grid is f_k = f0 + k df with f0 = f[0], df = (f[-1] - f[0]) / (n - 1); every line must
-    lie within EVEN_TOL * df of it.
+    The grid is f_k = f0 + k df with f0 = f[0] and df = (f[-1] - f[0]) / (n - 1) or f[1] - f[0],
+    whichever fits better (so that axes built as f0 + arange(n) * df come back bit for bit);
+    every line must lie within EVEN_TOL * df of it.
     """
     f = np.asarray(freq_hz, dtype=float)
     if f.size < 2:
@@ -27,7 +28,12 @@ def even_axis(freq_hz: np.ndarray, where: str) -> tuple[float, float]:
     df = (f[-1] - f[0]) / (f.size - 1)
     if not df > 0:
         raise ValueError(f"{where}: frequency axis is not increasing")
-    dev = np.abs(f - (f[0] + np.arange(f.size) * df))
+    k_lines = np.arange(f.size)
+    dev = np.abs(f - (f[0] + k_lines * df))
+    step = f[1] - f[0]  # reproduces arange(n) * df exactly where the end-point slope does not
+    dev_step = np.abs(f - (f[0] + k_lines * step))
+    if dev_step.max() < dev.max():
+        df, dev = step, dev_step
     k = int(np.argmax(dev))
     if dev[k] > EVEN_TOL * df:
         raise ValueError(
