@@ -159,6 +159,28 @@ def test_uneven_spacing_record_with_even_values_is_accepted(tmp_path):
     np.testing.assert_allclose(r.frf, t.frf, rtol=1e-10)
 
 
+def test_crlf_lines_and_big_endian_binary(tmp_path):
+    t = bat_test(n_points=4, n_lines=101)
+    p = tmp_path / "t.uff"
+    write_uff(p, t, binary=False)
+    p.write_bytes(p.read_bytes().replace(b"\n", b"\r\n"))
+    np.testing.assert_allclose(read_uff(p).frf, t.frf, rtol=1e-11)
+    write_uff(p, t, binary=True)
+    raw = bytearray(p.read_bytes())
+    pos = raw.find(b"    58b")
+    while pos >= 0:  # byte order field 2 = big endian, and swap the data to match
+        raw[pos + 7 : pos + 13] = b"     2"
+        start = pos
+        for _ in range(12):
+            start = raw.find(b"\n", start) + 1
+        n = 8 * 2 * t.freq_hz.size
+        le = np.frombuffer(raw[start : start + n], "<f8")
+        raw[start : start + n] = le.astype(">f8").tobytes()
+        pos = raw.find(b"    58b", start + n)
+    p.write_bytes(bytes(raw))
+    np.testing.assert_array_equal(read_uff(p).frf, t.frf)
+
+
 @settings(max_examples=12, deadline=None)
 @given(
     nodes=st.lists(st.integers(1, 99999), min_size=2, max_size=7, unique=True),
