@@ -23,6 +23,8 @@ def add_arguments(p) -> None:
     p.add_argument("--e-over-g", type=float, default=14.0, help="the wood's E/G (default 14)")
     p.add_argument("--E-scale", type=float, default=1.0,
                    help="true modulus / nominal modulus (board-to-board variation)")
+    p.add_argument("--density-scale", type=float, default=1.0,
+                   help="true density / nominal density")
     p.add_argument("--beam", choices=("euler", "timoshenko"), default="timoshenko")
     p.add_argument("--sensor-mass-g", type=float, default=3.0, help="accelerometer mass, g")
     p.add_argument("--sensor-offset-in", type=float, default=0.0,
@@ -49,7 +51,7 @@ def run(args) -> int:
     profile = read_profile_csv(args.profile) if args.profile else paper_profile()
     meta = read_meta(args.meta) if args.meta else None
     base = meta.material if meta else paper_material()
-    material = base.scaled(args.E_scale, 1.0)
+    material = base.scaled(args.E_scale, args.density_scale)
     material = type(material)(material.E_pa, material.rho_kg_m3, args.e_over_g, material.nu)
     if args.points:
         try:
