@@ -13,6 +13,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ema.atomic_write import atomic_write
 from updating.units import IN_TO_M
 
 
@@ -93,12 +94,9 @@ def read_profile_csv(path: str | Path) -> Profile:
 
 def write_profile_csv(path: str | Path, profile: Profile) -> None:
     """Write a profile as ``x_in,diameter_in`` (temporary file, then rename)."""
-    path = Path(path)
-    tmp = path.with_name(path.name + ".tmp")
     rows = np.column_stack([profile.x_m, profile.diameter_m]) / IN_TO_M
     lines = ["x_in,diameter_in"] + [f"{x:.4f},{d:.4f}" for x, d in rows]
-    tmp.write_text("\n".join(lines) + "\n")
-    tmp.replace(path)
+    atomic_write(path, lambda tmp: tmp.write_text("\n".join(lines) + "\n"))
 
 
 def paper_profile() -> Profile:
