@@ -16,6 +16,11 @@ import sys
 COMMANDS: tuple[str, ...] = (
     "model",
     "simulate",
+    "register",
+    "bats",
+    "history",
+    "inspect",
+    "demo",
 )
 
 

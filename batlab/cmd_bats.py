@@ -1,0 +1,35 @@
+"""`batlab bats`: the registered bats."""
+
+from __future__ import annotations
+
+import json
+from dataclasses import asdict
+
+from batlab.cli_support import add_db_argument, db_path
+
+HELP = "list the registered bats with their latest inspection"
+
+
+def add_arguments(p) -> None:
+    add_db_argument(p)
+    p.add_argument("--json", action="store_true", help="print JSON on stdout")
+
+
+def run(args) -> int:
+    from batlab.registry import list_bats, open_registry
+
+    with open_registry(db_path(args)) as conn:
+        bats = list_bats(conn)
+    if args.json:
+        print(json.dumps([asdict(b) for b in bats]))
+        return 0
+    if not bats:
+        print("no bats registered")
+        return 0
+    print(f"{'serial':<16} {'species':<14} {'registered (UTC)':<20} {'tests':>5}  latest")
+    for b in bats:
+        latest = "-" if b.last_altered is None else (
+            ("ALTERED" if b.last_altered else "not altered") + f" ({b.last_inspected_at[:19]})")
+        print(f"{b.serial:<16} {b.species:<14} {b.registered_at[:19]:<20} "
+              f"{b.n_inspections:>5}  {latest}")
+    return 0

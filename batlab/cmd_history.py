@@ -1,0 +1,42 @@
+"""`batlab history`: the inspections of one registered bat."""
+
+from __future__ import annotations
+
+import json
+from dataclasses import asdict
+
+from batlab.cli_support import add_db_argument, db_path
+
+HELP = "list the inspections of a registered bat, oldest first"
+
+
+def add_arguments(p) -> None:
+    p.add_argument("serial", help="the bat's serial number")
+    add_db_argument(p)
+    p.add_argument("--json", action="store_true", help="print JSON on stdout")
+
+
+def run(args) -> int:
+    from batlab.registry import get_bat, history, open_registry
+
+    with open_registry(db_path(args)) as conn:
+        bat = get_bat(conn, args.serial)
+        rows = history(conn, args.serial)
+    if args.json:
+        print(json.dumps({"serial": bat.serial, "registered_at": bat.registered_at,
+                          "baseline_sha256": bat.baseline_sha256,
+                          "inspections": [asdict(r) for r in rows]}))
+        return 0
+    print(f"{bat.serial}: registered {bat.registered_at[:19]} UTC, baseline {bat.baseline_name}")
+    if not rows:
+        print("  no inspections")
+    for r in rows:
+        v = r.verdict
+        what = "ALTERED" if r.altered else "not altered"
+        if r.altered and v.get("region_in"):
+            what += f" at {v['region_in'][0]:.1f}-{v['region_in'][1]:.1f} in"
+        conf = v.get("confidence")
+        conf_s = "" if conf is None else f", confidence {conf:.3f}"
+        print(f"  #{r.id} {r.inspected_at[:19]} {r.retest_name or r.retest_sha256[:12]}: "
+              f"{what}{conf_s}" + (f", report {r.report_path}" if r.report_path else ""))
+    return 0

@@ -1,0 +1,47 @@
+"""`batlab register`: a new bat's baseline into the registry (fit, calibrate, store)."""
+
+from __future__ import annotations
+
+import json
+
+from batlab.cli_support import add_db_argument, db_path, progress_printer
+
+HELP = "register a bat: fit its baseline test, calibrate its reference, store it by serial"
+
+
+def add_arguments(p) -> None:
+    p.add_argument("--serial", default=None, help="serial number (default: meta.json's; must "
+                                                  "agree with it)")
+    p.add_argument("--profile", required=True, help="profile.csv (x_in,diameter_in)")
+    p.add_argument("--meta", required=True, help="meta.json")
+    p.add_argument("--baseline", required=True, help="baseline test (.uff, .csv or .npz)")
+    p.add_argument("--replace", action="store_true",
+                   help="replace an already registered bat (its inspections are kept)")
+    add_db_argument(p)
+    p.add_argument("--json", action="store_true", help="print JSON on stdout")
+
+
+def run(args) -> int:
+    from batlab.pipeline import register_files
+    from batlab.registry import open_registry
+
+    progress = progress_printer("register")
+    path = db_path(args)
+    with open_registry(path) as conn:
+        done = register_files(conn, args.profile, args.meta, args.baseline, args.serial,
+                              args.replace, progress)
+    rec = done.record
+    out = {"serial": rec.serial, "db": str(path), "registered_at": rec.registered_at,
+           "baseline": rec.baseline_name, "baseline_sha256": rec.baseline_sha256,
+           "modes_hz": [round(f, 3) for f in rec.modes["freq_hz"]],
+           "reference": rec.reference}
+    if args.json:
+        print(json.dumps(out))
+    else:
+        print(f"registered {rec.serial} in {path}")
+        print(f"  baseline {rec.baseline_name} (sha256 {rec.baseline_sha256[:16]}...)")
+        print("  modes (Hz): " + ", ".join(f"{f:.1f}" for f in rec.modes["freq_hz"]))
+        ref = rec.reference
+        print(f"  calibrated: E {ref['E_pa'] / 1e9:.2f} GPa, density {ref['rho_kg_m3']:.0f} "
+              f"kg/m^3, E/G {ref['e_over_g']:.1f}, {ref['beam']} beam")
+    return 0

@@ -1,0 +1,375 @@
+"""The pipeline behind `register`, `inspect` and `demo`, in one place.
+
+    FRF file -> FrfTest -> modal fit -> MeasuredModes (sensor at the driving point)
+    baseline modes + profile + meta -> diagnose -> calibrated BatReference
+    reference + baseline modes + re-test modes -> inspect_retest -> Verdict -> contract JSON
+
+Positions are SI inside; the contract dict (../shared/CONTRACT.md) is in inches from the knob
+end. ``progress`` callables receive one-line messages (the commands print them on stderr).
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import sqlite3
+import tempfile
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from batlab import registry as reg
+from ema.frf_data import FrfTest
+from updating.bat_input import BatMeta, read_meta
+from updating.calibration import BatReference
+from updating.measured import MeasuredModes, from_fit
+from updating.profile import Profile, make_profile, read_profile_csv
+from updating.units import IN_TO_M, LB_TO_KG
+from updating.verdict import Verdict
+
+POINT_TOL_M = 0.25 * IN_TO_M
+"""A re-test impact point may sit this far from the baseline's (marks on the bat)."""
+
+Progress = Callable[[str], None]
+
+
+def _quiet(_: str) -> None:
+    return None
+
+
+@dataclass(frozen=True)
+class FittedTest:
+    """One test file, read and fitted.
+
+    Attributes:
+        name: the file's name (for messages and the report).
+        test: the FRFs.
+        fit: the modal fit (``ema.fit.ModalFit``), or None for a registered baseline whose
+            modes come from the registry.
+        modes: elastic modes at the impact points, in the baseline's point order.
+    """
+
+    name: str
+    test: FrfTest
+    fit: object | None
+    modes: MeasuredModes
+
+
+@dataclass(frozen=True)
+class InspectionResult:
+    """Everything an inspection produced (the report draws from it)."""
+
+    serial: str
+    profile: Profile
+    reference: BatReference
+    baseline: FittedTest
+    retest: FittedTest
+    verdict: Verdict
+
+
+# --- files -----------------------------------------------------------------------------------
+
+
+def read_frf(path: str | os.PathLike) -> FrfTest:
+    """Read an FRF test file (UFF, CSV, NPZ) with a driving point; one-line errors naming it."""
+    from ema.frf_io import read_test
+
+    path = Path(path)
+    if not path.is_file():
+        raise ValueError(f"{path}: no such file")
+    try:
+        return read_test(path)
+    except (ValueError, OSError):
+        raise
+    except Exception as exc:  # a reader's internal error on a damaged file
+        raise ValueError(f"{path}: unreadable FRF file ({type(exc).__name__}: {exc})") from None
+
+
+def frf_from_bytes(content: bytes, name: str) -> FrfTest:
+    """Read a stored FRF file (its format from ``name``'s extension)."""
+    with tempfile.TemporaryDirectory(prefix="batlab-") as tmp:
+        path = Path(tmp) / Path(name).name
+        path.write_bytes(content)
+        return read_frf(path)
+
+
+def read_bat_files(profile_path, meta_path) -> tuple[Profile, BatMeta]:
+    """profile.csv and meta.json; a missing file is a one-line error naming it."""
+    for p in (profile_path, meta_path):
+        if not Path(p).is_file():
+            raise ValueError(f"{p}: no such file")
+    profile = read_profile_csv(profile_path)
+    meta = read_meta(meta_path)
+    if meta.points_m.size and meta.points_m.max() > profile.length_m + POINT_TOL_M:
+        raise ValueError(f"{meta_path}: points_in run past the end of the bat "
+                         f"({profile.length_m / IN_TO_M:.2f} in long in {profile_path})")
+    return profile, meta
+
+
+# --- modes -----------------------------------------------------------------------------------
+
+
+def point_positions_m(test: FrfTest) -> np.ndarray:
+    """Positions of the nodes the mode shapes are given at: the roving side of the test (the
+    impact nodes for a roving hammer, the accelerometers for a roving accelerometer)."""
+    nodes = test.reference_nodes if test.frf.shape[2] >= test.frf.shape[1] else \
+        test.response_nodes
+    return test.x_m(nodes)
+
+
+def match_points(baseline_x_m: np.ndarray, retest_x_m: np.ndarray, retest_name: str) -> np.ndarray:
+    """Index into the re-test's points for each baseline point; ValueError when the re-test's
+    points are not the baseline's (count, or a point further than POINT_TOL_M from any)."""
+    base = np.asarray(baseline_x_m, dtype=float)
+    new = np.asarray(retest_x_m, dtype=float)
+    if base.size != new.size:
+        raise ValueError(f"{retest_name}: {new.size} test points, the baseline has {base.size}")
+    order = np.argmin(np.abs(base[:, None] - new[None, :]), axis=1)
+    miss = np.abs(new[order] - base)
+    if np.unique(order).size != base.size or miss.max() > POINT_TOL_M:
+        k = int(np.argmax(miss))
+        raise ValueError(f"{retest_name}: test points do not match the baseline's (baseline "
+                         f"point at {base[k] / IN_TO_M:.2f} in has no re-test point within "
+                         f"{POINT_TOL_M / IN_TO_M:.2f} in)")
+    return order
+
+
+def fit_modes(test: FrfTest, known_mass_kg: float | None = None):
+    """The automatic modal fit of a test (``ema.fit.fit_test``, polyreference LSCF)."""
+    from ema.fit import fit_test
+
+    return fit_test(test, known_mass_kg=known_mass_kg)
+
+
+def sensor_x_m(test: FrfTest) -> float:
+    """Position of the accelerometer: the driving point's node."""
+    i, _ = test.driving_point
+    return float(test.node_x_m[int(test.response_nodes[i])])
+
+
+def reorder(modes: MeasuredModes, order: np.ndarray) -> MeasuredModes:
+    """The modes with their point rows taken in ``order``."""
+    return MeasuredModes(modes.freq_hz, modes.shapes[order], modes.x_m[order],
+                         modes.damping_ratio, modes.sensor_x_m, modes.freq_std_hz)
+
+
+def fit_file(
+    name: str, test: FrfTest, weight_kg: float | None, order: np.ndarray | None = None,
+    progress: Progress = _quiet,
+) -> FittedTest:
+    """Fit a test; its modes' point rows optionally re-ordered to the baseline's points."""
+    progress(f"fitting modes of {name} ({test.frf.shape[2]} FRFs, {test.freq_hz.size} lines)")
+    fit = fit_modes(test, weight_kg)
+    modes = from_fit(fit, sensor_x_m(test))
+    if modes.freq_hz.size == 0:
+        raise ValueError(f"{name}: no elastic mode found in the test")
+    if order is not None:
+        modes = reorder(modes, order)
+    progress(f"{name}: {modes.freq_hz.size} modes at "
+             + ", ".join(f"{f:.1f}" for f in modes.freq_hz) + " Hz")
+    return FittedTest(name, test, fit, modes)
+
+
+def modes_to_dict(m: MeasuredModes) -> dict:
+    return {"freq_hz": m.freq_hz.tolist(), "damping_ratio": m.damping_ratio.tolist(),
+            "shapes": np.asarray(m.shapes).tolist(), "x_m": np.asarray(m.x_m).tolist(),
+            "sensor_x_m": float(m.sensor_x_m),
+            "freq_std_hz": None if m.freq_std_hz is None else np.asarray(m.freq_std_hz).tolist()}
+
+
+def modes_from_dict(d: dict) -> MeasuredModes:
+    std = d.get("freq_std_hz")
+    return MeasuredModes(np.asarray(d["freq_hz"], float),
+                         np.asarray(d["shapes"], float).reshape(len(d["x_m"]), -1),
+                         np.asarray(d["x_m"], float), np.asarray(d["damping_ratio"], float),
+                         float(d["sensor_x_m"]), None if std is None else np.asarray(std, float))
+
+
+# --- the updating stage ----------------------------------------------------------------------
+
+
+def calibrate(profile: Profile, meta: BatMeta, baseline: FittedTest):
+    """Diagnose the baseline: the calibrated reference (``updating.diagnose``)."""
+    from updating.diagnose import diagnose
+
+    susp = getattr(baseline.fit, "suspension_freq_hz", None)
+    susp = None if susp is None or len(susp) == 0 else np.asarray(susp)
+    return diagnose(profile, meta, baseline.modes, suspension_hz=susp)
+
+
+def inspect_modes(
+    profile: Profile, reference: BatReference, baseline: MeasuredModes, retest: MeasuredModes,
+    false_alarm: float,
+) -> Verdict:
+    """Phase 3: the verdict on a re-test against the reference (``updating.inspection``)."""
+    from updating.inspection import inspect_retest
+
+    return inspect_retest(profile, reference, baseline, retest, false_alarm=false_alarm)
+
+
+# --- JSON ------------------------------------------------------------------------------------
+
+
+def _in(x_m: float) -> float:
+    return round(float(x_m) / IN_TO_M, 4)
+
+
+def _num(v) -> float | None:
+    return None if v is None or not math.isfinite(float(v)) else float(v)
+
+
+def contract_dict(serial: str, verdict: Verdict) -> dict:
+    """The verdict as ../shared/CONTRACT.md fixes it (inches from the knob end; region, core
+    and fill null when not altered), plus the decision's confidence and significance level."""
+    altered = bool(verdict.altered)
+    region = verdict.region_m if altered else None
+    core = verdict.core_diameter_m if altered else None
+    fill = verdict.fill_density_ratio if altered else None
+    elements = [
+        {"x0_in": _in(a), "x1_in": _in(b), "alpha": float(al), "beta": float(be)}
+        for a, b, al, be in zip(verdict.element_x0_m, verdict.element_x1_m, verdict.alpha,
+                                verdict.beta, strict=True)
+    ]
+    return {
+        "serial": serial,
+        "altered": altered,
+        "region_in": None if region is None else [_in(region[0]), _in(region[1])],
+        "core_diameter_in": None if core is None else round(float(core) / IN_TO_M, 4),
+        "fill_density_ratio": _num(fill),
+        "elements": elements,
+        "confidence": _num(verdict.confidence),
+        "false_alarm_rate": _num(verdict.false_alarm_rate),
+    }
+
+
+def jsonable(value):
+    """numpy scalars/arrays, tuples and dataclass-free containers -> JSON types (NaN -> None)."""
+    if isinstance(value, dict):
+        return {str(k): jsonable(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [jsonable(v) for v in value]
+    if isinstance(value, np.ndarray):
+        return jsonable(value.tolist())
+    if isinstance(value, (np.bool_, bool)):
+        return bool(value)
+    if isinstance(value, (np.integer, int)):
+        return int(value)
+    if isinstance(value, (np.floating, float)):
+        return _num(value)
+    if value is None or isinstance(value, str):
+        return value
+    return str(value)
+
+
+def verdict_record(serial: str, verdict: Verdict) -> dict:
+    """What the registry keeps of an inspection: the contract dict and the verdict's details."""
+    out = contract_dict(serial, verdict)
+    out.update(jsonable({"statistic": verdict.statistic, "moisture": verdict.moisture,
+                         "uncertainty": verdict.uncertainty, "modes": verdict.modes,
+                         "details": verdict.details}))
+    return out
+
+
+# --- whole operations ------------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class Registration:
+    record: reg.BatRecord
+    baseline: FittedTest
+    diagnosis: object
+
+
+def prepare_registration(
+    profile_path, meta_path, baseline_path, serial: str | None = None,
+    progress: Progress = _quiet,
+) -> Registration:
+    """Read a new bat's files, fit its baseline and calibrate its reference (nothing stored)."""
+    profile, meta = read_bat_files(profile_path, meta_path)
+    if serial is not None and serial != meta.serial:
+        raise ValueError(f"{meta_path}: serial {meta.serial!r} differs from --serial {serial!r}")
+    test = read_frf(baseline_path)
+    baseline = fit_file(Path(baseline_path).name, test, meta.weight_kg, progress=progress)
+    progress("calibrating the reference model to the baseline (diagnose)")
+    diagnosis = calibrate(profile, meta, baseline)
+    record = reg.BatRecord(
+        serial=meta.serial, profile_x_m=profile.x_m.tolist(),
+        profile_diameter_m=profile.diameter_m.tolist(), meta=meta.extra, species=meta.species,
+        reference=diagnosis.reference.to_dict(), modes=modes_to_dict(baseline.modes))
+    return Registration(record, baseline, diagnosis)
+
+
+def register_files(
+    conn: sqlite3.Connection, profile_path, meta_path, baseline_path,
+    serial: str | None = None, replace: bool = False, progress: Progress = _quiet,
+) -> Registration:
+    """Register a bat: fit, calibrate, store with a copy of the baseline file."""
+    if serial is not None and not replace:  # fail fast, before the fit
+        exists = conn.execute("SELECT 1 FROM bats WHERE serial = ?", (serial,)).fetchone()
+        if exists:
+            raise ValueError(f"bat {serial!r} is already registered (use --replace)")
+    done = prepare_registration(profile_path, meta_path, baseline_path, serial, progress)
+    content = Path(baseline_path).read_bytes()
+    stored = reg.add_bat(conn, done.record, Path(baseline_path).name, content, replace=replace)
+    progress(f"registered {stored.serial} (baseline sha256 {stored.baseline_sha256[:12]})")
+    return Registration(stored, done.baseline, done.diagnosis)
+
+
+def inspect_files(
+    profile_path, meta_path, baseline_path, retest_path, false_alarm: float = 0.01,
+    progress: Progress = _quiet,
+) -> InspectionResult:
+    """The stateless inspection: the same steps as register, then the re-test against it."""
+    profile, meta = read_bat_files(profile_path, meta_path)
+    base_test, re_test = read_frf(baseline_path), read_frf(retest_path)
+    order = match_points(point_positions_m(base_test), point_positions_m(re_test),
+                         str(retest_path))
+    baseline = fit_file(Path(baseline_path).name, base_test, meta.weight_kg, progress=progress)
+    progress("calibrating the reference model to the baseline (diagnose)")
+    reference = calibrate(profile, meta, baseline).reference
+    retest = fit_file(Path(retest_path).name, re_test, meta.weight_kg, order, progress)
+    progress("inspecting the re-test against the reference")
+    verdict = inspect_modes(profile, reference, baseline.modes, retest.modes, false_alarm)
+    return InspectionResult(meta.serial, profile, reference, baseline, retest, verdict)
+
+
+def inspect_registered(
+    conn: sqlite3.Connection, serial: str, retest_path, false_alarm: float = 0.01,
+    refit_baseline: bool = False, progress: Progress = _quiet,
+) -> InspectionResult:
+    """Inspect a re-test of a registered bat against its stored reference and baseline modes.
+
+    The stored baseline file is read (its checksum checked) to check the re-test's points and,
+    with ``refit_baseline`` (for a report), to show its FRFs and stabilisation diagram.
+    """
+    bat = reg.get_bat(conn, serial)
+    content = reg.baseline_file(conn, bat)
+    base_test = frf_from_bytes(content, bat.baseline_name)
+    re_test = read_frf(retest_path)
+    base_modes = modes_from_dict(bat.modes)
+    order = match_points(base_modes.x_m, point_positions_m(re_test), str(retest_path))
+    profile = make_profile(bat.profile_x_m, bat.profile_diameter_m, f"registry bat {serial}")
+    weight = bat.meta.get("weight_lb")
+    weight_kg = None if weight is None else float(weight) * LB_TO_KG
+    fit = fit_file(bat.baseline_name, base_test, weight_kg, None, progress).fit \
+        if refit_baseline else None
+    baseline = FittedTest(bat.baseline_name, base_test, fit, base_modes)
+    retest = fit_file(Path(retest_path).name, re_test, weight_kg, order, progress)
+    reference = BatReference.from_dict(bat.reference)
+    progress("inspecting the re-test against the registered reference")
+    verdict = inspect_modes(profile, reference, base_modes, retest.modes, false_alarm)
+    return InspectionResult(serial, profile, reference, baseline, retest, verdict)
+
+
+def store_inspection(
+    conn: sqlite3.Connection, result: InspectionResult, retest_path,
+    report_path: str | None = None,
+) -> reg.Inspection:
+    """Record an inspection of a registered bat."""
+    bat = reg.get_bat(conn, result.serial)
+    return reg.add_inspection(
+        conn, result.serial, verdict_record(result.serial, result.verdict),
+        Path(retest_path).name, reg.sha256_bytes(Path(retest_path).read_bytes()),
+        bat.baseline_sha256, report_path)
