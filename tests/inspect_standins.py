@@ -1,0 +1,79 @@
+"""Test-only stand-ins for the numerical stages, so the application layer (CLI, registry,
+report) can be tested on its own. Each is small but honest about its inputs: the fitter picks
+real peaks of the driving-point FRF, the inspector decides from the frequency shifts, so
+a wrong file, a lost re-ordering or a swapped test changes what they return.
+
+``use_standins(monkeypatch, ...)`` patches batlab.pipeline; pass ``fit=False`` etc. to keep a
+real stage once it exists.
+"""
+
+from __future__ import annotations
+
+from types import SimpleNamespace
+
+import numpy as np
+from scipy.signal import find_peaks
+
+from updating.calibration import BatReference
+from updating.units import IN_TO_M
+from updating.verdict import Verdict
+
+
+def fake_fit(test, known_mass_kg=None):
+    """Peaks of the driving-point |H| above 20 Hz; shapes from Im H at each peak (quadrature
+    picking), at the impact points."""
+    i, j = test.driving_point
+    f = test.freq_hz
+    mag = np.abs(test.frf[:, i, j])
+    band = f >= 20.0
+    peaks, _ = find_peaks(np.where(band, mag, 0.0), prominence=0.2 * np.median(mag[band]))
+    peaks = peaks[np.argsort(mag[peaks])[::-1][:6]]
+    peaks = np.sort(peaks)
+    shapes = np.imag(test.frf[peaks, i, :]).T  # (n_ref, m)
+    shapes = shapes / np.sqrt(np.abs(shapes[j]))[None, :] * np.sign(shapes[j])[None, :]
+    return SimpleNamespace(
+        freq_hz=f[peaks], damping_ratio=np.full(peaks.size, 0.005), real_shapes=shapes,
+        x_m=test.x_m(test.reference_nodes), suspension_freq_hz=np.array([]),
+        band_freq_hz=f, synth=test.frf * 1.02, sweep=None, stability=None)
+
+
+def fake_calibrate(profile, meta, baseline):
+    m = meta.material
+    return SimpleNamespace(reference=BatReference(m.E_pa, m.rho_kg_m3, m.e_over_g,
+                                                  sensor_x_m=baseline.modes.sensor_x_m))
+
+
+def fake_inspect(profile, reference, baseline, retest, false_alarm):
+    """Altered when the modes shift unevenly (beyond a uniform drift); 1 in elements; the
+    'core' sits in the last 10 in, its size from the largest uneven shift."""
+    n = min(baseline.freq_hz.size, retest.freq_hz.size)
+    ratio = retest.freq_hz[:n] / baseline.freq_hz[:n]
+    uneven = float(np.max(np.abs(ratio / np.median(ratio) - 1)))
+    altered = uneven > 2e-3
+    edges = np.linspace(0.0, profile.length_m, int(round(profile.length_m / IN_TO_M)) + 1)
+    x0, x1 = edges[:-1], edges[1:]
+    inside = (x0 >= profile.length_m - 10 * IN_TO_M) & (x1 <= profile.length_m - IN_TO_M)
+    alpha = np.where(inside & altered, -0.1, 0.0) + 1e-4 * np.cos(x0)
+    beta = np.where(inside & altered, -0.02, 0.0)
+    region = (profile.length_m - 10 * IN_TO_M, profile.length_m - IN_TO_M)
+    return Verdict(
+        altered=altered, confidence=0.999 if altered else 0.3, false_alarm_rate=false_alarm,
+        statistic=uneven, region_m=region, core_diameter_m=1.0 * IN_TO_M,
+        fill_density_ratio=0.3, uncertainty={"core_diameter_m": 1e-3},
+        element_x0_m=x0, element_x1_m=x1, alpha=alpha, beta=beta,
+        moisture={"stiffness_scale": float(np.median(ratio) ** 2), "density_scale": 1.0},
+        modes=[{"baseline_hz": float(a), "retest_hz": float(b)}
+               for a, b in zip(baseline.freq_hz[:n], retest.freq_hz[:n], strict=True)],
+        details={"n_modes": n})
+
+
+def use_standins(monkeypatch, fit: bool = True, calibrate: bool = True,
+                 inspect: bool = True) -> None:
+    import batlab.pipeline as pipeline
+
+    if fit:
+        monkeypatch.setattr(pipeline, "fit_modes", fake_fit)
+    if calibrate:
+        monkeypatch.setattr(pipeline, "calibrate", fake_calibrate)
+    if inspect:
+        monkeypatch.setattr(pipeline, "inspect_modes", fake_inspect)
