@@ -158,7 +158,8 @@ def element_figure(result: InspectionResult):
 def element_mass_change(result: InspectionResult, n_quad: int = 24) -> MassProperties:
     """Mass, first and second moments added by the element factors, as a MassProperties of the
     change: dm = sum alpha_e int rho A dx, d(m x_cg) = sum alpha_e int rho A x dx,
-    dI_knob = sum alpha_e int rho A x^2 dx (cg_m holds d(m x_cg) / dm; i_cg unused: 0)."""
+    dI_knob = sum alpha_e int (rho A x^2 + rho I) dx, I = pi D^4 / 64 (the section's own
+    rotary inertia, as in ``updating.massprops``); cg_m holds d(m x_cg) / dm, i_cg is 0."""
     v, prof = result.verdict, result.profile
     rho = result.reference.rho_kg_m3
     x0, x1 = np.asarray(v.element_x0_m), np.asarray(v.element_x1_m)
@@ -166,11 +167,13 @@ def element_mass_change(result: InspectionResult, n_quad: int = 24) -> MassPrope
     half = (x1 - x0)[:, None] / 2
     xq = (x0 + x1)[:, None] / 2 + half * t[None, :]
     wq = half * w[None, :]
-    rho_a = rho * np.pi / 4 * prof.diameter_at(xq) ** 2
+    dq = prof.diameter_at(xq)
+    rho_a = rho * np.pi / 4 * dq**2
+    rho_i = rho * np.pi / 64 * dq**4
     alpha = np.asarray(v.alpha)[:, None]
     dm = float(np.sum(alpha * wq * rho_a))
     dmx = float(np.sum(alpha * wq * rho_a * xq))
-    di = float(np.sum(alpha * wq * rho_a * xq**2))
+    di = float(np.sum(alpha * wq * (rho_a * xq**2 + rho_i)))
     return MassProperties(dm, dmx / dm if dm else 0.0, di, 0.0)
 
 
@@ -253,14 +256,21 @@ def render_html(result: InspectionResult) -> str:
     for k, val in (v.moisture or {}).items():
         facts.append([f"uniform drift: {k}", val])
     for k, val in (v.uncertainty or {}).items():
+        if k.endswith("_m") and isinstance(val, (int, float)):  # lengths shown in inches
+            k, val = k[:-2] + "_in", val / IN_TO_M
         facts.append([f"standard uncertainty: {k}", val])
     parts.append(_table(["quantity", "value"], facts))
 
     parts.append("<h2>Element changes along the bat</h2>")
     parts.append(_img(_png(element_figure(result)), "element factors over the bat profile"))
     parts.append("<h2>Mass properties</h2>")
-    parts.append(_table(["model", "weight (lb)", "centre of mass (in)", "I knob (lb in²)"],
-                        [list(r) for r in mass_rows(result)]))
+    rows = mass_rows(result)
+    w0, cg0, i0 = rows[0][1:]
+    parts.append(_table(
+        ["model", "weight (lb)", "change (%)", "centre of mass (in)", "shift (in)",
+         "I knob (lb in²)", "change (%)"],
+        [[label, w, 100 * (w / w0 - 1), cg, cg - cg0, i, 100 * (i / i0 - 1)]
+         for label, w, cg, i in rows]))
     if v.modes:
         keys = list(dict.fromkeys(k for m in v.modes for k in m))
         parts.append("<h2>Paired modes</h2>")

@@ -1,0 +1,98 @@
+"""The HTML inspection report: self-contained, atomic, physically right mass changes, and it
+renders (headless Chromium screenshot, when Chromium is installed)."""
+
+from __future__ import annotations
+
+import base64
+import re
+import shutil
+import subprocess
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from batlab import pipeline
+from batlab.report import element_mass_change, mass_rows, write_report
+from tests.inspect_standins import use_standins
+from updating.massprops import mass_properties
+from updating.units import IN_TO_M, LB_TO_KG
+
+SAMPLE = Path("data_samples/smooth_bat")
+
+
+@pytest.fixture
+def result(monkeypatch):
+    use_standins(monkeypatch)
+    return pipeline.inspect_files(SAMPLE / "profile.csv", SAMPLE / "meta.json",
+                                  SAMPLE / "baseline.uff", SAMPLE / "retest_corked.uff")
+
+
+def test_report_is_self_contained(result, tmp_path):
+    out = tmp_path / "rep"
+    path = write_report(out, result)
+    assert path == out / "index.html"
+    assert sorted(p.name for p in out.iterdir()) == ["index.html"]  # no temporary left over
+    page = path.read_text()
+    assert "Inspection of bat HX-2001" in page and "ALTERED" in page
+    assert "confidence 0.999" in page
+    imgs = re.findall(r'<img src="data:image/png;base64,([A-Za-z0-9+/=]+)"', page)
+    assert len(imgs) >= 3  # element bars over the bat, FRF overlay, MAC
+    for b64 in imgs:
+        assert base64.b64decode(b64)[:8] == b"\x89PNG\r\n\x1a\n"
+    assert not re.search(r"(src|href)=\"(?!data:)", page)  # nothing fetched from elsewhere
+    assert "24.00 – 33.00" in page  # region in inches from the knob
+
+
+def test_report_destination_is_a_file(result, tmp_path):
+    (tmp_path / "f").write_text("x")
+    with pytest.raises(ValueError, match="not a directory"):
+        write_report(tmp_path / "f", result)
+
+
+def test_element_mass_change_uniform_factor(result):
+    """alpha = c everywhere scales the whole mass distribution: dm = c m, same centre of mass,
+    dI_knob = c I_knob (against the FE model's own section quadrature)."""
+    c = -0.05
+    v = replace(result.verdict, alpha=np.full(result.verdict.alpha.size, c))
+    d = element_mass_change(replace(result, verdict=v))
+    ref = mass_properties(result.reference.build(result.profile))
+    assert d.mass_kg == pytest.approx(c * ref.mass_kg, rel=1e-4)
+    assert d.cg_m == pytest.approx(ref.cg_m, rel=1e-4)
+    assert d.i_knob_kg_m2 == pytest.approx(c * ref.i_knob_kg_m2, rel=1e-4)
+
+
+def test_fitted_core_mass_change_matches_hand_calculation(result):
+    """A 1 in core from 24 to 33 in with fill 0.3: dm = rho (0.3 - 1) pi/4 d^2 l."""
+    rows = {r[0]: r for r in mass_rows(result)}
+    rho = result.reference.rho_kg_m3
+    d, length = 1.0 * IN_TO_M, 9.0 * IN_TO_M
+    dm_lb = rho * (0.3 - 1) * np.pi / 4 * d**2 * length / LB_TO_KG
+    ref, cored = rows["reference (baseline)"], rows["with the fitted core"]
+    assert cored[1] - ref[1] == pytest.approx(dm_lb, rel=0.01)
+    # lighter near the barrel: the centre of mass moves toward the knob
+    x_core = 28.5
+    expect_cg = (ref[1] * ref[2] + dm_lb * x_core) / (ref[1] + dm_lb)
+    assert cored[2] == pytest.approx(expect_cg, abs=0.01)
+
+
+@pytest.mark.skipif(shutil.which("chromium") is None,
+                    reason="chromium not installed (apt-get install chromium) - render check "
+                           "skipped")
+def test_report_renders_in_headless_chromium(result, tmp_path):
+    from matplotlib.image import imread
+
+    path = write_report(tmp_path / "rep", result)
+    shot = tmp_path / "shot.png"
+    subprocess.run(
+        ["chromium", "--headless", "--no-sandbox", "--disable-gpu", "--hide-scrollbars",
+         f"--screenshot={shot}", "--window-size=1100,1800", path.resolve().as_uri()],
+        check=True, capture_output=True, timeout=90)
+    img = imread(shot)
+    assert img.shape[0] >= 1000 and img.shape[1] >= 1000
+    gray = img[..., :3].mean(axis=2)
+    assert gray.std() > 0.05  # not a blank page
+    assert (gray < 0.5).mean() > 0.002  # some dark text/lines drawn
+    reds = (img[..., 0] > 0.6) & (img[..., 1] < 0.5) & (img[..., 2] < 0.5)
+    assert reds.sum() > 50  # the red verdict border is on screen
