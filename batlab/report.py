@@ -207,7 +207,7 @@ h1{margin-bottom:4px}.verdict{font-size:1.5em;padding:12px 16px;border-radius:6p
 .clean{background:#e3f5e1;border:2px solid #27ae60}
 table{border-collapse:collapse;margin:8px 0}td,th{border:1px solid #ccc;padding:3px 8px;
 text-align:right}th{background:#f3f3f3}td:first-child,th:first-child{text-align:left}
-img{max-width:100%;display:block;margin:8px 0}.note{color:#666;font-size:.9em}
+img{max-width:100%;display:block;margin:8px 0}.wide{overflow-x:auto}.note{color:#666;font-size:.9em}
 """
 
 
@@ -224,7 +224,7 @@ def _fmt(v, spec: str = ".4g") -> str:
 def _table(header: list[str], rows: list[list]) -> str:
     head = "".join(f"<th>{html.escape(h)}</th>" for h in header)
     body = "".join("<tr>" + "".join(f"<td>{_fmt(c)}</td>" for c in r) + "</tr>" for r in rows)
-    return f"<table><tr>{head}</tr>{body}</table>"
+    return f"<div class='wide'><table><tr>{head}</tr>{body}</table></div>"
 
 
 def _img(uri: str, alt: str) -> str:
