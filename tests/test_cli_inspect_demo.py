@@ -1,0 +1,41 @@
+"""`batlab demo`: simulate, register, inspect, report, all from the built-in bat."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+
+from batlab.cli import main
+from batlab.registry import history, open_registry
+from ema.frf_io import read_test
+from tests.inspect_standins import use_standins
+from updating.units import IN_TO_M
+
+
+def test_demo_writes_everything(tmp_path, monkeypatch, capsys):
+    use_standins(monkeypatch)
+    out_dir = tmp_path / "work"
+    assert main(["demo", "--out", str(out_dir), "--json"]) == 0
+    cap = capsys.readouterr()
+    res = json.loads(cap.out)
+    assert res["serial"] == "DEMO-34A" and res["altered"] is True
+    assert "simulating" in cap.err and "report" in cap.err
+    for name in ("profile.csv", "meta.json", "baseline.uff", "retest.uff", "registry.sqlite",
+                 "report/index.html"):
+        assert (out_dir / name).is_file(), name
+    base, re = read_test(out_dir / "baseline.uff"), read_test(out_dir / "retest.uff")
+    assert base.frf.shape == re.frf.shape == (3201, 1, 17)
+    meta = json.loads((out_dir / "meta.json").read_text())
+    assert np.allclose(base.x_m(base.reference_nodes), np.array(meta["points_in"]) * IN_TO_M)
+    with open_registry(out_dir / "registry.sqlite") as conn:
+        (insp,) = history(conn, "DEMO-34A")
+    assert insp.report_path == str(out_dir / "report" / "index.html")
+    assert insp.retest_name == "retest.uff"
+
+    # a second run into the same folder replaces the demo bat and adds an inspection
+    assert main(["demo", "--out", str(out_dir)]) == 0
+    text = capsys.readouterr().out
+    assert text.startswith("DEMO-34A: ALTERED") and "report:" in text
+    with open_registry(out_dir / "registry.sqlite") as conn:
+        assert len(history(conn, "DEMO-34A")) == 2
