@@ -244,3 +244,19 @@ def test_cli_process_missing_file_exit_code(tmp_path):
         capture_output=True, text=True, timeout=60)
     assert res.returncode == 2 and res.stdout == ""
     assert res.stderr.strip() == f"batlab inspect: error: {tmp_path / 'nope.uff'}: no such file"
+
+
+def test_report_option_both_forms(lab, capsys):
+    code, out, err = run_cli(stateless(lab, extra=["--json", "--report", lab / "rep1"]), capsys)
+    assert code == 0
+    check_contract(json.loads(out), "HX-2001")  # stdout still holds only the JSON
+    assert (lab / "rep1" / "index.html").is_file() and "report:" in err
+    assert run_cli(["register", "--profile", lab / "profile.csv", "--meta", lab / "meta.json",
+                    "--baseline", lab / "baseline.uff"], capsys)[0] == 0
+    code, out, _ = run_cli(["inspect", "--serial", "HX-2001", lab / "retest_corked.uff",
+                            "--report", lab / "rep2"], capsys)
+    assert code == 0 and out.startswith("HX-2001: ALTERED")
+    code, out, _ = run_cli(["history", "HX-2001", "--json"], capsys)
+    (insp,) = json.loads(out)["inspections"]
+    assert insp["report_path"] == str(lab / "rep2" / "index.html")
+    assert "retest_corked.uff" in (lab / "rep2" / "index.html").read_text()
