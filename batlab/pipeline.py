@@ -306,10 +306,10 @@ def register_files(
     serial: str | None = None, replace: bool = False, progress: Progress = _quiet,
 ) -> Registration:
     """Register a bat: fit, calibrate, store with a copy of the baseline file."""
-    if serial is not None and not replace:  # fail fast, before the fit
-        exists = conn.execute("SELECT 1 FROM bats WHERE serial = ?", (serial,)).fetchone()
-        if exists:
-            raise ValueError(f"bat {serial!r} is already registered (use --replace)")
+    if not replace:  # fail fast, before the fit (add_bat checks again, under the lock)
+        _, meta = read_bat_files(profile_path, meta_path)
+        if conn.execute("SELECT 1 FROM bats WHERE serial = ?", (meta.serial,)).fetchone():
+            raise ValueError(f"bat {meta.serial!r} is already registered (use --replace)")
     done = prepare_registration(profile_path, meta_path, baseline_path, serial, progress)
     content = Path(baseline_path).read_bytes()
     stored = reg.add_bat(conn, done.record, Path(baseline_path).name, content, replace=replace)

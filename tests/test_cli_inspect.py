@@ -146,7 +146,7 @@ def test_reregister_needs_replace(lab, capsys):
     assert run_cli(args, capsys)[0] == 0
     code, out, err = run_cli(args, capsys)
     assert code == 2 and out == ""
-    assert "already registered" in err and len(err.strip().splitlines()) == 1
+    assert "already registered" in err and len(err.strip().splitlines()) == 1  # before fitting
     code, out, _ = run_cli([*args, "--replace"], capsys)
     assert code == 0 and "registered HX-2001" in out
 
