@@ -15,6 +15,8 @@ import sys
 
 COMMANDS: tuple[str, ...] = (
     "model",
+    "rig",
+    "acquire",
 )
 
 
