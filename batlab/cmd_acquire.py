@@ -1,8 +1,9 @@
 """`batlab acquire`: roving-hammer test over a serial port (or a recorded raw stream).
 
 Live: handshake with the box, for each point take --hits accepted hits, STOP, write the FRFs
-(UFF via ema.uff.write_test). Every byte from the box goes to the raw stream file first, with
-a JSON sidecar holding the session settings so that ``--replay RAW`` re-runs the same path.
+(UFF, CSV or NPZ by extension, via ema.frf_io.write_test). Every byte from the box goes to
+the raw stream file first, with a JSON sidecar holding the session settings so that
+``--replay RAW`` re-runs the same path.
 """
 
 from __future__ import annotations
@@ -129,9 +130,9 @@ def run(args: argparse.Namespace) -> int:
         if not (args.raw or args.output):
             raise ValueError("give -o OUTPUT or --raw PATH: the raw stream must be saved")
         raw = Path(args.raw or Path(args.output).with_suffix(".raw.bin"))
-        _write_json_atomic(Path(str(raw) + ".json"), {
-            "points": points, "hits": hits, "driving_point": driving,
-            "settings": asdict(settings), "exp_window_tau_s": tau, "csv_info": csv_dict})
+        side = {"points": points, "hits": hits, "driving_point": driving,
+                "settings": asdict(settings), "exp_window_tau_s": tau, "csv_info": csv_dict}
+        _write_json_atomic(Path(str(raw) + ".json"), side)
         source = SerialDevice(open_port(args.port, args.baud), raw, csv_info,
                               silence_s=args.timeout_s)
     else:
@@ -145,9 +146,8 @@ def run(args: argparse.Namespace) -> int:
         source.close()
 
     if args.output:
-        from ema.uff import write_test
-
         from ema.frf_data import FrfTest
+        from ema.frf_io import write_test
 
         out = Path(args.output)
         test = FrfTest(result.freq_hz, result.h1, [driving], result.points,
@@ -155,9 +155,7 @@ def run(args: argparse.Namespace) -> int:
                        coherence=result.coherence, exp_window_tau_s=tau,
                        meta={"source": "batlab acquire", "raw_stream": str(raw),
                              "device": result.info.name, "hits_per_point": hits})
-        tmp = out.with_name(f".{out.stem}.tmp{out.suffix}")
-        write_test(tmp, test)
-        os.replace(tmp, out)
+        write_test(out, test)  # atomic (temporary name, then os.replace)
     rejected = [{"point": h.point, "hit": h.hit, "reason": h.reason, "detail": h.detail}
                 for h in result.hits if not h.accepted]
     summary = {"accepted": int(sum(h.accepted for h in result.hits)), "rejected": rejected,

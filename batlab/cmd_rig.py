@@ -3,7 +3,8 @@
 Prints the device path as the first stdout line, then streams until killed (or, with
 --once, until the host has sent STOP). The structure is a uniform free-free beam computed in
 closed form (Euler-Bernoulli: cos(bL) cosh(bL) = 1, mass-normalised shapes) hanging on a
-soft suspension, unless --profile gives a bat profile for the FE model.
+soft suspension, unless --profile gives a bat profile: then updating's virtual bat (FE model,
+Timoshenko, accelerometer mass, bungees; --alter drills and fills it) supplies the modes.
 """
 
 from __future__ import annotations
@@ -51,7 +52,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("action", choices=["serve"], help="serve: run the box")
     parser.add_argument("--profile", help="bat profile.csv (x_in,diameter_in) for the FE model "
                         "(default: a uniform beam)")
-    parser.add_argument("--meta", help="meta.json (species values, points_in) with --profile")
+    parser.add_argument("--meta", help="meta.json (species values, points_in)")
     parser.add_argument("--alter", help="alteration of the bat, e.g. cork:depth=10,d=1.0")
     parser.add_argument("--faults", default="",
                         help="comma list of double,overload,weak,garbage,drop,bitflip,truncate")
@@ -67,19 +68,36 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--points-in", default=None,
                         help="impact points from the knob end, in (default 1,3,...,31)")
     parser.add_argument("--accel-point", type=int, default=0,
-                        help="point number carrying the accelerometer (default: the last)")
+                        help="point number carrying the accelerometer (default: the last; "
+                        "with --profile the point nearest 1 in from the barrel end)")
     parser.add_argument("--tap-log", help="write one JSON line per tap (point, fault) here")
     parser.add_argument("--once", action="store_true", help="exit after the host's STOP")
 
 
 def _profile_model(args: argparse.Namespace, points_m: np.ndarray):
-    """ModalModel of a bat from its profile through updating's FE model (virtual bat)."""
-    try:
-        from updating.virtual_bat import bat_modal_model  # noqa: F401 (wired by maintainer)
-    except ImportError:
-        raise ValueError(f"{args.profile}: --profile needs updating.virtual_bat."
-                         "bat_modal_model, which this build does not have") from None
-    return bat_modal_model(args.profile, args.meta, args.alter, points_m)
+    """ModalModel of a bat at ``points_m`` from its profile (updating's virtual bat: FE model,
+    Timoshenko, 3 g accelerometer at the driving point, two 150 N/m bungees)."""
+    from rigs.modal_model import ModalModel
+    from updating.bat_input import parse_core_spec, read_meta
+    from updating.fe_model import displacement_at
+    from updating.material import paper_material
+    from updating.modes import model_modes
+    from updating.profile import read_profile_csv
+    from updating.virtual_bat import VirtualBat, damping_ratios
+
+    profile = read_profile_csv(args.profile)
+    material = read_meta(args.meta).material if args.meta else paper_material()
+    accel = (args.accel_point - 1) if args.accel_point else -1
+    bat = VirtualBat(profile, material, points_m, sensor_index=accel, sensor_mass_kg=0.003,
+                     bungee_k_n_per_m=150.0,
+                     core=parse_core_spec(args.alter) if args.alter else None)
+    fe = bat.truth_model()
+    modes = model_modes(fe, n_modes=min(fe.n_dof, 30))
+    keep = modes.freq_hz > 0.5  # suspension modes stay (bungees); numerically-zero ones go
+    f = modes.freq_hz[keep]
+    shapes = displacement_at(fe, modes.shapes[:, keep], points_m)
+    return ModalModel(f, damping_ratios(f, bat.zeta1, bat.zeta_exponent), shapes,
+                      points_m), bat.sensor_point()
 
 
 def run(args: argparse.Namespace) -> int:
@@ -89,7 +107,14 @@ def run(args: argparse.Namespace) -> int:
     unknown = [f for f in faults if f not in FAULTS]
     if unknown:
         raise ValueError(f"--faults: unknown fault(s) {', '.join(unknown)}")
-    if args.points_in:
+    if args.meta and not args.points_in:
+        from updating.bat_input import read_meta
+        from updating.units import IN_TO_M as in_to_m
+
+        points_in = read_meta(args.meta).points_m / in_to_m
+        if not points_in.size:
+            raise ValueError(f"{args.meta}: no points_in")
+    elif args.points_in:
         try:
             points_in = np.array([float(v) for v in args.points_in.split(",")])
         except ValueError:
@@ -97,13 +122,13 @@ def run(args: argparse.Namespace) -> int:
     else:
         points_in = np.array(DEFAULT_POINTS_IN)
     if args.profile:
-        model = _profile_model(args, points_in * IN_TO_M)
+        model, accel = _profile_model(args, points_in * IN_TO_M)
     else:
         if args.alter:
             raise ValueError("--alter needs --profile (the uniform beam cannot be altered)")
         model = uniform_beam_modes(args.length_in * IN_TO_M, args.mass_kg, args.f1_hz,
                                    points_in * IN_TO_M)
-    accel = (args.accel_point or len(points_in)) - 1
+        accel = (args.accel_point or len(points_in)) - 1
     if not 0 <= accel < len(points_in):
         raise ValueError(f"--accel-point {args.accel_point} is not one of 1..{len(points_in)}")
     tap_log = open(args.tap_log, "w") if args.tap_log else None  # noqa: SIM115

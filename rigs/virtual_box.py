@@ -1,14 +1,14 @@
 """A simulated acquisition box on a pseudo-terminal, speaking docs/protocol.md.
 
-It plays the technician too: no tap before the first ``POINT n``; after it, it taps point n ``tap_delay_s`` later and then
-every ``tap_interval_s`` until the next POINT, the response coming from rigs.hits (exact
-modal superposition, 24-bit ADC, sensor sensitivities, noise). Faults, drawn per tap with
-probability ``fault_rate`` and cycling through ``faults`` so that each one occurs:
-double (a second, weaker tap 8-20 ms later), overload (a tap hard enough to clip), weak
-(a tap below the usual acceptance level), garbage (random bytes between two frames), drop (a
-DATA frame never sent), bitflip (one bit of a frame flipped), truncate (a frame cut short).
-Every tap is logged (``tap_log``: one JSON line per tap). ``speed`` is the ratio of stream
-time to wall time; 0 streams as fast as the host reads (the pty blocks the box).
+It plays the technician too: no tap before the first ``POINT n``; then it taps point n
+``tap_delay_s`` later and every ``tap_interval_s`` until the next POINT, the response coming
+from rigs.hits (exact modal superposition, 24-bit ADC, sensor sensitivities, noise).
+Faults are drawn per tap with probability ``fault_rate``, cycling through ``faults`` so that
+each one occurs: double (a second, weaker tap 8-20 ms later), overload (a tap hard enough to
+clip), weak (35 N, below the usual acceptance level), garbage (random bytes between two
+frames), drop (a DATA frame never sent), bitflip (one payload bit flipped), truncate (a
+frame cut short). Every tap is logged (``tap_log``: one JSON line per tap). ``speed`` is
+stream time per wall time; 0 streams as fast as the host reads (the pty blocks the box).
 """
 
 from __future__ import annotations
