@@ -210,11 +210,13 @@ class SerialDevice:
             self._raw.flush()
             os.fsync(self._raw.fileno())
 
-    def stop(self) -> None:
-        """STOP streaming; the device sends its last frames before the ACK, so nothing sent
-        is lost (they stay readable through :meth:`next_item`)."""
-        if not self.csv and self._error is None:
-            self.request(p.STOP)
+    def stop(self) -> p.Ack | None:
+        """STOP streaming; the device sends its last frames before the ACK (whose index is
+        the next sample index), so nothing sent is lost: those frames stay readable through
+        :meth:`next_item`."""
+        if self.csv or self._error is not None:
+            return None
+        return self.request(p.STOP)
 
     def close(self) -> None:
         """Stop the reader thread, close the port and the raw file."""
@@ -303,7 +305,7 @@ class ReplaySource:
         pass
 
     def stop(self) -> None:
-        pass
+        return None
 
     def close(self) -> None:
         self._f.close()
