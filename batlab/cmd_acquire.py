@@ -145,6 +145,8 @@ def run(args: argparse.Namespace) -> int:
     finally:
         source.close()
 
+    if args.port:
+        _write_json_atomic(Path(str(raw) + ".json"), side | {"log": result.hits_as_dicts()})
     if args.output:
         from ema.frf_data import FrfTest
         from ema.frf_io import write_test

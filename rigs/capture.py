@@ -1,9 +1,10 @@
 """Impact capture: trigger on the force channel, cut records, check each hit.
 
-Trigger: the force rises above ``trigger_level_n`` after having been below
-``trigger_level_n - hysteresis_n`` (re-arm); a record runs from ``pretrigger_s`` before the
-trigger sample for ``record_s``. Records are long enough for the response to decay, so
-windows can stay weak (docs/acquisition.md).
+Trigger: the force rises above ``trigger_level_n`` after having stayed below
+``trigger_level_n - hysteresis_n`` for ``rearm_quiet_s`` (re-arm; longer than the gap of a
+double hit, so the bounce of a tap made before arming never starts a record); a record
+runs from ``pretrigger_s`` before the trigger sample for ``record_s``. Records are long
+enough for the response to decay, so windows can stay weak (docs/acquisition.md).
 
 Checks, in order, each with a reason: data lost (a gap, from frame counter or sample index,
 touches the record), sensor fault, overload (device flag or a code within ``clip_fraction``
@@ -34,6 +35,7 @@ class CaptureSettings:
     clip_fraction: float = 0.98
     double_hit_fraction: float = 0.05
     decay_ratio: float = 0.01
+    rearm_quiet_s: float = 0.05
 
 
 @dataclass(frozen=True)
@@ -199,13 +201,16 @@ class HitCapture:
             return False
         force = self._codes[lo:self._len, 0] * self.scale[0]
         if self._need_rearm:
-            below = np.flatnonzero(force < s.trigger_level_n - s.hysteresis_n)
-            if not below.size:
-                self._search = self.next_index
+            n_q = max(int(round(s.rearm_quiet_s * self.info.sample_rate_hz)), 1)
+            quiet = np.convolve(force < s.trigger_level_n - s.hysteresis_n, np.ones(n_q),
+                                "valid") >= n_q - 0.5
+            first = np.flatnonzero(quiet)
+            if not first.size:
+                self._search = max(self._search, self.next_index - n_q + 1)
                 return False
             self._need_rearm = False
-            lo += int(below[0])
-            force = force[below[0]:]
+            lo += int(first[0]) + n_q
+            force = force[int(first[0]) + n_q:]
         above = np.flatnonzero(force >= s.trigger_level_n)
         if not above.size:
             self._search = self.next_index

@@ -7,7 +7,8 @@ Faults are drawn per tap with probability ``fault_rate``, cycling through ``faul
 each one occurs: double (a second, weaker tap 8-20 ms later), overload (a tap hard enough to
 clip), weak (35 N, below the usual acceptance level), garbage (random bytes between two
 frames), drop (a DATA frame never sent), bitflip (one payload bit flipped), truncate (a
-frame cut short). Every tap is logged (``tap_log``: one JSON line per tap). ``speed`` is
+frame cut short). Every tap and every wire fault is logged (``tap_log``: JSON lines
+``{"tap", "point", "index", "fault", "peak_n"}`` and ``{"event", "index"}``). ``speed`` is
 stream time per wall time; 0 streams as fast as the host reads (the pty blocks the box).
 """
 
@@ -175,10 +176,12 @@ class VirtualBox:
         if fault in ("garbage", "drop", "bitflip", "truncate"):
             at = index + int(self._rng.uniform(0.05, 1.0) * fs)
             self._events.append((at, fault))
+        self._log({"tap": self._n_taps, "point": self._point, "index": index, "fault": fault,
+                   "peak_n": round(peak, 2)})
+
+    def _log(self, entry: dict) -> None:
         if self._tap_log is not None:
-            self._tap_log.write(json.dumps({"tap": self._n_taps, "point": self._point,
-                                            "index": index, "fault": fault,
-                                            "peak_n": round(peak, 2)}) + "\n")
+            self._tap_log.write(json.dumps(entry) + "\n")
             self._tap_log.flush()
 
     def _add_future(self, index: int, sig: np.ndarray) -> None:
@@ -224,6 +227,7 @@ class VirtualBox:
         due = [e for e in self._events if e[0] < self._n_sent]
         self._events = [e for e in self._events if e[0] >= self._n_sent]
         for _, fault in due:
+            self._log({"event": fault, "index": i0})
             if fault == "garbage":
                 self._out += self._rng.integers(0, 256, int(self._rng.integers(5, 200)),
                                                 dtype=np.uint8).tobytes()

@@ -53,10 +53,14 @@ def test_trigger_position_pretrigger_and_record_length():
 
 
 def test_hysteresis_one_record_per_hit_and_taps_before_arming_ignored():
-    pulses = [Pulse(0.2, 0.001, 150.0), Pulse(1.5, 0.001, 150.0), Pulse(2.8, 0.001, 150.0)]
-    codes, over = simulate_hit(MODEL, 1, 0, INFO, 4.0, pulses, 1e-5)
+    pulses = [Pulse(0.2, 0.001, 150.0), Pulse(1.5, 0.001, 150.0), Pulse(2.8, 0.001, 150.0),
+              Pulse(3.5, 0.001, 150.0), Pulse(3.515, 0.001, 80.0)]  # a double hit ...
+    codes, over = simulate_hit(MODEL, 1, 0, INFO, 5.0, pulses, 1e-5)
     _, recs = _records(_blocks(codes, over), arm=int(1.0 * FS))
     assert [round(r.trigger_index / FS, 2) for r in recs] == [1.5, 2.8]
+    # ... armed between its two pulses: the bounce does not start a record
+    _, recs = _records(_blocks(codes, over), arm=int(3.508 * FS))
+    assert recs == []
 
 
 def test_double_hit_rejected_with_timing():
@@ -120,8 +124,9 @@ def test_gap_inside_record_rejects_gap_outside_does_not():
 
 
 def test_stream_restart_inside_pretrigger_is_data_lost():
+    quiet, _ = simulate_hit(MODEL, 1, 0, INFO, 0.5, [], 1e-5)
     codes, over = simulate_hit(MODEL, 1, 0, INFO, 2.0, [Pulse(0.001, 0.001, 200.0)], 1e-5)
-    cap, recs = _records(_blocks(codes, over))
+    cap, recs = _records(_blocks(quiet) + _blocks(codes, over, index0=10**6))
     assert check_hit(recs[0], SET, FS, cap.n_pre).reason == "data lost"
 
 
