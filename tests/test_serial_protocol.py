@@ -133,3 +133,41 @@ def test_csv_line_mode_marks_bad_lines_as_lost_samples():
     np.testing.assert_array_equal(vals[~bad], [[1, 2], [3, -4], [10, 100]])
     vals, bad = dec.feed(b",13\n")
     np.testing.assert_array_equal(vals, [[12, 13]])
+
+
+HARNESS = r"""
+#include "batbox_frame.h"
+#include <cassert>
+#include <cstdio>
+int main() {
+  const uint8_t* s = (const uint8_t*)"123456789";
+  assert(batbox::crc16_ccitt(s, 9) == 0x29B1 && batbox::crc32_ieee(s, 9) == 0xCBF43926u);
+  uint8_t pl[6], out[64];
+  batbox::put_s24(batbox::put_s24(pl, -5), 8388607);
+  size_t n = batbox::encode_frame(out, batbox::DATA, batbox::data_flags(2, true, true, false),
+                                  7, 123, pl, 6);
+  batbox::CommandParser parser;
+  bool ok = false;
+  for (size_t i = 0; i < n; ++i) ok = parser.feed(out[i]);
+  assert(ok && parser.length() == n);
+  fwrite(out, 1, n, stdout);
+}
+"""
+
+
+def test_firmware_frame_code_matches_the_host(tmp_path):
+    import shutil
+    import subprocess
+    from pathlib import Path
+
+    if not shutil.which("g++"):
+        pytest.skip("no C++ compiler")
+    fw = Path(__file__).resolve().parents[1] / "rigs" / "firmware"
+    (tmp_path / "t.cpp").write_text(HARNESS)
+    subprocess.run(["g++", "-std=c++17", "-Wall", "-Werror", f"-I{fw}", str(tmp_path / "t.cpp"),
+                    "-o", str(tmp_path / "t")], check=True, timeout=60)
+    wire = subprocess.run([str(tmp_path / "t")], capture_output=True, check=True,
+                          timeout=10).stdout
+    assert wire == p.encode_frame(p.DATA, 7, 123, p.encode_samples(np.array([[-5, 2**23 - 1]]),
+                                                                   24),
+                                  p.data_flags(2, 24, overload=True))
