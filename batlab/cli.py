@@ -21,6 +21,8 @@ COMMANDS: tuple[str, ...] = (
     "history",
     "inspect",
     "demo",
+    "rig",
+    "acquire",
 )
 
 
