@@ -91,7 +91,7 @@ def run(args) -> int:
                                        progress=progress)
         serial = done.record.serial
         result = pipeline.inspect_registered(conn, serial, retest, refit_baseline=True,
-                                             progress=progress)
+                                             progress=progress, baseline_fit=done.baseline.fit)
         report = write_report(work / "report", result)
         pipeline.store_inspection(conn, result, retest, str(report))
     out = pipeline.contract_dict(serial, result.verdict)

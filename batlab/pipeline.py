@@ -337,12 +337,13 @@ def inspect_files(
 
 def inspect_registered(
     conn: sqlite3.Connection, serial: str, retest_path, false_alarm: float = 0.01,
-    refit_baseline: bool = False, progress: Progress = _quiet,
+    refit_baseline: bool = False, progress: Progress = _quiet, baseline_fit=None,
 ) -> InspectionResult:
     """Inspect a re-test of a registered bat against its stored reference and baseline modes.
 
     The stored baseline file is read (its checksum checked) to check the re-test's points and,
-    with ``refit_baseline`` (for a report), to show its FRFs and stabilisation diagram.
+    with ``refit_baseline`` (for a report), to show its FRFs and stabilisation diagram;
+    ``baseline_fit``: a fit of that same file already at hand (saves the refit).
     """
     bat = reg.get_bat(conn, serial)
     content = reg.baseline_file(conn, bat)
@@ -353,8 +354,9 @@ def inspect_registered(
     profile = make_profile(bat.profile_x_m, bat.profile_diameter_m, f"registry bat {serial}")
     weight = bat.meta.get("weight_lb")
     weight_kg = None if weight is None else float(weight) * LB_TO_KG
-    fit = fit_file(bat.baseline_name, base_test, weight_kg, None, progress).fit \
-        if refit_baseline else None
+    fit = baseline_fit
+    if refit_baseline and fit is None:
+        fit = fit_file(bat.baseline_name, base_test, weight_kg, None, progress).fit
     baseline = FittedTest(bat.baseline_name, base_test, fit, base_modes)
     retest = fit_file(Path(retest_path).name, re_test, weight_kg, order, progress)
     reference = BatReference.from_dict(bat.reference)
