@@ -1,0 +1,90 @@
+"""`batlab register` + `batlab inspect` on the real pipeline (ema fit, diagnose, inspection),
+run as the lab runs them (separate processes): the sample bat's corked re-test is found where
+it was drilled, a re-test that only drifted is not, and the stateless and registry forms give
+the same verdict."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from ema.frf_io import write_test
+from updating.bat_input import read_meta
+from updating.material import Material
+from updating.profile import read_profile_csv
+from updating.units import IN_TO_M
+from updating.virtual_bat import VirtualBat, simulate_test
+
+SAMPLE = Path("data_samples/smooth_bat")
+
+
+def drifted_retest(path: Path) -> None:
+    """The sample bat re-tested weeks later, unaltered: moisture +1 point, sensor re-mounted
+    (the set-up of data_samples/make_samples.sh)."""
+    meta = read_meta(SAMPLE / "meta.json")
+    wood = meta.material.scaled(1.04, 0.97)
+    bat = VirtualBat(read_profile_csv(SAMPLE / "profile.csv"),
+                     Material(wood.E_pa, wood.rho_kg_m3, 13.0, wood.nu), np.sort(meta.points_m),
+                     sensor_offset_m=-0.04 * IN_TO_M, sensor_mass_kg=0.003,
+                     bungee_k_n_per_m=150.0, moisture_pct=1.0, rel_noise=0.005)
+    write_test(path, simulate_test(bat, np.arange(0.0, 3200.5, 1.0), seed=11))
+
+
+@pytest.fixture(scope="module")
+def registry(tmp_path_factory):
+    tmp = tmp_path_factory.mktemp("real")
+    db = tmp / "reg.sqlite"
+    out = batlab(["register", "--profile", SAMPLE / "profile.csv", "--meta",
+                  SAMPLE / "meta.json", "--baseline", SAMPLE / "baseline.uff", "--db", db,
+                  "--json"])
+    assert out["serial"] == "HX-2001" and out["reference"]["beam"] in ("euler", "timoshenko")
+    drifted_retest(tmp / "drifted.uff")
+    return tmp, db
+
+
+def batlab(args) -> dict:
+    """Run ``python -m batlab ARGS``; exit 0, one JSON object on stdout."""
+    res = subprocess.run([sys.executable, "-m", "batlab", *map(str, args)], capture_output=True,
+                         text=True, timeout=300)
+    assert res.returncode == 0, res.stderr
+    return json.loads(res.stdout)
+
+
+def test_corked_retest_found_in_place(registry):
+    tmp, db = registry
+    out = batlab(["inspect", "--serial", "HX-2001", SAMPLE / "retest_corked.uff",
+                        "--db", db, "--json"])
+    assert out["altered"] is True
+    a, b = out["region_in"]
+    assert a == pytest.approx(24.0, abs=1.0) and b == pytest.approx(33.0, abs=1.0)
+    assert out["core_diameter_in"] == pytest.approx(1.0, abs=0.15)
+    assert out["fill_density_ratio"] == pytest.approx(0.3, abs=0.12)
+    x0 = np.array([e["x0_in"] for e in out["elements"]])
+    x1 = np.array([e["x1_in"] for e in out["elements"]])
+    assert x0[0] == pytest.approx(0.0, abs=1e-6) and x1[-1] == pytest.approx(34.0, abs=1e-3)
+    assert np.allclose(x0[1:], x1[:-1])
+    alpha = np.array([e["alpha"] for e in out["elements"]])
+    inside = (x0 >= 24.5) & (x1 <= 32.5)
+    outside = (x1 <= 22.0)
+    assert alpha[inside].mean() < -0.05  # mass removed where the core is
+    assert np.all(np.abs(alpha[outside]) < 0.2 * abs(alpha[inside].mean()))
+
+    stateless = batlab(["inspect", "--profile", SAMPLE / "profile.csv", "--meta",
+                              SAMPLE / "meta.json", "--baseline", SAMPLE / "baseline.uff",
+                              "--retest", SAMPLE / "retest_corked.uff", "--json"])
+    assert stateless == out
+
+
+def test_drifted_retest_is_not_altered(registry):
+    tmp, db = registry
+    out = batlab(["inspect", "--serial", "HX-2001", tmp / "drifted.uff", "--db", db,
+                        "--json"])
+    assert out["altered"] is False
+    assert out["region_in"] is None and out["core_diameter_in"] is None
+    assert out["fill_density_ratio"] is None
+    assert len(out["elements"]) > 10
