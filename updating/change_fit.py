@@ -12,7 +12,13 @@ modal fit's frequency uncertainties, sigma_psi = sigma_rel * rms-shape of the mo
 relative shape-noise level estimated from the residuals). Parameters:
 
     null:  x = [100 (s_E - 1), 100 (s_rho - 1), sensor shift (in)]
-    core:  x = null + [core depth from the barrel end (in), core diameter (in), fill ratio]
+    core:  x = null + [core depth from the barrel end (in), p = r b, q = (R - r) b]
+
+with b = (d / 1 in)^2 for core diameter d, fill density ratio r in [0, R]: the box p, q >= 0
+is exactly the cone of physical cores, b = (p + q) / R and r = R p / (p + q). The core's
+mass change (r - 1) b and its stiffness change (shear through the section's area and
+Cowper's coefficient ~ b, bending ~ b^2) are nearly linear in (p, q), so the model has a
+non-vanishing gradient at "no core" and no flat regions.
 
 The core fit starts from the best depths of a linearised scan (the residual projected on
 the null model's Jacobian and on the responses to a stiffness-only and a mass-only core at
@@ -34,9 +40,14 @@ from updating.units import IN_TO_M
 
 NULL_LOWER = np.array([-15.0, -10.0, -0.5])
 NULL_UPPER = np.array([15.0, 10.0, 0.5])
-CORE_LOWER = np.array([0.0, 0.05, 0.0])  # depth lower bound is set from the plug
-CORE_UPPER = np.array([15.0, 1.6, 5.0])
-SEED_DIAMETER_IN = 1.0
+R_MAX = 6.0  # densest fill considered, relative to the wood
+CORE_LOWER = np.array([0.0, 0.0, 0.0])  # depth lower bound is set from the plug
+CORE_UPPER = np.array([15.0, 2.6 * R_MAX, 2.6 * R_MAX])
+MIN_B = 1e-4  # (0.01 in)^2: the smallest core diameter the model builds
+MAX_NFEV_START, MAX_NFEV_CORE = 15, 30
+"""Caps on core-fit iterations (each start, final refinement): a real core converges in
+fewer; without one the depth is unidentifiable and the optimiser would wander (an
+unconverged H1 fit only lowers F)."""
 
 
 @dataclass(frozen=True)
@@ -109,18 +120,39 @@ class ParamSpace:
     def upper(self) -> np.ndarray:
         return np.concatenate([NULL_UPPER, CORE_UPPER])
 
-    def core(self, depth_in: float, d_in: float, ratio: float) -> Core:
-        """The core, its diameter clipped to 90 % of the thinnest outer diameter it spans."""
+    def core(self, depth_in: float, p: float, q: float) -> Core:
+        """The core of x[3:6]; diameter clipped to 90 % of the thinnest outer diameter it
+        spans."""
         L = self.profile.length_m
         depth = min(depth_in * IN_TO_M, 0.95 * L)
         xs = np.linspace(L - depth, L - self.plug_m, 25)
-        d = min(d_in * IN_TO_M, 0.9 * float(np.min(self.profile.diameter_at(xs))))
-        return Core(d, depth, ratio, self.fill_modulus_ratio, self.plug_m)
+        b = max((p + q) / R_MAX, MIN_B)
+        r = R_MAX * p / (p + q) if p + q > 0 else 1.0
+        d = min(np.sqrt(b) * IN_TO_M, 0.9 * float(np.min(self.profile.diameter_at(xs))))
+        return Core(d, depth, r, self.fill_modulus_ratio, self.plug_m)
+
+    def reading(self, x: np.ndarray, cov: np.ndarray) -> dict:
+        """Core start (m from the knob end), diameter (m), fill ratio and their standard
+        uncertainties from the covariance of x (first-order propagation)."""
+        _, p, q = x[3:6]
+        s = max(p + q, R_MAX * MIN_B)
+        b = s / R_MAX
+        dd = IN_TO_M / (2 * np.sqrt(b)) / R_MAX
+        grads = {"region_start_m": np.array([-IN_TO_M, 0.0, 0.0]),
+                 "core_diameter_m": np.array([0.0, dd, dd]),
+                 "fill_density_ratio": R_MAX * np.array([0.0, q, -p]) / s**2}
+        c = cov[3:6, 3:6]
+        sd = {k: float(np.sqrt(max(g @ c @ g, 0.0))) for k, g in grads.items()}
+        return {"core": self.core(*x[3:6]), "sd": sd}
 
     def params(self, x: np.ndarray) -> ChangeParams:
         core = None if x.size == 3 else self.core(*x[3:6])
         return ChangeParams(1 + x[0] / 100, 1 + x[1] / 100,
                             self.sensor_mount_m + x[2] * IN_TO_M, core)
+
+    def to_x(self, depth_in: float, b: float, r: float) -> np.ndarray:
+        """Core part of x for depth (in), b = (d / 1 in)^2 and fill ratio r."""
+        return np.array([depth_in, r * b, (R_MAX - r) * b])
 
 
 def residual_function(
@@ -143,7 +175,7 @@ def solve(fun: Callable, x0: np.ndarray, lower: np.ndarray, upper: np.ndarray,
     """Bounded Gauss-Newton (trust-region reflective) from x0."""
     x0 = np.clip(x0, lower + 1e-9, upper - 1e-9)
     res = least_squares(fun, x0, bounds=(lower, upper), method="trf", diff_step=1e-6,
-                        x_scale=1.0, max_nfev=max_nfev)
+                        x_scale=1.0, ftol=1e-6, xtol=1e-6, max_nfev=max_nfev)
     return Fit(res.x, space.params(res.x), res.fun, res.jac, n_freq)
 
 
@@ -161,24 +193,24 @@ def depth_scan(
 ) -> tuple[np.ndarray, np.ndarray]:
     """Linearised scan: for each depth, residual norm and seed x (6,) for the core fit.
 
-    The change in residual from a 1 in core with density-neutral fill (stiffness only),
-    and from making that fill massless (mass only), are combined with the null Jacobian;
-    the least-squares coefficients give a seed diameter (stiffness ~ d^2.5) and fill ratio
-    (mass change ~ (1 - r) d^2).
+    The change in residual from a 1 in core with density-neutral fill (b = 1, r = 1:
+    stiffness only), and from making that fill massless (r = 0: mass only), are combined
+    with the null Jacobian; the least-squares coefficients c_s, c_m seed b = c_s^0.8
+    (stiffness ~ b^1.25) and r = 1 - c_m / b (mass change (r - 1) b = -c_m).
     """
     fun = residual_function(predict, diff, space, sigma_rel)
     r0 = null.residual
     norms, seeds = [], []
     for depth in depths_in:
-        r_stiff = fun(np.concatenate([null.x, [depth, SEED_DIAMETER_IN, 1.0]]))
-        r_mass = fun(np.concatenate([null.x, [depth, SEED_DIAMETER_IN, 0.0]]))
+        r_stiff = fun(np.concatenate([null.x, space.to_x(depth, 1.0, 1.0)]))
+        r_mass = fun(np.concatenate([null.x, space.to_x(depth, 1.0, 0.0)]))
         A = np.column_stack([null.jac, r_stiff - r0, r_mass - r_stiff])
         coef, *_ = np.linalg.lstsq(A, -r0, rcond=None)
         norms.append(float(np.linalg.norm(r0 + A @ coef)))
         c_s, c_m = coef[3], coef[4]
-        d = float(np.clip(abs(c_s) ** 0.4, 0.3, 1.5)) * SEED_DIAMETER_IN
-        ratio = float(np.clip(1.0 - c_m * SEED_DIAMETER_IN**2 / d**2, 0.05, 4.0))
-        seeds.append(np.concatenate([null.x + coef[:3], [depth, d, ratio]]))
+        b = float(np.clip(max(c_s, 0.0) ** 0.8, 0.01, 2.2))
+        r = float(np.clip(1.0 - c_m / b, 0.05, R_MAX - 0.05))
+        seeds.append(np.concatenate([null.x + coef[:3], space.to_x(depth, b, r)]))
     return np.array(norms), np.array(seeds)
 
 
@@ -191,7 +223,8 @@ def fit_core(
     fun = residual_function(predict, diff, space, sigma_rel)
     lo, hi = space.lower(), space.upper()
     if x0 is not None:
-        return solve(fun, x0, lo, hi, space, diff.n_freq), {"starts_in": [float(x0[3])]}
+        return (solve(fun, x0, lo, hi, space, diff.n_freq, MAX_NFEV_CORE),
+                {"starts_in": [float(x0[3])]})
     norms, seeds = depth_scan(predict, diff, space, sigma_rel, null, depths_in)
     starts: list[np.ndarray] = []
     for i in np.argsort(norms):
@@ -199,7 +232,7 @@ def fit_core(
             starts.append(seeds[i])
         if len(starts) == n_starts:
             break
-    fits = [solve(fun, s, lo, hi, space, diff.n_freq) for s in starts]
+    fits = [solve(fun, s, lo, hi, space, diff.n_freq, MAX_NFEV_START) for s in starts]
     best = min(fits, key=lambda f: f.rss)
     info = {"scan_depth_in": [float(d) for d in depths_in],
             "scan_norm": [float(n) for n in norms],

@@ -21,7 +21,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from updating.calibration import BatReference
-from updating.fe_model import BatModel, assemble, attachment_matrices, with_attachments
+from updating.fe_model import BatModel, assemble, attachment_matrices, point_vector
 from updating.modes import solve_modes
 from updating.profile import Profile
 from updating.sections import Core
@@ -39,25 +39,27 @@ class ChangeParams:
 
 @dataclass(frozen=True)
 class WoodSystem:
-    """The bat without attachments: model, K_wood, M_wood, shape rows of the test points."""
+    """The bat without its accelerometer: model, K_wood (+ bungees), M_wood, shape rows of
+    the test points."""
 
     model: BatModel
     K: np.ndarray
     M: np.ndarray
+    K_bungees: np.ndarray
     point_rows: np.ndarray
 
 
 def wood_system(
     profile: Profile, reference: BatReference, points_m: np.ndarray, core: Core | None,
 ) -> WoodSystem:
-    """Model of the bat (wood only) with nodes at the test points."""
-    model = replace(reference, sensor_mass_kg=0.0, bungee_k_n_per_m=0.0).build(
-        profile, points_m, core=core)
+    """Model of the bat (wood only) with nodes at the test points, and its bungees."""
+    model = replace(reference, sensor_mass_kg=0.0).build(profile, points_m, core=core)
     K, M = assemble(model, with_attachments=False)
-    idx = np.array([model.node_at(x) for x in points_m])
-    if np.any(np.abs(model.node_x_m[idx] - points_m) > 1e-9):
+    Kb, _ = attachment_matrices(model)
+    idx = np.searchsorted(model.node_x_m, points_m - 1e-9)
+    if np.any(np.abs(model.node_x_m[np.minimum(idx, model.n_nodes - 1)] - points_m) > 1e-9):
         raise ValueError("test points must be nodes of the model")
-    return WoodSystem(model, K, M, 2 * idx)
+    return WoodSystem(model, K, M, Kb, 2 * idx)
 
 
 def make_predictor(
@@ -82,11 +84,12 @@ def make_predictor(
 
     def predict(p: ChangeParams) -> tuple[np.ndarray, np.ndarray]:
         ws = system(p.core)
-        atts = replace(reference, sensor_x_m=sensor_x_m + p.sensor_shift_m).attachments(
-            profile.length_m)
-        Ka, Ma = attachment_matrices(with_attachments(ws.model, atts))
-        modes = solve_modes(p.stiffness_scale * ws.K + Ka, p.density_scale * ws.M + Ma,
-                            None, n_solve)
+        M = p.density_scale * ws.M
+        if reference.sensor_mass_kg:
+            x = float(np.clip(sensor_x_m + p.sensor_shift_m, 0.0, profile.length_m))
+            dofs, n = point_vector(ws.model, x)
+            M[np.ix_(dofs, dofs)] += reference.sensor_mass_kg * np.outer(n, n)
+        modes = solve_modes(p.stiffness_scale * ws.K + ws.K_bungees, M, None, n_solve)
         return modes.freq_hz, modes.shapes[ws.point_rows]
 
     return predict

@@ -155,12 +155,12 @@ def inspect_retest(
     uncertainty = {"stiffness_scale": sd[0] / 100, "density_scale": sd[1] / 100,
                    "sensor_shift_m": sd[2] * IN_TO_M}
     region = core_d = ratio = None
+    candidate = space.reading(full.x, cov1)
     if altered:
         core = ps.core
         region = core.interval_m(profile.length_m)
         core_d, ratio = core.diameter_m, core.fill_density_ratio
-        uncertainty.update({"region_start_m": sd[3] * IN_TO_M, "core_diameter_m": sd[4] * IN_TO_M,
-                            "fill_density_ratio": sd[5]})
+        uncertainty.update(candidate["sd"])
     model = wood_system(profile, reference, points, None).model
     factors = core_element_factors(model, ps.core if altered else None)
 
@@ -185,8 +185,7 @@ def inspect_retest(
         "candidate_core": {"region_m": list(c.interval_m(profile.length_m)),
                            "diameter_m": c.diameter_m,
                            "fill_density_ratio": c.fill_density_ratio,
-                           "uncertainty_sd_x": np.sqrt(np.clip(np.diag(cov1), 0, None))[3:]
-                           .tolist()},
+                           "uncertainty": candidate["sd"]},
         "core_fit_moisture": {"stiffness_scale": full.params.stiffness_scale,
                               "density_scale": full.params.density_scale},
         "sensor_shift_m": ps.sensor_shift_m - space.sensor_mount_m,
