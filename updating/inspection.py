@@ -26,6 +26,7 @@ from scipy.stats import f as f_dist
 
 from updating.calibration import BatReference
 from updating.change_fit import (
+    MAX_NFEV_CORE,
     Differences,
     ParamSpace,
     covariance,
@@ -135,10 +136,10 @@ def inspect_retest(
     sigma = shape_noise(full, diff, sigma, 6)
     null = fit_null(predict, diff, space, sigma, x0=null.x)
     full, _ = fit_core(predict, diff, space, sigma, null, depths, x0=full.x)
-    if null.rss < full.rss:  # H1 contains H0: a worse H1 optimum is a local one
-        x0 = np.concatenate([null.x, full.x[3:]])
+    if null.rss < full.rss:  # H1 contains H0 (p = q = 0): restart H1 from there
+        x0 = np.concatenate([null.x, [full.x[3], 0.0, 0.0]])
         full = solve(residual_function(predict, diff, space, sigma), x0, space.lower(),
-                     space.upper(), space, diff.n_freq)
+                     space.upper(), space, diff.n_freq, MAX_NFEV_CORE)
 
     n, p1, q = diff.n_data, 6, 3
     dof = n - p1
@@ -181,14 +182,14 @@ def inspect_retest(
         "freq_noise_rel": diff.sigma_lnf.tolist(),
         "element_source": ("physical core fit (element-averaged section ratios)" if altered
                            else "moisture-only model (no local change)"),
-        "element_beta_shear": factors.beta_shear,
-        "candidate_core": {"region_m": list(c.interval_m(profile.length_m)),
+        "element_beta_shear": factors.beta_shear.tolist(),
+        "candidate_core": {"region_m": [float(v) for v in c.interval_m(profile.length_m)],
                            "diameter_m": c.diameter_m,
                            "fill_density_ratio": c.fill_density_ratio,
                            "uncertainty": candidate["sd"]},
-        "core_fit_moisture": {"stiffness_scale": full.params.stiffness_scale,
-                              "density_scale": full.params.density_scale},
-        "sensor_shift_m": ps.sensor_shift_m - space.sensor_mount_m,
+        "core_fit_moisture": {"stiffness_scale": float(full.params.stiffness_scale),
+                              "density_scale": float(full.params.density_scale)},
+        "sensor_shift_m": float(ps.sensor_shift_m - space.sensor_mount_m),
         "depth_scan": scan,
         "plug_m": plug_m, "fill_modulus_ratio": fill_modulus_ratio,
         "time_s": time.perf_counter() - t0,
@@ -202,6 +203,7 @@ def inspect_retest(
         uncertainty={k: float(v) for k, v in uncertainty.items()},
         element_x0_m=factors.x0_m, element_x1_m=factors.x1_m,
         alpha=factors.alpha, beta=factors.beta,
-        moisture={"stiffness_scale": ps.stiffness_scale, "density_scale": ps.density_scale},
+        moisture={"stiffness_scale": float(ps.stiffness_scale),
+                  "density_scale": float(ps.density_scale)},
         modes=modes, details=details,
     )
