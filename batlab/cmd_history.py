@@ -19,7 +19,7 @@ def add_arguments(p) -> None:
 def run(args) -> int:
     from batlab.registry import get_bat, history, open_registry
 
-    with open_registry(db_path(args)) as conn:
+    with open_registry(db_path(args), create=False) as conn:
         bat = get_bat(conn, args.serial)
         rows = history(conn, args.serial)
     if args.json:

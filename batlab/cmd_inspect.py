@@ -76,7 +76,7 @@ def run(args) -> int:
         if any(stateless):
             raise ValueError("--serial takes the bat from the registry: drop --profile, --meta "
                              "and --baseline")
-        with open_registry(db_path(args)) as conn:
+        with open_registry(db_path(args), create=False) as conn:
             result = pipeline.inspect_registered(conn, args.serial, retest, args.false_alarm,
                                                  refit_baseline=bool(args.report),
                                                  progress=progress)

@@ -186,11 +186,15 @@ def migrate(conn: sqlite3.Connection, target: int = SCHEMA_VERSION) -> int:
 # Connections and transactions
 
 
-def connect(path: str | os.PathLike, target: int = SCHEMA_VERSION) -> sqlite3.Connection:
-    """Open (creating if needed) the registry at ``path`` and migrate it to ``target``."""
+def connect(
+    path: str | os.PathLike, target: int = SCHEMA_VERSION, create: bool = True,
+) -> sqlite3.Connection:
+    """Open the registry at ``path`` (creating it if ``create``) and migrate it to ``target``."""
     path = Path(path)
     if path.exists() and path.is_dir():
         raise ValueError(f"{path}: registry path is a directory")
+    if not create and not path.exists():
+        raise ValueError(f"{path}: no registry there (register a bat first, or give --db)")
     path.parent.mkdir(parents=True, exist_ok=True)
     try:
         conn = sqlite3.connect(path, timeout=BUSY_TIMEOUT_S, isolation_level=None)
@@ -218,9 +222,9 @@ def transaction(conn: sqlite3.Connection) -> Iterator[sqlite3.Connection]:
 
 
 @contextmanager
-def open_registry(path: str | os.PathLike) -> Iterator[sqlite3.Connection]:
+def open_registry(path: str | os.PathLike, create: bool = True) -> Iterator[sqlite3.Connection]:
     """``connect`` as a context manager that closes the connection."""
-    conn = connect(path)
+    conn = connect(path, create=create)
     try:
         yield conn
     finally:

@@ -205,12 +205,12 @@ def test_stateless_bad_input(lab, capsys, case):
 
 
 def test_registry_bad_input(lab, capsys):
+    assert run_cli(["register", "--profile", lab / "profile.csv", "--meta", lab / "meta.json",
+                    "--baseline", lab / "baseline.uff"], capsys)[0] == 0
     code, _, err = run_cli(["inspect", "--serial", "NOPE", lab / "retest_corked.uff"], capsys)
     assert code == 2 and "unknown serial 'NOPE'" in err
     code, _, err = run_cli(["history", "NOPE"], capsys)
     assert code == 2 and "unknown serial" in err
-    assert run_cli(["register", "--profile", lab / "profile.csv", "--meta", lab / "meta.json",
-                    "--baseline", lab / "baseline.uff"], capsys)[0] == 0
     _fewer_points(SAMPLE / "retest_corked.uff", lab / "fewer.uff")
     code, _, err = run_cli(["inspect", "--serial", "HX-2001", lab / "fewer.uff"], capsys)
     assert code == 2 and "16 test points" in err
@@ -260,3 +260,11 @@ def test_report_option_both_forms(lab, capsys):
     (insp,) = json.loads(out)["inspections"]
     assert insp["report_path"] == str(lab / "rep2" / "index.html")
     assert "retest_corked.uff" in (lab / "rep2" / "index.html").read_text()
+
+
+def test_reading_commands_need_an_existing_registry(tmp_path, capsys):
+    db = tmp_path / "none.sqlite"
+    for args in (["bats"], ["history", "S"], ["inspect", "--serial", "S", "r.uff"]):
+        code, out, err = run_cli([*args, "--db", db], capsys)
+        assert code == 2 and out == "" and "no registry there" in err
+    assert not db.exists()

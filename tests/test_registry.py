@@ -254,3 +254,10 @@ def test_killed_writer_leaves_database_consistent(tmp_path):
         bat = reg.get_bat(conn, "K1")
         reg.add_inspection(conn, "K1", {"altered": True}, "r.uff", "after", bat.baseline_sha256)
         assert reg.history(conn, "K1")[-1].retest_sha256 == "after"
+
+
+def test_missing_registry_not_created_on_read(tmp_path):
+    path = tmp_path / "typo" / "r.sqlite"
+    with pytest.raises(ValueError, match="no registry there"):
+        reg.connect(path, create=False)
+    assert not path.parent.exists()
