@@ -94,6 +94,8 @@ def mass_normalise(model: BatModel, test: TestModes, n_rigid: int = 2) -> TestMo
 
 def _run(model, test, groups_kw, msso_kw, expansions, do_refine, mass_normalised, sigmas,
          prior_sigma):
+    refine_groups = choose_groups(model, groups_kw.pop("refine_stiffness"),
+                                  groups_kw.pop("refine_mass"))
     n_rigid = 2
     scaled = test if mass_normalised else mass_normalise(model, test, n_rigid)
     f, first, res, cond = zero_factors(model.n_elements), None, None, np.nan
@@ -103,8 +105,9 @@ def _run(model, test, groups_kw, msso_kw, expansions, do_refine, mass_normalised
             first, cond = f, c
     rr = None
     if do_refine:
-        rr = refine(model, test, f, res.groups, mass_normalised=mass_normalised,
-                    freq_sigma=sigmas[0], shape_sigma=sigmas[1], prior_sigma=prior_sigma)
+        rr = refine(model, test, f, refine_groups, mass_normalised=mass_normalised,
+                    freq_sigma=sigmas[0], shape_sigma=sigmas[1], prior_sigma=prior_sigma,
+                    weighed_mass_kg=msso_kw["weighed_mass_kg"])
         f = rr.factors
     return f, first, res, rr, cond
 
@@ -116,6 +119,7 @@ def update_elements(
     weights: dict | None = None, weighed_mass_kg: float | None = None,
     freq_sigma: float = 5e-4, shape_sigma: float = 1e-2, prior_sigma: float | str | None = "auto",
     n_resample: int = 0, rng: np.random.Generator | None = None,
+    msso_parts: tuple[str | None, str | None] | None = None,
 ) -> ElementUpdate:
     """Per-element mass and stiffness changes of a re-tested bat against its reference.
 
@@ -134,6 +138,8 @@ def update_elements(
         freq_sigma, shape_sigma: noise of the frequencies (relative) and shape entries
             (relative to each mode's RMS); weights of the refinement and the resampling noise.
         n_resample: re-runs with the test modes perturbed by that noise, giving ``std``.
+        msso_parts: (stiffness, mass) of the MSSO seed if it should differ from the refined
+            parameterisation (e.g. ("element", "element") to seed a separable refinement).
     """
     test = TestModes(np.asarray(freq_hz, dtype=float), np.asarray(shapes_a, dtype=float),
                      np.asarray(dofs_a, dtype=int))
@@ -143,11 +149,16 @@ def update_elements(
     if np.any(test.dofs_a % 2) or np.any(test.dofs_a >= model.n_dof):
         raise ValueError("dofs_a must be translational DOFs of the model")
     choose_groups(model, stiffness, mass)
-    groups_kw = {"stiffness": stiffness, "mass": mass}
+    seed_s, seed_m = (stiffness, mass) if msso_parts is None else msso_parts
+    choose_groups(model, seed_s, seed_m)
     msso_kw = {"regularisation": regularisation, "weights": weights,
                "weighed_mass_kg": weighed_mass_kg}
     sig = (freq_sigma, shape_sigma)
-    f, first, res, rr, cond = _run(model, test, groups_kw, msso_kw, expansions, refine_fit,
+    def groups_kw():
+        return {"stiffness": seed_s, "mass": seed_m, "refine_stiffness": stiffness,
+                "refine_mass": mass}
+
+    f, first, res, rr, cond = _run(model, test, groups_kw(), msso_kw, expansions, refine_fit,
                                    mass_normalised, sig, prior_sigma)
     # scaling check: POC of the (scaled) test shapes with the SEREP-reduced reference mass
     from updating.fe_model import assemble
@@ -165,10 +176,10 @@ def update_elements(
         out = []
         for _ in range(n_resample):
             noisy = with_noise(test, shape_sigma, freq_sigma, rng)
-            fd = _run(model, noisy, groups_kw, msso_kw, expansions, refine_fit,
+            fd = _run(model, noisy, groups_kw(), msso_kw, expansions, refine_fit,
                       mass_normalised, sig, prior_sigma)[0]
             out.append(np.stack(fd.as_tuple()))
         draws = np.stack(out)
         std = ElementFactors(*draws.std(axis=0, ddof=1))
-    return ElementUpdate(f, first, res.groups, res, rr, cond, poc.max_offdiag,
-                         max(1, expansions), std, draws)
+    return ElementUpdate(f, first, choose_groups(model, stiffness, mass), res, rr, cond,
+                         poc.max_offdiag, max(1, expansions), std, draws)

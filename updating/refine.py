@@ -8,8 +8,8 @@ Refinement: Levenberg-Marquardt fit of the exact model (sections rebuilt with th
 
     r_f = (lam_r(y) / lam_r^test - 1) / (2 sigma_f)
     r_s = (c_r phi_r(y)[a] - psi_r) / (sigma_s rms(psi_r))      (c_r = 1 if mass-normalised)
-    r_p = y / sigma_prior               (optional prior of no change; off by default because
-                                         it biases exact data)
+    r_p = (D y, y / 10) / sigma_prior   (prior: differences between neighbouring elements
+                                         and, weakly, the change itself; see prior_matrix)
 
 and analytic eigen-sensitivities (Fox & Kapoor 1968; complete modal expansion):
 
@@ -154,7 +154,7 @@ def _evaluate(model, test, y, groups, n_rigid, scales, want_jac, w):
     rms = np.sqrt(np.mean(psi**2, axis=0))
     r_f = (lam / lam_t - 1) * w["f"]
     r_s = ((scales * phi_a - psi) / rms * w["s"]).ravel(order="F")
-    r = np.concatenate([r_f, r_s, y * w["p"]])
+    r = np.concatenate([r_f, r_s, w["G"] @ y + w["g0"], w["L"] @ y])
     if not want_jac:
         return r, (lam, phi_a, f)
     m, a = idx.size, test.dofs_a.size
@@ -178,8 +178,33 @@ def _evaluate(model, test, y, groups, n_rigid, scales, want_jac, w):
             coef[mode] = -0.5 * np.einsum("ea,eab,eb->e", P, dM, P)
             dphi = Phi_a @ coef  # (a, e)
             J_s[j * a:(j + 1) * a, cols] = dphi * scales[j] / rms[j] * w["s"]
-    J = np.vstack([J_f, J_s, np.eye(np_) * w["p"]])
+    J = np.vstack([J_f, J_s, w["G"], w["L"]])
     return r, J, (lam, phi_a, f)
+
+
+def mass_rows(model: BatModel, groups: tuple[str, ...], weighed_mass_kg: float | None,
+              mass_sigma: float) -> tuple[np.ndarray, np.ndarray]:
+    """The weighed-mass residual (m0 + sum_i alpha_i m_i - m_w) / (sigma m_w) as (G, g0)."""
+    p = model.n_elements * len(groups)
+    if weighed_mass_kg is None:
+        return np.zeros((0, p)), np.zeros(0)
+    s = model.samples
+    m_el = np.bincount(s.elem, s.weight_m * s.props.rhoa, model.n_elements)
+    G = np.concatenate([m_el if g in ("m", "trans") else np.zeros_like(m_el) for g in groups])
+    scale = 1.0 / (mass_sigma * weighed_mass_kg)
+    return G[None, :] * scale, np.array([(m_el.sum() - weighed_mass_kg) * scale])
+
+
+def prior_matrix(n_elements: int, n_groups: int, prior_sigma: float | None) -> np.ndarray:
+    """Rows of the prior: first differences of each group's factors along the bat over
+    sigma (a smooth or piecewise-uniform change is cheap, a lone spike is not) and the factors
+    themselves over 10 sigma; no rows without a prior."""
+    p = n_elements * n_groups
+    if prior_sigma is None:
+        return np.zeros((0, p))
+    D = np.diff(np.eye(n_elements), axis=0)
+    L = np.vstack([np.kron(np.eye(n_groups), D), 0.1 * np.eye(p)])
+    return L / prior_sigma
 
 
 def _scale_jacobian(phi_a, psi):
@@ -192,29 +217,32 @@ def _scale_jacobian(phi_a, psi):
     return J
 
 
-AUTO_PRIORS = (0.01, 0.03, 0.1, 0.3, 1.0, 3.0, None)
+AUTO_PRIORS = (0.01, 0.1, 1.0, None)
 
 
 def refine(
     model: BatModel, test: TestModes, seed: ElementFactors, groups: tuple[str, ...], *,
     mass_normalised: bool = True, freq_sigma: float = 5e-4, shape_sigma: float = 1e-2,
-    prior_sigma: float | str | None = "auto", n_rigid: int = 2, max_iter: int = 60,
-    tol: float = 1e-12, lower: float = -0.95,
+    prior_sigma: float | str | None = "auto", weighed_mass_kg: float | None = None,
+    mass_sigma: float = 1e-3, n_rigid: int = 2, max_iter: int = 60, tol: float = 1e-12,
+    lower: float = -0.95,
 ) -> RefineResult:
     """Levenberg-Marquardt fit of the element factors of ``groups`` to frequencies and shapes.
 
     freq_sigma: relative standard deviation of the measured frequencies; shape_sigma: of a
     shape entry relative to the mode's RMS; they weight the residuals. With
-    ``mass_normalised=False`` each mode gets a free scale c_r.
+    ``mass_normalised=False`` each mode gets a free scale c_r; then a uniform factor on all
+    of K and M is unobservable and ``weighed_mass_kg`` (relative sigma ``mass_sigma``) should
+    be given: it adds the residual (m(y) - m_w) / (sigma m_w).
 
-    prior_sigma: standard deviation of the zero-change prior, None for none, or "auto":
+    prior_sigma: standard deviation of the prior (prior_matrix), None for none, or "auto":
     Morozov's discrepancy principle by continuation -- fits with the prior loosened step by
     step (AUTO_PRIORS, each warm-started) until the data chi^2 falls to the number of data
     (what the noise alone leaves); exact data run through to no prior and fit exactly.
     """
     kw = {"mass_normalised": mass_normalised, "freq_sigma": freq_sigma,
           "shape_sigma": shape_sigma, "n_rigid": n_rigid, "max_iter": max_iter, "tol": tol,
-          "lower": lower}
+          "lower": lower, "weighed_mass_kg": weighed_mass_kg, "mass_sigma": mass_sigma}
     if prior_sigma != "auto":
         return _levenberg_marquardt(model, test, seed, groups, prior_sigma=prior_sigma, **kw)
     f = seed
@@ -229,11 +257,13 @@ def refine(
 def _levenberg_marquardt(
     model: BatModel, test: TestModes, seed: ElementFactors, groups: tuple[str, ...], *,
     mass_normalised: bool, freq_sigma: float, shape_sigma: float, prior_sigma: float | None,
-    n_rigid: int, max_iter: int, tol: float, lower: float,
+    weighed_mass_kg: float | None, mass_sigma: float, n_rigid: int, max_iter: int, tol: float,
+    lower: float,
 ) -> RefineResult:
     e = model.n_elements
     w = {"f": 1.0 / (2 * freq_sigma), "s": 1.0 / shape_sigma,
-         "p": 0.0 if prior_sigma is None else 1.0 / prior_sigma}
+         "L": prior_matrix(e, len(groups), prior_sigma)}
+    w["G"], w["g0"] = mass_rows(model, groups, weighed_mass_kg, mass_sigma)
     y = seed.vector(groups).copy()
     m = test.shapes_a.shape[1]
     scales = np.ones(m)
@@ -245,7 +275,7 @@ def _levenberg_marquardt(
     if not mass_normalised:
         J = np.hstack([J, np.vstack([np.zeros((m, m)),
                                      _scale_jacobian(phi_a, test.shapes_a) * w["s"],
-                                     np.zeros((y.size, m))])])
+                                     np.zeros((w["G"].shape[0] + w["L"].shape[0], m))])])
     cost = 0.5 * float(r @ r)
     for it in range(1, max_iter + 1):  # noqa: B007
         A = J.T @ J
@@ -276,11 +306,11 @@ def _levenberg_marquardt(
         if not mass_normalised:
             J = np.hstack([J, np.vstack([np.zeros((m, m)),
                                          _scale_jacobian(phi_a, test.shapes_a) * w["s"],
-                                         np.zeros((y.size, m))])])
+                                         np.zeros((w["G"].shape[0] + w["L"].shape[0], m))])])
         if rel < tol or small:
             converged = True
             break
-    sv = np.linalg.svd(J[:-y.size], compute_uv=False)
+    sv = np.linalg.svd(J[:J.shape[0] - w["L"].shape[0]], compute_uv=False)
     rank = int(np.sum(sv > 1e-8 * sv[0]))
     cov_diag = np.diag(np.linalg.pinv(J.T @ J, rcond=1e-12))[:y.size]
     std = factors_from_vector(np.sqrt(np.clip(cov_diag, 0, None)), groups, e)
@@ -289,8 +319,8 @@ def _levenberg_marquardt(
     from updating.pairing import mac
 
     macs = np.diag(mac(phi_a, psi))
-    chi2 = 2 * cost - (w["p"] ** 2) * float(y @ y)
-    n_data = m + test.shapes_a.size - (0 if mass_normalised else m)
+    chi2 = 2 * cost - float(np.sum((w["L"] @ y) ** 2))
+    n_data = m + test.shapes_a.size - (0 if mass_normalised else m) + w["G"].shape[0]
     return RefineResult(f, std, it, converged, cost, np.sqrt(lam / test.omega2) - 1, shape_err,
                         macs, rank, scales, chi2, n_data, prior_sigma)
 
