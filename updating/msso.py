@@ -216,7 +216,8 @@ def msso_skyline(
     """Coefficient MSSO: every symmetric K, M entry inside the skyline is an unknown.
 
     Unknown x_ij (i <= j) changes A_ij = A_ji by s_ij x_ij, s_ij = sqrt(|A_ii A_jj|) of the
-    reference; the minimum-norm (or regularised) solution is returned as dK, dM.
+    reference; the columns of the stacked system are then equilibrated to unit norm and the
+    minimum-norm (or regularised) solution in those variables is returned as dK, dM.
     """
     E, omega2 = _check_modes(shapes_n, omega2, model.n_dof)
     n, m = E.shape
@@ -264,8 +265,10 @@ def msso_skyline(
         "stiffness_norm": (np.hstack([C3, np.zeros_like(C3)]), d3),
     }
     C, d, w = _stack(blocks, weights)
-    sol = solve(C, d, regularisation)
-    x = sol.y
+    col = np.sqrt(np.asarray(C.multiply(C).sum(axis=0))).ravel()
+    col = np.where(col > 0, col, 1.0)
+    sol = solve(C @ sp.diags(1.0 / col), d, regularisation)
+    x = sol.y / col
     out = []
     for k, A in enumerate((K, M)):
         diag = A.diagonal()
