@@ -18,7 +18,7 @@ from updating.fe_model import BatModel, build_model
 from updating.material import paper_material
 from updating.modes import model_modes
 from updating.profile import paper_profile
-from updating.refine import TestModes, with_noise
+from updating.refine import ModalData, with_noise
 from updating.sections import Core
 from updating.units import IN_TO_M
 
@@ -56,7 +56,7 @@ def run_paper_case(n_modes: int = 6, noise_pct: float = 0.0, seed: int = 0) -> P
                        core=Core(IN_TO_M, 10 * IN_TO_M, 1 / 3, 0.0, IN_TO_M))
     t = model_modes(cork, n_modes + 2).elastic()
     a = cork.translational_dofs
-    test = TestModes(t.freq_hz, t.shapes[a], a)
+    test = ModalData(t.freq_hz, t.shapes[a], a)
     if noise_pct > 0:
         test = with_noise(test, noise_pct / 100, 5e-4, np.random.default_rng(seed))
         sig = {"shape_sigma": noise_pct / 100, "freq_sigma": 5e-4}

@@ -10,10 +10,13 @@ element of the truth. Usage: python benchmarks/msso_noise_table.py [--draws 50] 
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 from concurrent.futures import ProcessPoolExecutor
 
-import numpy as np
+os.environ.setdefault("OMP_NUM_THREADS", "1")  # one BLAS thread per worker process
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+import numpy as np  # noqa: E402
 
 sys.path.insert(0, ".")
 
@@ -23,7 +26,7 @@ from updating.fe_model import build_model  # noqa: E402
 from updating.material import paper_material  # noqa: E402
 from updating.modes import model_modes  # noqa: E402
 from updating.profile import paper_profile  # noqa: E402
-from updating.refine import TestModes, with_noise  # noqa: E402
+from updating.refine import ModalData, with_noise  # noqa: E402
 from updating.sections import Core  # noqa: E402
 from updating.units import IN_TO_M  # noqa: E402
 
@@ -38,7 +41,7 @@ def one(args):
                        core=Core(IN_TO_M, 10 * IN_TO_M, 1 / 3, 0.0, IN_TO_M))
     t = model_modes(cork, m + 2).elastic()
     a = cork.translational_dofs
-    test = with_noise(TestModes(t.freq_hz, t.shapes[a], a), noise, 5e-4,
+    test = with_noise(ModalData(t.freq_hz, t.shapes[a], a), noise, 5e-4,
                       np.random.default_rng(seed))
     u = update_elements(ref, test.freq_hz, test.shapes_a, a, freq_sigma=5e-4, shape_sigma=noise)
     out = {}

@@ -16,8 +16,8 @@ from updating.fe_model import BatModel
 from updating.msso import MssoResult
 from updating.pairing import align_signs, pseudo_orthogonality
 from updating.refine import (
+    ModalData,
     RefineResult,
-    TestModes,
     expansion_pass,
     full_modes,
     paired_elastic,
@@ -80,7 +80,7 @@ def dofs_at(model: BatModel, x_m, tol_m: float = 1e-6) -> np.ndarray:
     return 2 * node
 
 
-def mass_normalise(model: BatModel, test: TestModes, n_rigid: int = 2) -> TestModes:
+def mass_normalise(model: BatModel, test: ModalData, n_rigid: int = 2) -> ModalData:
     """Scale unscaled test shapes to unit modal mass with the SEREP-reduced reference mass."""
     from updating.fe_model import assemble
 
@@ -89,7 +89,7 @@ def mass_normalise(model: BatModel, test: TestModes, n_rigid: int = 2) -> TestMo
     T = serep(np.column_stack([Phi[:, :n_rigid], Phi[:, idx]]), test.dofs_a)
     Ma = T.reduce(assemble(model)[1])
     mm = np.einsum("ar,ab,br->r", test.shapes_a, Ma, test.shapes_a)
-    return TestModes(test.freq_hz, test.shapes_a / np.sqrt(mm), test.dofs_a)
+    return ModalData(test.freq_hz, test.shapes_a / np.sqrt(mm), test.dofs_a)
 
 
 def _run(model, test, groups_kw, msso_kw, expansions, do_refine, mass_normalised, sigmas,
@@ -141,7 +141,7 @@ def update_elements(
         msso_parts: (stiffness, mass) of the MSSO seed if it should differ from the refined
             parameterisation (e.g. ("element", "element") to seed a separable refinement).
     """
-    test = TestModes(np.asarray(freq_hz, dtype=float), np.asarray(shapes_a, dtype=float),
+    test = ModalData(np.asarray(freq_hz, dtype=float), np.asarray(shapes_a, dtype=float),
                      np.asarray(dofs_a, dtype=int))
     m = test.freq_hz.size
     if test.shapes_a.ndim != 2 or test.shapes_a.shape != (test.dofs_a.size, m):

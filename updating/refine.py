@@ -45,7 +45,7 @@ FD_STEP = 1e-5
 
 
 @dataclass(frozen=True)
-class TestModes:
+class ModalData:
     """Measured modes: natural frequencies (m,), real shapes (a, m) at translational DOFs."""
 
     freq_hz: np.ndarray
@@ -64,7 +64,7 @@ def full_modes(model: BatModel) -> tuple[np.ndarray, np.ndarray]:
     return lam, Phi
 
 
-def paired_elastic(lam: np.ndarray, Phi: np.ndarray, test: TestModes, n_rigid: int
+def paired_elastic(lam: np.ndarray, Phi: np.ndarray, test: ModalData, n_rigid: int
                    ) -> np.ndarray:
     """Model mode index paired (by MAC at the measured DOFs) with each test mode."""
     m = test.shapes_a.shape[1]
@@ -74,7 +74,7 @@ def paired_elastic(lam: np.ndarray, Phi: np.ndarray, test: TestModes, n_rigid: i
 
 
 def expansion_pass(
-    model: BatModel, test: TestModes, factors: ElementFactors, n_rigid: int = 2, **msso_kw,
+    model: BatModel, test: ModalData, factors: ElementFactors, n_rigid: int = 2, **msso_kw,
 ) -> tuple[ElementFactors, MssoResult, float]:
     """One SEREP + MSSO pass relative to the model updated by ``factors``.
 
@@ -91,7 +91,7 @@ def expansion_pass(
 
 
 def iterate_expansion(
-    model: BatModel, test: TestModes, n_iter: int = 5, tol: float = 1e-6, **msso_kw,
+    model: BatModel, test: ModalData, n_iter: int = 5, tol: float = 1e-6, **msso_kw,
 ) -> tuple[ElementFactors, list[MssoResult]]:
     """Repeated expansion passes until the largest factor increment is below ``tol``."""
     f = zero_factors(model.n_elements)
@@ -221,7 +221,7 @@ AUTO_PRIORS = (0.01, 0.1, 1.0, None)
 
 
 def refine(
-    model: BatModel, test: TestModes, seed: ElementFactors, groups: tuple[str, ...], *,
+    model: BatModel, test: ModalData, seed: ElementFactors, groups: tuple[str, ...], *,
     mass_normalised: bool = True, freq_sigma: float = 5e-4, shape_sigma: float = 1e-2,
     prior_sigma: float | str | None = "auto", weighed_mass_kg: float | None = None,
     mass_sigma: float = 1e-3, n_rigid: int = 2, max_iter: int = 60, tol: float = 1e-12,
@@ -255,7 +255,7 @@ def refine(
 
 
 def _levenberg_marquardt(
-    model: BatModel, test: TestModes, seed: ElementFactors, groups: tuple[str, ...], *,
+    model: BatModel, test: ModalData, seed: ElementFactors, groups: tuple[str, ...], *,
     mass_normalised: bool, freq_sigma: float, shape_sigma: float, prior_sigma: float | None,
     weighed_mass_kg: float | None, mass_sigma: float, n_rigid: int, max_iter: int, tol: float,
     lower: float,
@@ -325,8 +325,8 @@ def _levenberg_marquardt(
                         macs, rank, scales, chi2, n_data, prior_sigma)
 
 
-def with_noise(test: TestModes, shape_sigma: float, freq_sigma: float,
-               rng: np.random.Generator) -> TestModes:
+def with_noise(test: ModalData, shape_sigma: float, freq_sigma: float,
+               rng: np.random.Generator) -> ModalData:
     """Test modes with Gaussian noise: shapes + N(0, (shape_sigma rms_r)^2), f (1 + N(0, s^2))."""
     rms = np.sqrt(np.mean(test.shapes_a**2, axis=0))
     shapes = test.shapes_a + rng.standard_normal(test.shapes_a.shape) * shape_sigma * rms
