@@ -21,7 +21,7 @@ import scipy.linalg
 import scipy.optimize
 import scipy.sparse as sp
 
-DENSE_SVD_LIMIT = 4_000_000  # rows * columns below which C is decomposed directly
+DENSE_SVD_LIMIT = 1_000_000  # rows * columns below which C is decomposed directly
 RANK_TOL = 1e-7
 
 
