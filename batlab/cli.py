@@ -18,6 +18,7 @@ COMMANDS: tuple[str, ...] = (
     "simulate",
     "rig",
     "acquire",
+    "paper",
 )
 
 
