@@ -14,6 +14,11 @@ import importlib
 import os
 import sys
 
+# batlab's matrices are small (tens to hundreds of DOFs): BLAS threads cost more than they
+# save, and under load they slow an eigen-solution several times. Set before numpy loads.
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+os.environ.setdefault("OMP_NUM_THREADS", "1")
+
 COMMANDS: tuple[str, ...] = (
     "model",
     "simulate",
@@ -24,6 +29,7 @@ COMMANDS: tuple[str, ...] = (
     "demo",
     "rig",
     "acquire",
+    "paper",
 )
 
 
