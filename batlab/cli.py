@@ -33,21 +33,6 @@ COMMANDS: tuple[str, ...] = (
 )
 
 
-BLAS_THREAD_VARS = ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS")
-
-
-def single_threaded_blas() -> None:
-    """Default the BLAS thread pools to one thread; a user's own setting wins.
-
-    batlab's linear algebra is many small dense problems (FE eigenproblems of ~100 DOF,
-    least-squares steps); threaded OpenBLAS spends its time synchronising on them. On a loaded
-    2-core machine `diagnose` of one bat took 27 s with 2 threads and 1.5 s with 1. Effective
-    only before numpy is first imported, so ``main`` calls it first.
-    """
-    for var in BLAS_THREAD_VARS:
-        os.environ.setdefault(var, "1")
-
-
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="batlab",
@@ -63,7 +48,6 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv: list[str] | None = None) -> int:
-    single_threaded_blas()
     args = build_parser().parse_args(argv)
     try:
         return int(args._run(args) or 0)
