@@ -198,14 +198,19 @@ def chi2_drop(before: Fit, after: Fit, sigma_f: float, frequencies_only: bool) -
 
 def forward_select(
     setup: Setup, obs: Observations, current: Fit, remaining: list[str], role: str,
-    accept, key,
-) -> tuple[list[Step], Fit, list[Step]]:
+    accept, key, reweight=None,
+) -> tuple[list[Step], Fit, list[Step], Observations]:
     """Greedy forward selection: add the extension with the largest ``key`` while ``accept``.
 
-    Returns (accepted steps, the fit with them, the trials of the round that stopped).
+    ``reweight(fit, obs) -> obs`` (optional) re-estimates the residual weights from the fit
+    after each accepted step (the current fit is then refitted with them).
+    Returns (accepted steps, the fit with them, the trials of the round that stopped, obs).
     """
     steps: list[Step] = []
     while remaining:
+        if reweight is not None:
+            obs = reweight(current, obs)
+            current = fit_model(setup, current.active, obs, current.state)
         trials = []
         for c in remaining:
             active = current.active | {c}
@@ -216,11 +221,11 @@ def forward_select(
                                chi2_drop(current, fit, obs.sigma_f, False), new_p, role, fit))
         best = max(trials, key=key)
         if not accept(best):
-            return steps, current, sorted(trials, key=key, reverse=True)
+            return steps, current, sorted(trials, key=key, reverse=True), obs
         steps.append(best)
         current = best.fit
         remaining.remove(best.name)
-    return steps, current, []
+    return steps, current, [], obs
 
 
 def diagnose(
@@ -252,7 +257,7 @@ def diagnose(
     remaining = [c for c in CAUSES if not (c == "density" and meta.weight_kg is None
                                            and not np.any(measured.shapes))]
     # 1. causes: extensions that lower the frequency error measurably and significantly
-    named, current, _ = forward_select(
+    named, current, _, _ = forward_select(
         setup, obs, nominal, remaining, "cause",
         accept=lambda s: s.gain_pct >= min_gain_pct and s.chi2_drop_freq >= crit[s.new_params],
         key=lambda s: s.gain_pct)
@@ -263,12 +268,13 @@ def diagnose(
     if not facts <= current.active:
         current = fit_model(setup, current.active | facts, obs, current.state)
     remaining = [c for c in remaining if c not in facts]
-    # 3. calibration: further extensions the shapes (or frequencies) support significantly
-    obs = replace(obs, sigma_s=shape_sigma(current, obs, shape_sigma_floor))
-    current = fit_model(setup, current.active, obs, current.state)
-    support, final, rejected = forward_select(
+    # 3. calibration: further extensions that improve the fit of frequencies and shapes by
+    # more than they cost (Akaike: chi-square drop above 2 per parameter); the shape-noise
+    # level is re-estimated from the current model before each round
+    support, final, rejected, obs = forward_select(
         setup, obs, current, remaining, "calibration",
-        accept=lambda s: s.chi2_drop >= crit[s.new_params], key=lambda s: s.chi2_drop)
+        accept=lambda s: s.chi2_drop >= 2 * s.new_params, key=lambda s: s.chi2_drop,
+        reweight=lambda fit, o: replace(o, sigma_s=shape_sigma(fit, o, shape_sigma_floor)))
     rejected = [replace(s, role="rejected") for s in rejected]
     reference = reference_of(setup, final.active, final.state)
     return Diagnosis(obs.freq_hz, meas_idx, nominal, final, tuple(named + support + rejected),

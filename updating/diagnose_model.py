@@ -39,7 +39,6 @@ from updating.fe_model import (
     BatModel,
     assemble,
     build_model,
-    displacement_at,
     place,
     point_vector,
 )
@@ -194,6 +193,20 @@ class ModalSolution:
     dshapes: np.ndarray
 
 
+def interpolation_matrix(model: BatModel, x_m: np.ndarray) -> np.ndarray:
+    """(P, n) matrix N with w(x_p) = N[p] @ dofs: the element shape functions N_w at each x
+    (vectorised fe_model.displacement_at)."""
+    from updating.beam_element import shape_functions
+
+    x = np.asarray(x_m, dtype=float)
+    e = np.clip(np.searchsorted(model.node_x_m, x, side="right") - 1, 0, model.n_elements - 1)
+    L = model.element_length_m[e]
+    n_w = shape_functions((x - model.node_x_m[e]) / L, L, model.phi[e]).n_w
+    out = np.zeros((x.size, model.n_dof))
+    out[np.arange(x.size)[:, None], model.dofs[e]] = n_w
+    return out
+
+
 def derivative_matrices(
     model: BatModel, names: tuple[str, ...], setup: Setup,
 ) -> list[tuple[np.ndarray | None, np.ndarray | None]]:
@@ -235,7 +248,7 @@ def solve(
     sel = np.arange(2, 2 + k)
     low = np.arange(2)
     f = np.sqrt(lam) / (2 * np.pi)
-    n_pts = displacement_at(model, np.eye(model.n_dof), setup.points_m)
+    n_pts = interpolation_matrix(model, setup.points_m)
     p = len(names)
     dlnf = np.zeros((p, k))
     dlnf_low = np.zeros((p, 2))
