@@ -16,6 +16,7 @@ import sys
 COMMANDS: tuple[str, ...] = (
     "model",
     "simulate",
+    "diagnose",
 )
 
 

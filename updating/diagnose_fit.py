@@ -4,12 +4,13 @@ Residuals (dimensionless; frequencies are what the RMS error measures):
 
     e_r  = f_r(model) / f_r(measured) - 1                        paired elastic modes
     s_ir = (sigma_f / sigma_s) (y_ir - sign_r u_ir) / rms(y_r)    shape entries
-    b_j  = f_j(model) / f_j(suspension) - 1                      suspension modes (if any)
+    b_j  = (sigma_f / sigma_b) (f_j(model) / f_j(suspension) - 1)  suspension modes (if any)
 
 u_r is the model's mass-normalised shape at the test points, y_r the measured one (both in
 1/sqrt(kg), so the shapes carry the absolute mass scale: the scale weight fixes the total, the
 accelerometer shows in the amplitude and curvature near the driving point). sigma_f is the
-relative frequency uncertainty, sigma_s that of a shape entry relative to its mode's RMS.
+relative frequency uncertainty, sigma_s that of a shape entry relative to its mode's RMS,
+sigma_b that of a (heavily damped) suspension frequency.
 Solved by scipy's trust-region reflective least squares with the analytic Jacobian
 (updating.diagnose_model); parameter covariance s^2 (J^T J)^-1 with s^2 = SSR / (N - p).
 """
@@ -65,6 +66,7 @@ class Observations:
         sigma_f: relative frequency uncertainty (residual scale).
         sigma_s: uncertainty of a shape entry relative to its mode's RMS.
         suspension_hz: (<= 2,) measured suspension (rigid-body) frequencies, Hz.
+        sigma_b: their relative uncertainty.
     """
 
     freq_hz: np.ndarray
@@ -73,6 +75,7 @@ class Observations:
     sigma_f: float = 5e-4
     sigma_s: float = 0.01
     suspension_hz: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    sigma_b: float = 0.01
 
     @property
     def n_model_modes(self) -> int:
@@ -137,8 +140,9 @@ def residuals(sol: ModalSolution, obs: Observations, with_suspension: bool):
             with np.errstate(divide="ignore"):
                 idx = np.array([np.argmin(np.abs(np.log(sol.low_hz / meas[0])))])
         r = sol.low_hz[idx] / meas
-        res.append(r - 1.0)
-        jac.append((r[None, :] * sol.dlnf_low[:, idx]).T)
+        w = obs.sigma_f / obs.sigma_b
+        res.append(w * (r - 1.0))
+        jac.append((w * r[None, :] * sol.dlnf_low[:, idx]).T)
     return np.concatenate(res), np.vstack(jac)
 
 
