@@ -75,6 +75,7 @@ class Diagnosis:
     Attributes:
         measured_hz: (m,) paired measured frequencies, Hz (ascending).
         measured_index: (m,) their index in the measured modes.
+        model_index: (m,) the paired elastic mode of the model (0: the first).
         nominal: fit of the nominal model (no parameters); extended: the calibrated model.
         steps: the selection path: the named extensions in order, then every extension of the
             round that stopped the selection (not named), each with its measured gain.
@@ -86,6 +87,7 @@ class Diagnosis:
 
     measured_hz: np.ndarray
     measured_index: np.ndarray
+    model_index: np.ndarray
     nominal: Fit
     extended: Fit
     steps: tuple[Step, ...]
@@ -277,5 +279,6 @@ def diagnose(
         reweight=lambda fit, o: replace(o, sigma_s=shape_sigma(fit, o, shape_sigma_floor)))
     rejected = [replace(s, role="rejected") for s in rejected]
     reference = reference_of(setup, final.active, final.state)
-    return Diagnosis(obs.freq_hz, meas_idx, nominal, final, tuple(named + support + rejected),
-                     unpaired, min_gain_pct, reference, fine_element_m)
+    return Diagnosis(obs.freq_hz, meas_idx, obs.model_index, nominal, final,
+                     tuple(named + support + rejected), unpaired, min_gain_pct, reference,
+                     fine_element_m)
