@@ -2,16 +2,20 @@
 
 1. Pair the measured modes with the nominal model's (Euler-Bernoulli, isotropic, handbook E
    and density, ~1 in elements, nothing attached) by MAC.
-2. Forward selection: from the nominal model, try each remaining extension
+2. Causes, by forward selection: from the nominal model, try each remaining extension
    (updating.diagnose_model.CAUSES), refit all free parameters (updating.diagnose_fit), keep
    the one that lowers the RMS frequency error most. Its gain (percentage points) is measured,
-   not assumed. An extension is named a cause only if its gain is at least ``min_gain_pct``
-   and significant given the frequency uncertainty: the drop of the frequency chi-square
-   sum(e_r^2) / sigma_f^2 exceeds the 99 % point of chi-square with as many degrees of freedom
-   as new parameters (at least one). Selection stops at the first extension that fails.
-3. The calibrated model (the bat's reference for inspect) has the named extensions plus what
-   was measured rather than fitted: the density from the scale weight and, when the test saw
-   them, the bungees from the suspension modes.
+   not assumed. It counts only if the gain is at least ``min_gain_pct`` and significant given
+   the frequency uncertainty: the drop of the frequency chi-square sum(e_r^2) / sigma_f^2
+   exceeds the 99 % point of chi-square with as many degrees of freedom as new parameters (at
+   least one). The selection stops at the first extension that fails.
+3. What was measured rather than fitted joins next: the density from the scale weight and,
+   when the test saw them, the bungees from the suspension modes.
+4. Calibration: further extensions join while they improve the fit of frequencies and
+   mass-normalised shapes by more than they cost (Akaike: chi-square drop above 2 per
+   parameter); the accelerometer's mass is mostly seen here, in the shapes.
+Every extension of the calibrated model has its measured frequency gain; those whose gain
+qualifies as in 2 are named causes. The calibrated model is the bat's reference for inspect.
 """
 
 from __future__ import annotations
@@ -77,8 +81,10 @@ class Diagnosis:
         measured_index: (m,) their index in the measured modes.
         model_index: (m,) the paired elastic mode of the model (0: the first).
         nominal: fit of the nominal model (no parameters); extended: the calibrated model.
-        steps: the selection path: the named extensions in order, then every extension of the
-            round that stopped the selection (not named), each with its measured gain.
+        steps: the selection path, each extension with its measured gain, in the order added
+            (their gains add up to the drop from the nominal to the calibrated RMS error, up
+            to the small shifts when the shape weights are re-estimated),
+            then the extensions left out (role "rejected").
         unpaired_hz: measured modes no model mode matched (MAC below the threshold).
         min_gain_pct: naming threshold, percentage points.
         reference: the calibrated reference (updating.calibration.BatReference).
@@ -256,20 +262,29 @@ def diagnose(
     obs, meas_idx, unpaired = observations(setup, measured, suspension_hz, min_mac)
     nominal = fit_model(setup, frozenset(), obs, start_state(setup, suspension_hz))
     crit = scipy.stats.chi2.ppf(CONFIDENCE, np.arange(8))
+
+    def nameable(s: Step) -> bool:
+        return s.gain_pct >= min_gain_pct and s.chi2_drop_freq >= crit[s.new_params]
+
     remaining = [c for c in CAUSES if not (c == "density" and meta.weight_kg is None
                                            and not np.any(measured.shapes))]
     # 1. causes: extensions that lower the frequency error measurably and significantly
-    named, current, _, _ = forward_select(
-        setup, obs, nominal, remaining, "cause",
-        accept=lambda s: s.gain_pct >= min_gain_pct and s.chi2_drop_freq >= crit[s.new_params],
-        key=lambda s: s.gain_pct)
+    named, current, _, _ = forward_select(setup, obs, nominal, remaining, "cause",
+                                          accept=nameable, key=lambda s: s.gain_pct)
     # 2. what was measured rather than fitted: the scale weight, the suspension modes
-    facts = {"density"} if meta.weight_kg is not None else set()
+    facts = ["density"] if meta.weight_kg is not None else []
     if obs.suspension_hz.size:
-        facts.add("suspension")
-    if not facts <= current.active:
-        current = fit_model(setup, current.active | facts, obs, current.state)
-    remaining = [c for c in remaining if c not in facts]
+        facts.append("suspension")
+    measured_steps = []
+    for c in (c for c in facts if c in remaining):
+        fit = fit_model(setup, current.active | {c}, obs, current.state)
+        new_p = max(1, len(fit.names) - len(current.names))
+        measured_steps.append(Step(c, current.rms_pct, fit.rms_pct,
+                                   chi2_drop(current, fit, obs.sigma_f, True),
+                                   chi2_drop(current, fit, obs.sigma_f, False), new_p,
+                                   "calibration", fit))
+        current = fit
+        remaining.remove(c)
     # 3. calibration: further extensions that improve the fit of frequencies and shapes by
     # more than they cost (Akaike: chi-square drop above 2 per parameter); the shape-noise
     # level is re-estimated from the current model before each round
@@ -277,8 +292,10 @@ def diagnose(
         setup, obs, current, remaining, "calibration",
         accept=lambda s: s.chi2_drop >= 2 * s.new_params, key=lambda s: s.chi2_drop,
         reweight=lambda fit, o: replace(o, sigma_s=shape_sigma(fit, o, shape_sigma_floor)))
+    # an extension in the calibrated model is named whenever its measured gain qualifies
+    later = [replace(s, role="cause") if nameable(s) else s for s in measured_steps + support]
     rejected = [replace(s, role="rejected") for s in rejected]
     reference = reference_of(setup, final.active, final.state)
     return Diagnosis(obs.freq_hz, meas_idx, obs.model_index, nominal, final,
-                     tuple(named + support + rejected), unpaired, min_gain_pct, reference,
+                     tuple(named + later + rejected), unpaired, min_gain_pct, reference,
                      fine_element_m)
