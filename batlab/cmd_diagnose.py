@@ -21,13 +21,18 @@ def add_arguments(p) -> None:
                    help="modal estimation method of the ema fitter")
 
 
-def fit_modes(test, method: str):
-    """(MeasuredModes, suspension_hz) of a test by the ema fitter."""
+def modal_fitter():
+    """ema.fit.fit_test, or a clear error when this installation lacks it."""
     try:
         from ema.fit import fit_test
     except ImportError:
         raise ValueError("the modal fitter (ema.fit) is not available in this "
                          "installation") from None
+    return fit_test
+
+
+def fit_modes(test, method: str, fit_test):
+    """(MeasuredModes, suspension_hz) of a test by the ema fitter."""
     from updating.measured import from_fit
 
     i, _ = test.driving_point
@@ -51,8 +56,9 @@ def run(args) -> int:
     if args.plot and not Path(args.plot).is_dir():
         raise OSError(f"{args.plot}: --plot needs an existing directory")
     test = read_test(args.frf)
+    fit_test = modal_fitter()
     print(f"batlab diagnose: fitting the modes of {args.frf} ...", file=sys.stderr)
-    measured, suspension_hz = fit_modes(test, args.method)
+    measured, suspension_hz = fit_modes(test, args.method, fit_test)
     if measured.freq_hz.size == 0:
         raise ValueError(f"{args.frf}: the fitter found no elastic mode above 20 Hz")
     print(f"batlab diagnose: {measured.freq_hz.size} elastic modes; ranking the causes ...",
