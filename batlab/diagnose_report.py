@@ -53,11 +53,11 @@ def write_plot(result, path: Path, title: str = "") -> Path:
     fig, (ax1, ax2) = plt.subplots(2, 1, figsize=(6.4, 5.2), sharex=True)
     ax1.bar(x, nominal, color="tab:red", label=f"nominal (RMS {result.nominal.rms_pct:.2f} %)")
     ax1.set_ylabel("error, %")
-    ax1.legend(loc="lower left", fontsize=8)
+    ax1.legend(loc="upper left", fontsize=8)
     ax2.bar(x, extended, color="tab:green",
             label=f"calibrated (RMS {result.extended.rms_pct:.3f} %)")
     ax2.set_ylabel("error, %")
-    ax2.legend(loc="lower left", fontsize=8)
+    ax2.legend(loc="best", fontsize=8)
     ax2.set_xticks(x, [f"{v:.0f} Hz" for v in f], fontsize=8)
     ax2.set_xlabel("measured mode")
     for ax in (ax1, ax2):
