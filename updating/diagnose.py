@@ -15,7 +15,11 @@
    mass-normalised shapes by more than they cost (Akaike: chi-square drop above 2 per
    parameter); the accelerometer's mass is mostly seen here, in the shapes.
 Every extension of the calibrated model has its measured frequency gain; those whose gain
-qualifies as in 2 are named causes. The calibrated model is the bat's reference for inspect.
+qualifies as in 2 are named causes.
+5. Backward check: each named cause is removed from the calibrated model in turn; if that
+   costs less than the naming test of 2 (the greedy order let it stand in for later ones) it
+   is not named, and it leaves the model unless the Akaike test of 4 keeps it.
+The calibrated model is the bat's reference for inspect.
 """
 
 from __future__ import annotations
@@ -236,6 +240,28 @@ def forward_select(
     return steps, current, [], obs
 
 
+def backward_check(
+    setup: Setup, obs: Observations, path: list[Step], final: Fit, nameable, facts,
+) -> tuple[list[Step], Fit, list[Step]]:
+    """Re-test each named cause, smallest gain first, by removing it from the final model
+    (what was measured, ``facts``, stays in the model)."""
+    dropped: list[Step] = []
+    for step in sorted((s for s in path if s.named), key=lambda s: s.gain_pct):
+        without = fit_model(setup, final.active - {step.name}, obs, final.state)
+        back = Step(step.name, without.rms_pct, final.rms_pct,
+                    chi2_drop(without, final, obs.sigma_f, True),
+                    chi2_drop(without, final, obs.sigma_f, False), step.new_params, "", final)
+        if nameable(back):
+            continue
+        if step.name in facts or back.chi2_drop >= 2 * back.new_params:
+            path = [replace(s, role="calibration") if s is step else s for s in path]
+        else:
+            path = [s for s in path if s is not step]
+            dropped.append(step)
+            final = without
+    return path, final, dropped
+
+
 def diagnose(
     profile: Profile, meta: BatMeta, measured: MeasuredModes, suspension_hz=None,
     min_gain_pct: float = MIN_GAIN_PCT, min_mac: float = 0.5,
@@ -293,9 +319,14 @@ def diagnose(
         accept=lambda s: s.chi2_drop >= 2 * s.new_params, key=lambda s: s.chi2_drop,
         reweight=lambda fit, o: replace(o, sigma_s=shape_sigma(fit, o, shape_sigma_floor)))
     # an extension in the calibrated model is named whenever its measured gain qualifies
-    later = [replace(s, role="cause") if nameable(s) else s for s in measured_steps + support]
-    rejected = [replace(s, role="rejected") for s in rejected]
+    path = named + [replace(s, role="cause") if nameable(s) else s
+                    for s in measured_steps + support]
+    # 5. backward check: a cause the calibrated model does not need (removing it costs less
+    # than the naming threshold, an artefact of the greedy order) is not named; it leaves the
+    # model too unless the shapes and frequencies still support it (Akaike)
+    path, final, dropped = backward_check(setup, obs, path, final, nameable, facts)
+    rejected = [replace(s, role="rejected") for s in dropped + rejected]
     reference = reference_of(setup, final.active, final.state)
     return Diagnosis(obs.freq_hz, meas_idx, obs.model_index, nominal, final,
-                     tuple(named + later + rejected), unpaired, min_gain_pct, reference,
+                     tuple(path + rejected), unpaired, min_gain_pct, reference,
                      fine_element_m)

@@ -132,8 +132,9 @@ def from_vector(state: State, names: tuple[str, ...], x: np.ndarray) -> State:
     return replace(state, **changes)
 
 
+# physical ranges; E/G >= 2 = 2 (1 + nu) with nu >= 0 (the isotropic limit; wood: 9-20)
 BOUNDS = {"ln_E": (np.log(1e8), np.log(1e11)), "ln_rho": (np.log(50.0), np.log(3000.0)),
-          "ln_e_over_g": (np.log(0.05), np.log(60.0)), "sensor_g": (0.0, 100.0),
+          "ln_e_over_g": (np.log(2.0), np.log(60.0)), "sensor_g": (0.0, 100.0),
           "bungee_kn_per_m": (0.0, 100.0)}
 
 
