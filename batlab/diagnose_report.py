@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import textwrap
 from pathlib import Path
 
 
@@ -27,8 +28,9 @@ def format_table(out: dict) -> str:
         lines.append(f"  {c['name']:<18} gain {c['gain_pct']:6.3f} pp   {vals}")
     quiet = [n for n in out.get("not_named", []) if n.get("in_reference")]
     if quiet:
-        lines.append("also in the calibrated model (frequency gain too small to name): "
-                     + ", ".join(f"{n['name']} ({n['gain_pct']:+.3f} pp)" for n in quiet))
+        text = ("also in the calibrated model (frequency gain too small to name): "
+                + ", ".join(f"{n['name']} ({n['gain_pct']:+.3f} pp)" for n in quiet))
+        lines += textwrap.wrap(text, 96, subsequent_indent="  ")
     cal = out["calibrated"]
     lines.append(f"calibrated: E {cal['E_psi']:.4g} psi, E/G {cal['E_over_G']:.3g}, weight "
                  f"density {cal['weight_density_lbf_in3']:.5f} lbf/in^3, sensor "
