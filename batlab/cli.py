@@ -11,12 +11,21 @@ from __future__ import annotations
 
 import argparse
 import importlib
+import os
 import sys
+
+# batlab's matrices are small (tens to hundreds of DOFs): BLAS threads cost more than they
+# save, and under load they slow an eigen-solution several times. Set before numpy loads.
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+os.environ.setdefault("OMP_NUM_THREADS", "1")
 
 COMMANDS: tuple[str, ...] = (
     "model",
     "simulate",
     "diagnose",
+    "rig",
+    "acquire",
+    "paper",
 )
 
 

@@ -1,6 +1,5 @@
 """`batlab simulate` writes a contract-form UFF test; the samples are what the script makes."""
 
-import filecmp
 import json
 import shlex
 from pathlib import Path
@@ -47,6 +46,10 @@ def test_sample_is_what_the_script_makes(tmp_path, monkeypatch, capsys):
     args = ["simulate", "--profile", "paper_bat/profile.csv", "--meta", "paper_bat/meta.json",
             "--beam", "euler", "--e-over-g", "2.6", *common, "--seed", "1", "--out", str(out)]
     assert main(args) == 0
-    assert filecmp.cmp(out, SAMPLES / "paper_bat" / "baseline.uff", shallow=False)
+    # the same seed gives the same test, to the round-off of the suspension modes (their
+    # eigenvalues are ~1e-11 of the largest; BLAS thread count reorders sums)
+    ours, sample = read_test(out), read_test(SAMPLES / "paper_bat" / "baseline.uff")
+    np.testing.assert_allclose(ours.frf, sample.frf, rtol=1e-4, atol=1e-9)
+    assert ours.node_x_m == sample.node_x_m
     test = read_test(SAMPLES / "paper_bat" / "corked.uff")
     assert np.all(np.isfinite(test.frf)) and test.frf.shape == (3201, 1, 17)
