@@ -27,6 +27,7 @@ COMMANDS: tuple[str, ...] = (
     "history",
     "inspect",
     "demo",
+    "diagnose",
     "rig",
     "acquire",
     "paper",
