@@ -13,6 +13,7 @@ import base64
 import html
 import io
 import os
+import tempfile
 from pathlib import Path
 
 import numpy as np
@@ -24,6 +25,10 @@ from updating.sections import Core
 from updating.units import IN_TO_M, KG_M2_TO_LB_IN2, LB_TO_KG
 
 
+def _data_uri(png: bytes) -> str:
+    return "data:image/png;base64," + base64.b64encode(png).decode("ascii")
+
+
 def _png(fig) -> str:
     """A figure as a base64 PNG data URI (the figure is closed)."""
     import matplotlib.pyplot as plt
@@ -31,7 +36,15 @@ def _png(fig) -> str:
     buf = io.BytesIO()
     fig.savefig(buf, format="png", dpi=110, bbox_inches="tight")
     plt.close(fig)
-    return "data:image/png;base64," + base64.b64encode(buf.getvalue()).decode("ascii")
+    return _data_uri(buf.getvalue())
+
+
+def stabilisation_png(fit) -> str:
+    """The fit's stabilisation diagram (``ema.plots.plot_stabilisation``) as a data URI."""
+    from ema.plots import plot_stabilisation
+
+    with tempfile.TemporaryDirectory(prefix="batlab-report-") as tmp:
+        return _data_uri(plot_stabilisation(fit, Path(tmp) / "stab.png").read_bytes())
 
 
 def _db(h: np.ndarray) -> np.ndarray:
@@ -60,31 +73,6 @@ def frf_figure(result: InspectionResult):
     ax.set_title("Driving-point FRF")
     ax.legend(fontsize=8, loc="lower right")
     ax.grid(alpha=0.3)
-    return fig
-
-
-def stabilisation_figure(ft):
-    """Poles of the LSCF order sweep (stable in frequency, damping and shape: filled) over the
-    sum MIF, with the selected modes."""
-    import matplotlib.pyplot as plt
-
-    fit = ft.fit
-    fig, ax = plt.subplots(figsize=(9, 3.2))
-    sweep, stab = fit.sweep, fit.stability
-    ok = stab.all
-    ax.plot(sweep.freq_hz[~ok], sweep.order[~ok], ".", ms=2, color="0.7", label="pole")
-    ax.plot(sweep.freq_hz[ok], sweep.order[ok], "o", ms=3, mfc="C2", mec="none",
-            label="stable pole")
-    for f in fit.freq_hz:
-        ax.axvline(f, color="C3", lw=0.8, alpha=0.7)
-    ax.set_xlim(fit.band_hz)
-    ax.set_xlabel("frequency (Hz)")
-    ax.set_ylabel("model order")
-    ax2 = ax.twinx()
-    ax2.semilogy(fit.band_freq_hz, fit.mif, color="C0", lw=0.8, alpha=0.6)
-    ax2.set_ylabel("sum MIF")
-    ax.set_title(f"Stabilisation diagram: {ft.name}")
-    ax.legend(fontsize=8, loc="upper left")
     return fig
 
 
@@ -281,7 +269,8 @@ def render_html(result: InspectionResult) -> str:
     parts.append(_img(_png(mac_figure(result)), "MAC baseline vs re-test"))
     for ft in (result.baseline, result.retest):
         if ft.fit is not None and getattr(ft.fit, "sweep", None) is not None:
-            parts.append(_img(_png(stabilisation_figure(ft)), f"stabilisation {ft.name}"))
+            parts.append(f"<h3>Stabilisation diagram: {html.escape(ft.name)}</h3>")
+            parts.append(_img(stabilisation_png(ft.fit), f"stabilisation {ft.name}"))
     parts.append("<p class='note'>Made by batlab; element factors: M = M_S + sum alpha_i m_i, "
                  "K = K_S + sum beta_i k_i (MSSO).</p>")
     return ("<!DOCTYPE html><html lang='en'><head><meta charset='utf-8'>"

@@ -45,6 +45,15 @@ def test_report_is_self_contained(result, tmp_path):
     assert "24.00 – 33.00" in page  # region in inches from the knob
 
 
+def test_report_with_real_fits_has_stabilisation_diagrams(monkeypatch, tmp_path):
+    use_standins(monkeypatch, fit=False)
+    res = pipeline.inspect_files(SAMPLE / "profile.csv", SAMPLE / "meta.json",
+                                 SAMPLE / "baseline.uff", SAMPLE / "retest_corked.uff")
+    page = write_report(tmp_path, res).read_text()
+    assert page.count("<h3>Stabilisation diagram: ") == 2
+    assert len(re.findall(r'<img src="data:image/png;base64,', page)) == 5
+
+
 def test_report_destination_is_a_file(result, tmp_path):
     (tmp_path / "f").write_text("x")
     with pytest.raises(ValueError, match="not a directory"):
