@@ -2,8 +2,10 @@
 
 ``fit_test`` runs, with no human picking:
 
-1. poles: polyreference LSCF over an order sweep (``ema.lscf``), stabilisation and automatic
-   selection (``ema.stabilisation``); or, with ``method="peak"``, sum-MIF peaks with
+1. poles: polyreference LSCF over an order sweep in overlapping sub-bands (``ema.lscf``,
+   ``ema.autopoles``), stabilisation and automatic selection (``ema.stabilisation``); stable
+   poles just outside the band (modes the band edge cuts) join the LSFD as computational
+   poles but are not reported; or, with ``method="peak"``, sum-MIF peaks with
    half-power damping (``ema.mif``);
 2. residues of every FRF with lower and upper residual terms (``ema.lsfd``);
 3. modes without support in the data are dropped: a mode whose contribution at its own
@@ -28,14 +30,15 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ema.autopoles import auto_poles, take
 from ema.complexity import mpc, mpd, real_modes
 from ema.frf_data import FrfTest
-from ema.lscf import PoleSweep, lscf_sweep
+from ema.lscf import PoleSweep
 from ema.lsfd import LsfdResult, lsfd
 from ema.mass_line import RigidBody, rigid_body_from_mass_line, rigid_body_from_modes
 from ema.mif import PeakPick, pick_peaks, sum_mif
 from ema.scaling import fix_sign, mass_normalised_shapes
-from ema.stabilisation import SelectedPoles, Stability, select_poles, stability
+from ema.stabilisation import SelectedPoles, Stability
 
 METHODS = ("lscf", "peak")
 
@@ -149,7 +152,7 @@ def fit_test(
         band_hz: (lo, hi) Hz fitted; default from 20 Hz (above the suspension) to the last line.
         method: "lscf" (polyreference LSCF + stabilisation + LSFD) or "peak" (sum-MIF peaks,
             half-power damping + LSFD).
-        max_order: highest LSCF order (default 60 / number of polyreference references).
+        max_order: highest LSCF order (default 120 / number of polyreference references).
         suspension_max_hz: modes below are the suspension's rigid-body modes.
         known_mass_kg: the bat's mass, for the mass-line check when the band excludes the
             suspension modes.
@@ -174,12 +177,13 @@ def fit_test(
     peaks = pick_peaks(freq[sel], mif, band)
 
     sweep = stab = selected = None
+    extra = np.zeros(0, dtype=complex)
     if method == "lscf":
         n_poly_ref = h_poly.shape[2]
-        p_max = int(max_order) if max_order else max(16, 60 // n_poly_ref)
-        sweep = lscf_sweep(freq, h_poly, band, p_max)
-        stab = stability(sweep)
-        selected = select_poles(sweep, stab)
+        p_max = int(max_order) if max_order else max(12, 40 // n_poly_ref)
+        auto = auto_poles(freq, h_poly, band, p_max)
+        sweep, stab, selected = auto.sweep, auto.stability, auto.modes
+        extra = auto.outside.pole
         fr, zr = selected.freq_hz, selected.damping_ratio
         f_std, z_std, count = selected.freq_std_hz, selected.damping_std, selected.count
     else:
@@ -190,25 +194,18 @@ def fit_test(
 
     h_flat = test.frf.reshape(freq.size, -1)
     poles = _poles(zr, fr)
-    fit = lsfd(freq, h_flat, poles, test.quantity, band)
+    m = poles.size
+    fit = lsfd(freq, h_flat, np.concatenate([poles, extra]), test.quantity, band)
     keep = _supported(fit, h_flat[sel], poles, min_snr)
     if not keep.all():
         fr, zr, f_std, z_std, count = (a[keep] for a in (fr, zr, f_std, z_std, count))
-        if selected is not None:
-            selected = SelectedPoles(
-                freq_hz=fr,
-                damping_ratio=zr,
-                freq_std_hz=f_std,
-                damping_std=z_std,
-                pole=selected.pole[keep],
-                count=count,
-                shape=selected.shape[keep],
-                members=[m for m, k in zip(selected.members, keep, strict=True) if k],
-            )
         poles = poles[keep]
-        fit = lsfd(freq, h_flat, poles, test.quantity, band)
+        m = poles.size
+        if selected is not None:
+            selected = take(selected, keep)
+        fit = lsfd(freq, h_flat, np.concatenate([poles, extra]), test.quantity, band)
 
-    residue = fit.residue.reshape(n_resp, n_ref, -1)
+    residue = fit.residue[:, :m].reshape(n_resp, n_ref, m)
     row = residue[i_d, :, :] if row_layout else residue[:, j_d, :]
     shapes = mass_normalised_shapes(row, poles, d_index)
     real = fix_sign(real_modes(shapes), d_index)

@@ -1,25 +1,32 @@
 """Polyreference least-squares complex-frequency (LSCF / PolyMAX) poles over an order sweep.
 
 Right matrix-fraction model in the z-domain (Peeters, Van der Auweraer, Guillaume, Leuridan,
-"The PolyMAX frequency-domain method", Shock and Vibration 11, 2004):
+"The PolyMAX frequency-domain method", Shock and Vibration 11, 2004), here in its
+frequency-shifted complex-coefficient form so that any band [f_lo, f_hi] maps onto (almost)
+the whole unit circle:
 
-    H_o(w) = B_o(z) A(z)^-1,   z = exp(i w dt),   B_o(z) = sum_k z^k b_ok (1 x m),
-    A(z) = sum_k z^k A_k (m x m),   k = 0..p,   dt = 1 / (2 f_hi)
+    H_o(w) = B_o(z) A(z)^-1,   z = exp(i (w - w_c) dt),   w_c = pi (f_lo + f_hi),
+    dt = span / (f_hi - f_lo),   B_o(z) = sum_k z^k b_ok (1 x m),   A(z) = sum_k z^k A_k (m x m),
 
-for outputs o = 1..l and m references. Linearised error per output and line,
-E_o = sum_k z^k (b_ok - H_o A_k), gives for each output the blocks
-R = Re(G^H G), S_o = Re(G^H F_o), T_o = Re(F_o^H F_o) with G_fk = z_f^k and
-F_o,f(k,b) = -z_f^k H_ob(f). Eliminating the numerators (b_o = -R^-1 S_o alpha) leaves the
-reduced normal equations
+k = 0..p, for outputs o = 1..l and m references; the band covers |angle z| <= span pi
+(span = 0.9), where the powers z^k are nearly orthogonal and the normal equations stay well
+conditioned at any band position (the real-coefficient form over [0, f_hi] becomes singular
+for a band far from 0 Hz). Each mode in the band is one pole (its conjugate lies outside the
+band and is absorbed by the model). Linearised error per output and line,
+E_o = sum_k z^k (b_ok - H_o A_k), gives the blocks R = G^H G, S_o = G^H F_o,
+T_o = F_o^H F_o with G_fk = z_f^k and F_o,f(k,b) = -z_f^k H_ob(f). Eliminating the numerators
+(b_o = -R^-1 S_o alpha) leaves the reduced normal equations
 
-    M alpha = 0,   M = sum_o (T_o - S_o^T R^-1 S_o),
+    M alpha = 0,   M = sum_o (T_o - S_o^H R^-1 S_o),
 
 solved with the constraint A_p = I. The poles are the eigenvalues z_r of the block companion
-matrix of A(z), lambda_r = ln(z_r) / dt; its eigenvectors give the participation factors
-L_r (A(z_r) L_r = 0) and B_o(z_r) L_r is proportional to the mode shape at output o.
+matrix of A(z), lambda_r = ln(z_r) / dt + i w_c; its eigenvectors give the participation
+factors L_r (A(z_r) L_r = 0) and B_o(z_r) L_r is proportional to the mode shape at output o.
 
 All blocks are Toeplitz in (j, k): they are built once from the moments
-c_n[X] = sum_f z_f^n X_f, n = -p..p, and every order of the sweep takes leading sub-blocks.
+c_n[X] = sum_f z_f^n X_f, n = -p..p. R_p = L_p L_p^H, with L_p the leading block of the
+Cholesky factor of the largest R, so S_o^H R_p^-1 S_o is a running sum over the rows of
+L^-1 S_o and every order of the sweep costs one small solve and one eigenvalue problem.
 
 Roving-hammer tests (one accelerometer, many impacts) are fitted transposed: by reciprocity
 H_jk = H_kj, so the impacts become outputs and the single accelerometer the only reference.
@@ -31,6 +38,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from scipy.linalg import cholesky, solve_triangular
 
 
 @dataclass(frozen=True)
@@ -58,13 +66,6 @@ class PoleSweep:
     band_hz: tuple[float, float]
 
 
-def _moments(zf: np.ndarray, x: np.ndarray, p: int) -> np.ndarray:
-    """c_n[x] = sum_f z_f^n x_f for n = -p..p; x is (F, ...) -> (2p+1, ...)."""
-    n = np.arange(-p, p + 1)
-    zn = zf[None, :] ** n[:, None]  # (2p+1, F)
-    return np.tensordot(zn, x, axes=(1, 0))
-
-
 def _toeplitz_index(p: int) -> np.ndarray:
     """Index into the moment axis (n = -p..p stored at n + p) for block entry (j, k): k - j."""
     j = np.arange(p + 1)
@@ -77,6 +78,7 @@ def lscf_sweep(
     band_hz: tuple[float, float],
     max_order: int,
     min_order: int = 2,
+    span: float = 0.9,
 ) -> PoleSweep:
     """Poles of polyreference LSCF models of orders min_order..max_order.
 
@@ -86,9 +88,10 @@ def lscf_sweep(
         band_hz: (lo, hi) frequency band fitted, Hz.
         max_order: highest polynomial order p (p*m poles at order p).
         min_order: lowest order.
+        span: the band is mapped onto the arc |angle z| <= span pi of the unit circle.
 
     Returns:
-        A PoleSweep with the poles in the band with positive damped frequency.
+        A PoleSweep with all poles of positive damped frequency (in the band or not).
     """
     freq_hz = np.asarray(freq_hz, dtype=float)
     h = np.asarray(frf, dtype=complex)
@@ -106,46 +109,65 @@ def lscf_sweep(
     rms = np.sqrt(np.mean(np.abs(h) ** 2, axis=(0, 2)))
     h = h / np.where(rms > 0, rms, 1.0)[None, :, None]
 
-    dt = 1.0 / (2.0 * hi)
-    zf = np.exp(2j * np.pi * f * dt)
-    ones = np.ones(f.size, dtype=complex)
-    c_r = _moments(zf, ones, p_max).real  # (2p+1,)
-    c_s = -_moments(zf, h, p_max).real  # (2p+1, l, m)
+    fc = 0.5 * (lo + hi)
+    dt = span / (hi - lo)
+    n_mom = np.arange(-p_max, p_max + 1)
+    zn = np.exp(2j * np.pi * dt * n_mom[:, None] * (f - fc)[None, :])  # (2p+1, F): z_f^n
     hh = np.conj(h)[:, :, :, None] * h[:, :, None, :]  # (F, l, m, m)
-    c_t = _moments(zf, hh, p_max).real  # (2p+1, l, m, m)
+    cols = np.concatenate(
+        [np.ones((f.size, 1)), h.reshape(f.size, -1), hh.reshape(f.size, -1)], axis=1
+    )
+    mom = zn @ cols  # moments c_n of 1, H and conj(H) H
+    c_r = mom[:, 0]
+    c_s = -mom[:, 1 : 1 + n_out * m].reshape(-1, n_out, m)
+    c_t = mom[:, 1 + n_out * m :].reshape(-1, n_out, m, m)
 
-    idx = _toeplitz_index(p_max)  # (p+1, p+1)
-    r_full = c_r[idx]  # (P, P)
-    s_full = np.moveaxis(c_s[idx], 2, 0)  # (l, P, P, m): S_o[j, k, b]
-    s_full = s_full.reshape(n_out, p_max + 1, (p_max + 1) * m)
-    t_full = np.moveaxis(c_t[idx], 2, 0)  # (l, P, P, m, m): T_o[j, k, a, b]
-    t_full = np.transpose(t_full, (0, 1, 3, 2, 4)).reshape(
-        n_out, (p_max + 1) * m, (p_max + 1) * m
-    )  # rows (j, a), columns (k, b)
+    n_p = p_max + 1
+    idx = _toeplitz_index(p_max)  # (P, P)
+    r_full = c_r[idx]
+    s_full = np.moveaxis(c_s[idx], 2, 0).reshape(n_out, n_p, n_p * m)  # S_o[j, (k, b)]
+    t_sum = np.transpose(c_t[idx].sum(axis=2), (0, 2, 1, 3)).reshape(n_p * m, n_p * m)
+    # R_p = L_p L_p^H with L_p the leading block of the full Cholesky factor, so
+    # S_o^H R_p^-1 S_o = Y_o^H Y_o with Y_o = L^-1 S_o restricted to rows 0..p: a running sum.
+    try:
+        chol = cholesky(r_full, lower=True)
+    except np.linalg.LinAlgError as exc:
+        raise ValueError(f"band {lo:g}-{hi:g} Hz: LSCF normal equations are singular") from exc
+    # the inverse of a leading block of a triangular matrix is the leading block of its inverse
+    linv = solve_triangular(chol, np.eye(n_p), lower=True)
+    y = linv @ np.moveaxis(s_full, 0, 1).reshape(n_p, -1)
+    y = y.reshape(n_p, n_out, n_p * m)  # y[j, o, (k, b)]
+    yhy = np.zeros((n_p * m, n_p * m), dtype=complex)
 
     orders, pole_l, shape_l, part_l, order_l = [], [], [], [], []
-    for p in range(int(min_order), p_max + 1):
+    for p in range(0, p_max + 1):
+        yhy += np.conj(y[p]).T @ y[p]
+        if p < int(min_order):
+            continue
         n_c = (p + 1) * m
-        r = r_full[: p + 1, : p + 1]
-        s = s_full[:, : p + 1, :n_c]
-        t = t_full[:, :n_c, :n_c]
-        rinv_s = np.linalg.solve(r, s)  # (l, P, n_c)
-        mm = np.sum(t - np.transpose(s, (0, 2, 1)) @ rinv_s, axis=0)
+        mm = t_sum[:n_c, :n_c] - yhy[:n_c, :n_c]
         top = np.linalg.solve(mm[: p * m, : p * m], -mm[: p * m, p * m :])  # (p m, m)
-        alpha = np.vstack([top, np.eye(m)])  # (n_c, m)
-        comp = np.zeros((p * m, p * m))
+        alpha = np.vstack([top, np.eye(m, dtype=complex)])  # (n_c, m)
+        comp = np.zeros((p * m, p * m), dtype=complex)
         comp[: (p - 1) * m, m:] = np.eye((p - 1) * m)
         # last block row: [-A_0, -A_1, ..., -A_{p-1}], A_k = top[k m:(k+1) m, :]
         comp[(p - 1) * m :, :] = -top.reshape(p, m, m).transpose(1, 0, 2).reshape(m, p * m)
-        zr, vec = np.linalg.eig(comp)
-        lam = np.log(zr.astype(complex)) / dt
+        if m == 1:
+            zr = np.linalg.eigvals(comp)
+            vec = np.ones((1, zr.size), dtype=complex)
+        else:
+            zr, vec = np.linalg.eig(comp)
+        lam = np.log(zr) / dt + 2j * np.pi * fc
         keep = (lam.imag > 0) & np.isfinite(lam)
-        lam, vec, zr = lam[keep], vec[:, keep], zr[keep]
-        lr = vec[:m, :]
+        lam, zr = lam[keep], zr[keep]
+        lr = vec[:m, keep]
         lr = lr / np.linalg.norm(lr, axis=0, keepdims=True)
-        beta = -(rinv_s @ alpha)  # (l, P, m): b_o,k
+        # numerators b_o = -R_p^-1 S_o alpha = -L_p^-H (Y_o alpha)
+        ya = np.einsum("joc,cb->job", y[: p + 1, :, :n_c], alpha).reshape(p + 1, -1)
+        beta = -np.conj(linv[: p + 1, : p + 1]).T @ ya
+        beta = beta.reshape(p + 1, n_out, m)  # b_o,k
         zk = zr[None, :] ** np.arange(p + 1)[:, None]  # (P, n_poles)
-        shape = np.einsum("okb,bn,kn->no", beta, lr, zk)
+        shape = np.einsum("kob,bn,kn->no", beta, lr, zk)
         orders.append(p)
         pole_l.append(lam)
         shape_l.append(shape)

@@ -50,7 +50,6 @@ class SelectedPoles:
         pole: (m,) lambda = -zeta w_n + i w_n sqrt(1 - zeta^2), rad/s.
         count: (m,) number of model orders at which the mode is stable.
         shape: (m, l) shape estimate of the cluster member nearest the median.
-        members: list of (k,) index arrays into the PoleSweep, one per mode.
     """
 
     freq_hz: np.ndarray
@@ -60,7 +59,6 @@ class SelectedPoles:
     pole: np.ndarray
     count: np.ndarray
     shape: np.ndarray
-    members: list
 
 
 def stability(
@@ -95,9 +93,13 @@ def select_poles(
     tol_cluster_freq: float = 0.003,
     min_fraction: float = 0.3,
     min_mpc: float = 0.5,
+    freq_range_hz: tuple[float, float] | None = None,
 ) -> SelectedPoles:
-    """Cluster the stable poles over orders and keep the clusters that are physical modes."""
-    lo, hi = sweep.band_hz
+    """Cluster the stable poles over orders and keep the clusters that are physical modes.
+
+    Poles are candidates inside ``freq_range_hz`` (default: the sweep's band).
+    """
+    lo, hi = sweep.band_hz if freq_range_hz is None else freq_range_hz
     cand = np.flatnonzero(
         stab.all
         & (sweep.damping_ratio > 0)
@@ -135,7 +137,7 @@ def select_poles(
         rep = members[np.argmin(np.abs(f - fm) / fm + np.abs(z - zm) / zm)]
         if mpc(sweep.shape[rep][:, None])[0] < min_mpc:
             continue
-        rows.append((fm, zm, np.std(f), np.std(z), members.size, sweep.shape[rep], members))
+        rows.append((fm, zm, np.std(f), np.std(z), members.size, sweep.shape[rep]))
     rows.sort(key=lambda r: r[0])
     fr = np.array([r[0] for r in rows], dtype=float)
     zr = np.array([r[1] for r in rows], dtype=float)
@@ -149,5 +151,4 @@ def select_poles(
         pole=-zr * wn + 1j * wn * np.sqrt(1 - zr**2),
         count=np.array([r[4] for r in rows], dtype=int),
         shape=np.array([r[5] for r in rows], dtype=complex).reshape(-1, n_out),
-        members=[r[6] for r in rows],
     )
