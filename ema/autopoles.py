@@ -7,9 +7,10 @@ whose edges double (lo, max(2 lo, lo + 80 Hz), then x2 up to hi); each core is f
 (``ema.lscf``) over itself widened by ``overlap`` of its width on both sides, and its poles
 selected automatically (``ema.stabilisation``). A mode is taken from the sub-band whose
 core holds it; modes found twice near a core edge (within ``dup_tol`` in frequency and
-MAC > 0.9) are kept once, from the sub-band whose core centre is nearest. Stable poles just
-outside the whole band (a mode the band edge cuts) are returned apart: the LSFD step uses
-them as computational poles, they are not reported as modes.
+20 % in damping) are kept once, from the sub-band whose core centre is nearest. Stable poles
+outside the whole band or closer to its edges than their half-power half-width zeta f plus
+2 lines (a mode the band edge cuts: its estimate is unreliable) are returned apart: the LSFD
+step uses them as computational poles, they are not reported as modes.
 """
 
 from __future__ import annotations
@@ -19,7 +20,6 @@ from dataclasses import dataclass
 import numpy as np
 
 from ema.lscf import PoleSweep, lscf_sweep
-from ema.mac import mac
 from ema.stabilisation import SelectedPoles, Stability, select_poles, stability
 
 
@@ -105,9 +105,11 @@ def auto_poles(
         wide = select_poles(sw, st, freq_range_hz=(0.9 * fa, 1.1 * fb))
         centre = np.sqrt(a * b)
         in_core = (wide.freq_hz >= a - dup_tol * a) & (wide.freq_hz <= b + dup_tol * b)
-        in_core &= (wide.freq_hz > lo) & (wide.freq_hz < hi)
-        found.append((take(wide, in_core), centre))
-        edge = ((wide.freq_hz >= hi) & (b >= hi)) | ((wide.freq_hz <= lo) & (a <= lo))
+        guard = wide.damping_ratio * wide.freq_hz + 2 * df
+        inside = (wide.freq_hz > lo + guard) & (wide.freq_hz < hi - guard)
+        found.append((take(wide, in_core & inside), centre))
+        edge = ~inside & (((wide.freq_hz > 0.5 * (a + b)) & (b >= hi)) |
+                          ((wide.freq_hz < 0.5 * (a + b)) & (a <= lo)))
         outside.append(take(wide, edge))
         # stabilisation data: the poles of this sub-band's core
         core = (sw.freq_hz >= a) & (sw.freq_hz < b if b < hi else sw.freq_hz <= hi)
@@ -122,7 +124,7 @@ def auto_poles(
             if j == i or other.freq_hz.size == 0 or sel.freq_hz.size == 0:
                 continue
             close = np.abs(sel.freq_hz[:, None] / other.freq_hz[None, :] - 1) < dup_tol
-            close &= mac(sel.shape.T, other.shape.T) > 0.9
+            close &= np.abs(sel.damping_ratio[:, None] / other.damping_ratio[None, :] - 1) < 0.2
             dist_self = np.abs(np.log(sel.freq_hz / centre))
             dist_other = np.abs(np.log(other.freq_hz[None, :] / c2))
             worse = close & ((dist_self[:, None] > dist_other) |

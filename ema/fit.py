@@ -15,7 +15,9 @@
    MPC and MPD (``ema.complexity``);
 5. exponential-window damping correction zeta = zeta_measured - 1 / (tau w_r);
 6. modes below ``suspension_max_hz`` are the suspension's rigid-body modes: reported apart,
-   and used for the mass check (``ema.mass_line``).
+   and used for the mass check (``ema.mass_line``). A band starting below
+   ``suspension_max_hz`` fits them as modes and drops the lower residual terms (which would
+   trade off against them); otherwise the lower residual is the mass line.
 
 Orientation: the polyreference "references" are the side with fewer nodes. For a roving-hammer
 test (1 accelerometer x n impacts) the FRF matrix is fitted transposed (reciprocity,
@@ -36,7 +38,7 @@ from ema.frf_data import FrfTest
 from ema.lscf import PoleSweep
 from ema.lsfd import LsfdResult, lsfd
 from ema.mass_line import RigidBody, rigid_body_from_mass_line, rigid_body_from_modes
-from ema.mif import PeakPick, pick_peaks, sum_mif
+from ema.mif import PeakPick, pick_peaks, receptance_power, sum_mif
 from ema.scaling import fix_sign, mass_normalised_shapes
 from ema.stabilisation import SelectedPoles, Stability
 
@@ -174,7 +176,7 @@ def fit_test(
     d_index = j_d if row_layout else i_d
     sel = (freq >= band[0]) & (freq <= band[1]) & (freq > 0)
     mif = sum_mif(test.frf[sel])
-    peaks = pick_peaks(freq[sel], mif, band)
+    peaks = pick_peaks(freq[sel], receptance_power(freq[sel], mif, test.quantity), band)
 
     sweep = stab = selected = None
     extra = np.zeros(0, dtype=complex)
@@ -195,7 +197,8 @@ def fit_test(
     h_flat = test.frf.reshape(freq.size, -1)
     poles = _poles(zr, fr)
     m = poles.size
-    fit = lsfd(freq, h_flat, np.concatenate([poles, extra]), test.quantity, band)
+    lower = band[0] >= suspension_max_hz  # else the suspension modes are fitted as modes
+    fit = lsfd(freq, h_flat, np.concatenate([poles, extra]), test.quantity, band, lower=lower)
     keep = _supported(fit, h_flat[sel], poles, min_snr)
     if not keep.all():
         fr, zr, f_std, z_std, count = (a[keep] for a in (fr, zr, f_std, z_std, count))
@@ -203,7 +206,7 @@ def fit_test(
         m = poles.size
         if selected is not None:
             selected = take(selected, keep)
-        fit = lsfd(freq, h_flat, np.concatenate([poles, extra]), test.quantity, band)
+        fit = lsfd(freq, h_flat, np.concatenate([poles, extra]), test.quantity, band, lower=lower)
 
     residue = fit.residue[:, :m].reshape(n_resp, n_ref, m)
     row = residue[i_d, :, :] if row_layout else residue[:, j_d, :]

@@ -62,7 +62,7 @@ class SelectedPoles:
 
 
 def stability(
-    sweep: PoleSweep, tol_freq: float = 0.01, tol_damping: float = 0.05, min_mac: float = 0.98
+    sweep: PoleSweep, tol_freq: float = 0.01, tol_damping: float = 0.05, min_mac: float = 0.95
 ) -> Stability:
     """Stability flags of every pole against the poles of the previous order of the sweep."""
     n = sweep.pole.size
@@ -89,7 +89,7 @@ def select_poles(
     sweep: PoleSweep,
     stab: Stability,
     max_damping: float = 0.1,
-    min_mac: float = 0.98,
+    min_mac: float = 0.95,
     tol_cluster_freq: float = 0.003,
     min_fraction: float = 0.3,
     min_mpc: float = 0.5,

@@ -91,7 +91,8 @@ def make_test(
     elif quantity == "mobility":
         h = model.receptance(freq, [d], np.arange(n_points)) * (2j * np.pi * freq)[:, None, None]
     rms = np.sqrt(np.mean(np.abs(h) ** 2, axis=0, keepdims=True))
-    h = h + noise * rms * (rng.standard_normal(h.shape) + 1j * rng.standard_normal(h.shape)) / np.sqrt(2)
+    white = rng.standard_normal(h.shape) + 1j * rng.standard_normal(h.shape)
+    h = h + noise * rms * white / np.sqrt(2)
     nodes = np.arange(1, n_points + 1)
     test = FrfTest(
         freq_hz=freq,
