@@ -9,8 +9,10 @@ selected automatically (``ema.stabilisation``). A mode is taken from the sub-ban
 core holds it; modes found twice near a core edge (within ``dup_tol`` in frequency and
 20 % in damping) are kept once, from the sub-band whose core centre is nearest. Stable poles
 outside the whole band or closer to its edges than their half-power half-width zeta f plus
-2 lines (a mode the band edge cuts: its estimate is unreliable) are returned apart: the LSFD
-step uses them as computational poles, they are not reported as modes.
+2 lines (a mode the band edge cuts: its estimate is unreliable) are returned apart, and so
+are all poles of the highest order in that edge zone (up to 10 % beyond the band; damping
+0-20 %): the LSFD step uses them as computational poles that absorb the cut modes, they are
+not reported as modes.
 """
 
 from __future__ import annotations
@@ -29,6 +31,7 @@ class AutoPoles:
 
     modes: SelectedPoles
     outside: SelectedPoles
+    computational: np.ndarray
     sweep: PoleSweep
     stability: Stability
     sub_bands: list
@@ -94,7 +97,7 @@ def auto_poles(
     df = freq_hz[1] - freq_hz[0]
     n_out = frf.shape[1]
     lo, hi = band_hz
-    found, outside, sweeps, stabs = [], [], [], []
+    found, outside, sweeps, stabs, computational = [], [], [], [], []
     for (a, b), (fa, fb) in sub_bands(band_hz):
         n_lines = int((fb - fa) / df)
         p = min(int(max_order), n_lines // 4)
@@ -111,6 +114,14 @@ def auto_poles(
         edge = ~inside & (((wide.freq_hz > 0.5 * (a + b)) & (b >= hi)) |
                           ((wide.freq_hz < 0.5 * (a + b)) & (a <= lo)))
         outside.append(take(wide, edge))
+        # computational poles: every pole of the highest order at the band's edges
+        top = sw.order == sw.orders[-1]
+        zt, ft = sw.damping_ratio, sw.freq_hz
+        g = zt * ft + 2 * df
+        comp = top & (zt > 0) & (zt < 0.2) & (
+            ((b >= hi) & (ft >= hi - g) & (ft <= 1.1 * hi)) |
+            ((a <= lo) & (ft <= lo + g) & (ft >= 0.9 * lo)))
+        computational.append(sw.pole[comp])
         # stabilisation data: the poles of this sub-band's core
         core = (sw.freq_hz >= a) & (sw.freq_hz < b if b < hi else sw.freq_hz <= hi)
         sweeps.append((sw, core))
@@ -148,4 +159,7 @@ def auto_poles(
         damping=np.concatenate([st.damping[c] for st, (_, c) in zip(stabs, sweeps, strict=True)]),
         shape=np.concatenate([st.shape[c] for st, (_, c) in zip(stabs, sweeps, strict=True)]),
     )
-    return AutoPoles(modes, out, merged, merged_stab, [fb for _, fb in sub_bands(band_hz)])
+    return AutoPoles(
+        modes, out, np.concatenate(computational), merged, merged_stab,
+        [fb for _, fb in sub_bands(band_hz)],
+    )

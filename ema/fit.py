@@ -185,7 +185,7 @@ def fit_test(
         p_max = int(max_order) if max_order else max(12, 40 // n_poly_ref)
         auto = auto_poles(freq, h_poly, band, p_max)
         sweep, stab, selected = auto.sweep, auto.stability, auto.modes
-        extra = auto.outside.pole
+        extra = np.concatenate([auto.outside.pole, auto.computational])
         fr, zr = selected.freq_hz, selected.damping_ratio
         f_std, z_std, count = selected.freq_std_hz, selected.damping_std, selected.count
     else:

@@ -28,17 +28,24 @@ def random_modes(
     band_hz: tuple[float, float] = (20.0, 3200.0),
     close_ratio: float | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:
-    """Frequencies (ascending, >= 4 % apart except one pair close_ratio apart) and damping."""
+    """Frequencies (ascending, >= 4 % apart except one pair close_ratio apart) and damping.
+
+    Damping is log-uniform in 0.3-3 %; the close pair's is capped at close_ratio (modal
+    overlap zeta / separation <= 1: the pair shows two peaks or a shouldered one).
+    """
     lo, hi = band_hz
     while True:
         f = np.sort(np.exp(rng.uniform(np.log(lo + 80.0), np.log(0.97 * hi), n_modes)))
         if np.all(np.diff(f) / f[:-1] > 0.04):
             break
+    zeta = np.exp(rng.uniform(np.log(0.003), np.log(0.03), n_modes))
     if close_ratio is not None:
         k = int(rng.integers(0, n_modes - 1))
         f[k + 1] = f[k] * (1 + close_ratio)
-        f = np.sort(f)
-    zeta = np.exp(rng.uniform(np.log(0.003), np.log(0.03), n_modes))
+        cap = min(0.03, close_ratio)
+        zeta[k : k + 2] = np.exp(rng.uniform(np.log(0.003), np.log(cap), 2))
+        order = np.argsort(f)
+        f, zeta = f[order], zeta[order]
     return f, zeta
 
 
