@@ -5,8 +5,9 @@
 1. poles: polyreference LSCF over an order sweep in overlapping sub-bands (``ema.lscf``,
    ``ema.autopoles``), stabilisation and automatic selection (``ema.stabilisation``); stable
    poles just outside the band (modes the band edge cuts) join the LSFD as computational
-   poles but are not reported; or, with ``method="peak"``, sum-MIF peaks with
-   half-power damping (``ema.mif``);
+   poles (when there is a misfit above 1e-4 and they lower it by 5 % or more) but are not
+   reported; or, with
+   ``method="peak"``, sum-MIF peaks with half-power damping (``ema.mif``);
 2. residues of every FRF with lower and upper residual terms (``ema.lsfd``);
 3. modes without support in the data are dropped: a mode whose contribution at its own
    resonance, RMS over the FRFs, is below ``min_snr`` times the RMS misfit of the synthesis
@@ -122,6 +123,10 @@ def _poles(zeta: np.ndarray, freq_hz: np.ndarray) -> np.ndarray:
     return -z * wn + 1j * wn * np.sqrt(1 - z**2)
 
 
+def _misfit(fit: LsfdResult, h: np.ndarray) -> float:
+    return float(np.linalg.norm(h - fit.synth))
+
+
 def _supported(fit: LsfdResult, h: np.ndarray, poles: np.ndarray, min_snr: float) -> np.ndarray:
     """Mask of the modes whose contribution at resonance stands above the local misfit."""
     f = fit.freq_hz
@@ -198,7 +203,15 @@ def fit_test(
     poles = _poles(zr, fr)
     m = poles.size
     lower = band[0] >= suspension_max_hz  # else the suspension modes are fitted as modes
-    fit = lsfd(freq, h_flat, np.concatenate([poles, extra]), test.quantity, band, lower=lower)
+    fit = lsfd(freq, h_flat, poles, test.quantity, band, lower=lower)
+    if extra.size:  # computational poles only when they explain the band edges better
+        with_extra = lsfd(freq, h_flat, np.r_[poles, extra], test.quantity, band, lower=lower)
+        base = _misfit(fit, h_flat[sel])
+        better = _misfit(with_extra, h_flat[sel]) < 0.95 * base
+        if better and base > 1e-4 * np.linalg.norm(h_flat[sel]):
+            fit = with_extra
+        else:
+            extra = extra[:0]
     keep = _supported(fit, h_flat[sel], poles, min_snr)
     if not keep.all():
         fr, zr, f_std, z_std, count = (a[keep] for a in (fr, zr, f_std, z_std, count))
