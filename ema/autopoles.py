@@ -91,6 +91,7 @@ def auto_poles(
     band_hz: tuple[float, float],
     max_order: int = 40,
     dup_tol: float = 0.003,
+    order_step: int = 1,
 ) -> AutoPoles:
     """Physical poles in band_hz of frf (F, l, m) (polyreference orientation), automatically."""
     freq_hz = np.asarray(freq_hz, dtype=float)
@@ -103,7 +104,7 @@ def auto_poles(
         p = min(int(max_order), n_lines // 4)
         if p < 4:
             continue
-        sw = lscf_sweep(freq_hz, frf, (fa, fb), p)
+        sw = lscf_sweep(freq_hz, frf, (fa, fb), p, order_step=order_step)
         st = stability(sw)
         wide = select_poles(sw, st, freq_range_hz=(0.9 * fa, 1.1 * fb))
         centre = np.sqrt(a * b)

@@ -187,7 +187,7 @@ def fit_test(
     extra = np.zeros(0, dtype=complex)
     if method == "lscf":
         n_poly_ref = h_poly.shape[2]
-        p_max = int(max_order) if max_order else max(12, 40 // n_poly_ref)
+        p_max = int(max_order) if max_order else max(12, 30 // n_poly_ref)
         auto = auto_poles(freq, h_poly, band, p_max)
         sweep, stab, selected = auto.sweep, auto.stability, auto.modes
         extra = np.concatenate([auto.outside.pole, auto.computational])

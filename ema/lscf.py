@@ -79,6 +79,8 @@ def lscf_sweep(
     max_order: int,
     min_order: int = 2,
     span: float = 0.9,
+    order_step: int = 1,
+    max_damping: float = 0.3,
 ) -> PoleSweep:
     """Poles of polyreference LSCF models of orders min_order..max_order.
 
@@ -88,10 +90,13 @@ def lscf_sweep(
         band_hz: (lo, hi) frequency band fitted, Hz.
         max_order: highest polynomial order p (p*m poles at order p).
         min_order: lowest order.
+        order_step: fit every order_step-th order from min_order up.
+        max_damping: poles with damping ratios outside (0, max_damping) are dropped.
         span: the band is mapped onto the arc |angle z| <= span pi of the unit circle.
 
     Returns:
-        A PoleSweep with all poles of positive damped frequency (in the band or not).
+        A PoleSweep with the poles of positive damped frequency and damping in
+        (0, max_damping), in the band or not.
     """
     freq_hz = np.asarray(freq_hz, dtype=float)
     h = np.asarray(frf, dtype=complex)
@@ -142,7 +147,7 @@ def lscf_sweep(
     orders, pole_l, shape_l, part_l, order_l = [], [], [], [], []
     for p in range(0, p_max + 1):
         yhy += np.conj(y[p]).T @ y[p]
-        if p < int(min_order):
+        if p < int(min_order) or (p - int(min_order)) % int(order_step):
             continue
         n_c = (p + 1) * m
         mm = t_sum[:n_c, :n_c] - yhy[:n_c, :n_c]
@@ -158,16 +163,20 @@ def lscf_sweep(
         else:
             zr, vec = np.linalg.eig(comp)
         lam = np.log(zr) / dt + 2j * np.pi * fc
-        keep = (lam.imag > 0) & np.isfinite(lam)
+        keep = np.isfinite(lam) & (lam.imag > 0) & (-lam.real > 0)
+        keep[keep] &= -lam.real[keep] < max_damping * np.abs(lam[keep])
         lam, zr = lam[keep], zr[keep]
         lr = vec[:m, keep]
         lr = lr / np.linalg.norm(lr, axis=0, keepdims=True)
         # numerators b_o = -R_p^-1 S_o alpha = -L_p^-H (Y_o alpha)
-        ya = np.einsum("joc,cb->job", y[: p + 1, :, :n_c], alpha).reshape(p + 1, -1)
+        ya = (y[: p + 1, :, :n_c] @ alpha).reshape(p + 1, -1)
         beta = -np.conj(linv[: p + 1, : p + 1]).T @ ya
         beta = beta.reshape(p + 1, n_out, m)  # b_o,k
         zk = zr[None, :] ** np.arange(p + 1)[:, None]  # (P, n_poles)
-        shape = np.einsum("kob,bn,kn->no", beta, lr, zk)
+        if m == 1:
+            shape = (zk.T @ beta[:, :, 0]) * lr[0][:, None]
+        else:
+            shape = np.einsum("kon,kn->no", beta @ lr, zk)
         orders.append(p)
         pole_l.append(lam)
         shape_l.append(shape)

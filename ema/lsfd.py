@@ -22,6 +22,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from scipy.linalg import solve_triangular
 
 QUANTITY_POWER = {"receptance": 0, "mobility": 1, "accelerance": 2}
 
@@ -96,7 +97,10 @@ def lsfd(
     y = np.concatenate([h.real, h.imag], axis=0)
     scale = np.linalg.norm(a, axis=0)
     scale = np.where(scale > 0, scale, 1.0)
-    coef = np.linalg.lstsq(a / scale, y, rcond=None)[0] / scale[:, None]  # (2m + 3, n_frf)
+    used = np.linalg.norm(a, axis=0) > 0
+    q, r = np.linalg.qr(a[:, used] / scale[used])  # thin QR: one factorisation, all FRFs
+    coef = np.zeros((a.shape[1], y.shape[1]))
+    coef[used] = solve_triangular(r, q.T @ y) / scale[used][:, None]  # (2m + 3, n_frf)
     residue = (coef[0 : 2 * m : 2] + 1j * coef[1 : 2 * m : 2]).T  # (n_frf, m)
     mode_part = np.einsum("fmk,kmn->fnm", modes, coef[: 2 * m].reshape(m, 2, -1).transpose(1, 0, 2))
     synth = basis @ coef
