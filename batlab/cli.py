@@ -15,6 +15,10 @@ import sys
 
 COMMANDS: tuple[str, ...] = (
     "model",
+    "simulate",
+    "rig",
+    "acquire",
+    "paper",
 )
 
 

@@ -36,23 +36,41 @@ class ModalModel:
         z = np.broadcast_to(np.asarray(self.damping_ratio, dtype=float), f.shape).copy()
         s = np.asarray(self.shapes, dtype=float).reshape(-1, f.size)
         x = np.atleast_1d(np.asarray(self.x_m, dtype=float))
-        if x.size != s.shape[0]:
+        if x.size != s.shape[0]:  # NaN positions are allowed (off-grid sensors)
             raise ValueError("one position per shape row is required")
         object.__setattr__(self, "freq_hz", f)
         object.__setattr__(self, "damping_ratio", z)
         object.__setattr__(self, "shapes", s)
         object.__setattr__(self, "x_m", x)
 
-    def receptance(self, freq_hz: np.ndarray, resp: np.ndarray, ref: np.ndarray) -> np.ndarray:
-        """Receptance H[f, i, j] (m/N) between points ``resp[i]`` and ``ref[j]`` (indices)."""
+    def _modal_factors(self, freq_hz: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(w^2 (F, 1), den (F, m)) with den = w_r^2 - w^2 + 2 i zeta_r w_r w."""
         w = 2 * np.pi * np.asarray(freq_hz, dtype=float)[:, None]
         wr = 2 * np.pi * self.freq_hz[None, :]
-        den = wr**2 - w**2 + 2j * self.damping_ratio[None, :] * wr * w  # (F, m)
+        return w**2, wr**2 - w**2 + 2j * self.damping_ratio[None, :] * wr * w
+
+    def _sum(self, factors: np.ndarray, resp, ref) -> np.ndarray:
         a = self.shapes[np.asarray(resp)]  # (n_resp, m)
         b = self.shapes[np.asarray(ref)]  # (n_ref, m)
-        return np.einsum("im,jm,fm->fij", a, b, 1.0 / den)
+        return np.einsum("im,jm,fm->fij", a, b, factors)
+
+    def receptance(self, freq_hz: np.ndarray, resp: np.ndarray, ref: np.ndarray) -> np.ndarray:
+        """Receptance H[f, i, j] (m/N) between points ``resp[i]`` and ``ref[j]`` (indices).
+
+        A rigid-body mode (w_r = 0) makes the receptance infinite at 0 Hz.
+        """
+        _, den = self._modal_factors(freq_hz)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            return self._sum(1.0 / den, resp, ref)
 
     def accelerance(self, freq_hz: np.ndarray, resp: np.ndarray, ref: np.ndarray) -> np.ndarray:
-        """Accelerance H[f, i, j] ((m/s^2)/N) = -w^2 times the receptance."""
-        w2 = (2 * np.pi * np.asarray(freq_hz, dtype=float)) ** 2
-        return -w2[:, None, None] * self.receptance(freq_hz, resp, ref)
+        """Accelerance H[f, i, j] ((m/s^2)/N) = -w^2 times the receptance.
+
+        The factor -w^2/den of a rigid-body mode tends to 1 (the mass line) as w -> 0; at
+        0 Hz it is taken as that limit, and an elastic mode contributes 0 there.
+        """
+        w2, den = self._modal_factors(freq_hz)
+        zero = den == 0
+        factors = -w2 / np.where(zero, 1.0, den)
+        factors[zero] = 1.0
+        return self._sum(factors, resp, ref)

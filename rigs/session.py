@@ -1,0 +1,135 @@
+"""Roving-hammer session: points in order, N accepted hits each, FRFs from accepted hits.
+
+For each point the host announces it (POINT command; the ACK's sample index arms the trigger,
+so taps recorded before the announcement never count for the new point), then takes records
+until ``hits_per_point`` are accepted. The raw stream is on disk before a hit is checked.
+Progress goes to ``progress`` (stderr in the CLI): "point 5/16 (#9), hit 2/3, rejected:
+double hit (...)".
+"""
+
+from __future__ import annotations
+
+import struct
+from collections.abc import Callable
+from dataclasses import asdict, dataclass, field
+
+import numpy as np
+
+from rigs import protocol as p
+from rigs.capture import CaptureSettings, HitCapture, HitRecord, check_hit
+from rigs.driver import DeviceError
+from rigs.frf_estimate import estimate_frf
+
+
+@dataclass(frozen=True)
+class HitLog:
+    """One triggered record: where, which attempt, verdict and why."""
+
+    point: int
+    hit: int
+    accepted: bool
+    reason: str | None
+    detail: str
+    trigger_index: int
+    peak_force_n: float
+
+
+@dataclass(frozen=True)
+class SessionResult:
+    """FRFs of a roving-hammer test, one fixed response.
+
+    Attributes:
+        freq_hz: (F,) lines; h1, h2, coherence: (F, 1, n_points), accelerance (m/s^2)/N.
+        points: (n_points,) impact point numbers in the order of the last axis.
+        exp_window_tau_s: exponential window time constant (None: no window).
+        hits: every triggered record with its verdict.
+        info: the device's description.
+    """
+
+    freq_hz: np.ndarray
+    h1: np.ndarray
+    h2: np.ndarray
+    coherence: np.ndarray
+    points: np.ndarray
+    exp_window_tau_s: float | None
+    hits: list[HitLog]
+    info: p.DeviceInfo
+    n_averages: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=int))
+
+    def hits_as_dicts(self) -> list[dict]:
+        return [asdict(h) for h in self.hits]
+
+
+def _quiet(_: str) -> None:
+    return None
+
+
+def acquire_point(source, capture: HitCapture, point: int, hits_per_point: int,
+                  settings: CaptureSettings, log: list[HitLog], label: str,
+                  progress: Callable[[str], None], max_rejects: int = 20,
+                  read_timeout_s: float = 0.2) -> list[HitRecord]:
+    """Collect ``hits_per_point`` accepted records at one point (see module docstring)."""
+    ack = source.request(p.POINT, struct.pack("<H", point))
+    capture.arm(ack.index if ack is not None else capture.next_index)
+    progress(f"{label}: tap point {point}")
+    accepted: list[HitRecord] = []
+    attempt = rejects = 0
+    while len(accepted) < hits_per_point:
+        try:
+            item = source.next_item(read_timeout_s)
+        except (DeviceError, EOFError, OSError):
+            if capture.recording:
+                log.append(HitLog(point, attempt + 1, False, "device stopped mid-hit",
+                                  "stream ended before the record was complete", -1, 0.0))
+                progress(f"{label}, hit {len(accepted) + 1}/{hits_per_point}, rejected: "
+                         "device stopped mid-hit")
+            raise
+        if item is None:
+            continue
+        for rec in capture.push(item):
+            if len(accepted) >= hits_per_point:
+                break
+            attempt += 1
+            source.flush_raw()
+            chk = check_hit(rec, settings, capture.info.sample_rate_hz, capture.n_pre)
+            log.append(HitLog(point, attempt, chk.accepted, chk.reason, chk.detail,
+                              rec.trigger_index, chk.peak_force_n))
+            head = f"{label}, hit {len(accepted) + 1}/{hits_per_point}"
+            if chk.accepted:
+                accepted.append(rec)
+                rejects = 0
+                progress(f"{head}, accepted ({chk.detail})")
+            else:
+                rejects += 1
+                progress(f"{head}, rejected: {chk.reason} ({chk.detail})")
+                if rejects >= max_rejects:
+                    raise ValueError(f"point {point}: {rejects} hits rejected in a row "
+                                     f"(last: {chk.reason})")
+    capture.disarm()
+    return accepted
+
+
+def run_session(source, points: list[int], hits_per_point: int,
+                settings: CaptureSettings | None = None,
+                exp_window_tau_s: float | None = None, fmax_hz: float | None = None,
+                progress: Callable[[str], None] = _quiet, max_rejects: int = 20
+                ) -> SessionResult:
+    """Run the roving-hammer test on a source that has completed its handshake."""
+    if hits_per_point < 1 or not points:
+        raise ValueError("need at least one point and one hit per point")
+    settings = settings or CaptureSettings()
+    info = source.info
+    capture = HitCapture(info, settings)
+    log: list[HitLog] = []
+    estimates = []
+    for k, point in enumerate(points):
+        recs = acquire_point(source, capture, point, hits_per_point, settings, log,
+                             f"point {k + 1}/{len(points)} (#{point})", progress, max_rejects)
+        estimates.append(estimate_frf(np.array([r.force_n for r in recs]),
+                                      np.array([r.accel_ms2 for r in recs]),
+                                      info.sample_rate_hz, exp_window_tau_s, fmax_hz=fmax_hz))
+    stack = {name: np.stack([getattr(e, name) for e in estimates], axis=-1)[:, None, :]
+             for name in ("h1", "h2", "coherence")}
+    return SessionResult(estimates[0].freq_hz, stack["h1"], stack["h2"], stack["coherence"],
+                         np.asarray(points, dtype=int), exp_window_tau_s, log, info,
+                         np.array([e.n_averages for e in estimates]))

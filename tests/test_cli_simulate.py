@@ -1,0 +1,52 @@
+"""`batlab simulate` writes a contract-form UFF test; the samples are what the script makes."""
+
+import filecmp
+import json
+import shlex
+from pathlib import Path
+
+import numpy as np
+import pytest
+import pyuff
+
+from batlab.cli import main
+from ema.frf_io import read_test
+
+SAMPLES = Path(__file__).resolve().parent.parent / "data_samples"
+
+
+def test_simulate_writes_contract_uff(tmp_path, capsys):
+    out = tmp_path / "t.uff"
+    code = main(["simulate", "--out", str(out), "--seed", "4", "--df", "2", "--points",
+                 "1,5,9,13,17,21,25,29,32", "--alter", "cork:depth=10,d=1,ratio=0.33", "--json"])
+    assert code == 0
+    summary = json.loads(capsys.readouterr().out)
+    test = read_test(out)
+    assert test.frf.shape == (1601, 1, 9)
+    assert test.quantity == "accelerance"
+    assert test.response_nodes[0] == summary["driving_point_node"]
+    assert test.node_x_m[int(test.response_nodes[0])] == pytest.approx(32 * 0.0254)
+    sets = pyuff.UFF(str(out)).read_sets()
+    types = [s["type"] for s in sets]
+    assert types[:2] == [164, 15] and types.count(58) == 9
+    assert all(s["func_type"] == 4 and s["rsp_node"] == test.response_nodes[0]
+               for s in sets if s["type"] == 58)
+
+
+def test_simulate_bad_points(tmp_path, capsys):
+    assert main(["simulate", "--out", str(tmp_path / "x.uff"), "--points", "1,a"]) == 2
+    assert "--points" in capsys.readouterr().err
+    assert not (tmp_path / "x.uff").exists()
+
+
+def test_sample_is_what_the_script_makes(tmp_path, monkeypatch, capsys):
+    script = (SAMPLES / "make_samples.sh").read_text()
+    common = shlex.split(script.split('common="')[1].split('"')[0])
+    monkeypatch.chdir(SAMPLES)
+    out = tmp_path / "baseline.uff"
+    args = ["simulate", "--profile", "paper_bat/profile.csv", "--meta", "paper_bat/meta.json",
+            "--beam", "euler", "--e-over-g", "2.6", *common, "--seed", "1", "--out", str(out)]
+    assert main(args) == 0
+    assert filecmp.cmp(out, SAMPLES / "paper_bat" / "baseline.uff", shallow=False)
+    test = read_test(SAMPLES / "paper_bat" / "corked.uff")
+    assert np.all(np.isfinite(test.frf)) and test.frf.shape == (3201, 1, 17)

@@ -1,0 +1,175 @@
+"""FE model of the bat: the paper's numbers, analytic beams, convergence, matrix properties."""
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from updating.beam_element import element_parts
+from updating.fe_model import Attachment, assemble, build_model, skyline_mask
+from updating.massprops import mass_properties
+from updating.material import Material, paper_material
+from updating.modes import model_modes, rigid_body_shapes, solve_modes
+from updating.profile import make_profile, paper_profile
+from updating.sections import Core
+from updating.units import IN_TO_M, LB_TO_KG
+
+PAPER_HZ = [141.5, 555.9, 979.0, 1956.2]
+WOOD = Material(E_pa=12e9, rho_kg_m3=650.0)
+
+
+def uniform(length_m=0.8, d_m=0.05):
+    return make_profile([0, length_m], [d_m, d_m])
+
+
+def test_paper_bat_dofs_weight_and_frequencies():
+    model = build_model(paper_profile(), paper_material())
+    assert model.n_nodes == 34 and model.n_dof == 68
+    weight_lb = mass_properties(model).mass_kg / LB_TO_KG
+    assert weight_lb == pytest.approx(2.1176, abs=1e-4)
+    modes = model_modes(model, n_modes=6)
+    assert modes.n_rigid == 2 and np.all(modes.freq_hz[:2] == 0.0)
+    np.testing.assert_allclose(modes.freq_hz[2:], PAPER_HZ, rtol=2e-3)
+
+
+def test_paper_cork_weight_change():
+    cork = Core(1.0 * IN_TO_M, 10 * IN_TO_M, 1 / 3, 0.0, 1.0 * IN_TO_M)
+    m0 = mass_properties(build_model(paper_profile(), paper_material())).mass_kg
+    m1 = mass_properties(build_model(paper_profile(), paper_material(), core=cork)).mass_kg
+    assert (m0 - m1) / LB_TO_KG == pytest.approx(0.1022, rel=1e-3)
+
+
+def test_uniform_free_free_euler_bernoulli_matches_analytic():
+    length, d = 0.8, 0.05
+    model = build_model(uniform(length, d), WOOD, n_elements=80)
+    A, I = np.pi * d**2 / 4, np.pi * d**4 / 64
+    beta_l = np.array([4.730041, 7.853205, 10.995608])
+    exact = beta_l**2 / (2 * np.pi * length**2) * np.sqrt(WOOD.E_pa * I / (WOOD.rho_kg_m3 * A))
+    f = model_modes(model, n_modes=5).elastic().freq_hz
+    np.testing.assert_allclose(f, exact, rtol=1e-3)
+
+
+def timoshenko_ss_hz(n, length, d, mat, k):
+    """Simply supported Timoshenko beam, lower root of the characteristic quadratic."""
+    A, I = np.pi * d**2 / 4, np.pi * d**4 / 64
+    kga, ei, ra, ri = k * mat.G_pa * A, mat.E_pa * I, mat.rho_kg_m3 * A, mat.rho_kg_m3 * I
+    q = n * np.pi / length
+    a2 = ra * ri
+    a1 = -(ra * (ei * q**2 + kga) + ri * kga * q**2)
+    a0 = kga * q**2 * (ei * q**2 + kga) - (kga * q) ** 2
+    w2 = np.roots([a2, a1, a0]).real.min()
+    return np.sqrt(w2) / (2 * np.pi)
+
+
+def ss_frequencies(model, n):
+    K, M = assemble(model)
+    free = np.setdiff1d(np.arange(model.n_dof), [0, model.n_dof - 2])
+    modes = solve_modes(K[np.ix_(free, free)], M[np.ix_(free, free)], n_modes=n)
+    return modes.freq_hz
+
+
+def test_timoshenko_stocky_beam_converges_to_timoshenko_solution():
+    length, d = 0.25, 0.05  # L/D = 5: shear and rotary inertia matter
+    mat = Material(12e9, 650.0, e_over_g=14.0, nu=0.3)
+    k = 6 * 1.3 / (7 + 6 * 0.3)
+    exact = np.array([timoshenko_ss_hz(n, length, d, mat, k) for n in (1, 2, 3)])
+    errors = []
+    for n_el in (8, 16, 32, 64):
+        f = ss_frequencies(build_model(uniform(length, d), mat, beam="timoshenko",
+                                       n_elements=n_el), 3)
+        errors.append(np.abs(f / exact - 1))
+    errors = np.array(errors)
+    # constant shear strain per element: second-order convergence of the eigenvalues
+    assert np.all(errors[:-1] / errors[1:] > 3.5)
+    assert errors[-1].max() < 1e-3
+    # Euler-Bernoulli overestimates such a stocky beam badly: the check has teeth
+    f_eb = ss_frequencies(build_model(uniform(length, d), mat, n_elements=64), 3)
+    assert np.all(f_eb / exact - 1 > 0.05)
+
+
+def test_mesh_convergence_from_above():
+    f = [model_modes(build_model(paper_profile(), paper_material(), n_elements=n), 6)
+         .elastic().freq_hz for n in (33, 66, 132, 264)]
+    diffs = np.diff(np.array(f), axis=0)
+    assert np.all(diffs <= 1e-9)  # consistent mass: upper bounds that decrease
+    assert np.all(np.abs(diffs[-1]) < np.abs(diffs[0]) / 10)
+
+
+@pytest.mark.parametrize("beam", ["euler", "timoshenko"])
+def test_matrices_symmetric_and_definite_rigid_modes_in_null_space(beam):
+    model = build_model(paper_profile(), Material(12e9, 650.0, 14.0), beam=beam)
+    K, M = assemble(model)
+    np.testing.assert_allclose(K, K.T, atol=1e-9 * np.abs(K).max())
+    np.testing.assert_allclose(M, M.T, atol=1e-12 * np.abs(M).max())
+    assert np.linalg.eigvalsh(M).min() > 0
+    lam_k = np.linalg.eigvalsh(K)
+    assert lam_k.min() > -1e-10 * lam_k.max()
+    assert np.sum(lam_k < 1e-10 * lam_k.max()) == 2  # exactly two rigid-body modes
+    R = rigid_body_shapes(model.node_x_m, M)
+    assert np.abs(K @ R).max() < 1e-12 * np.abs(K).max()
+    modes = model_modes(model)
+    np.testing.assert_allclose(modes.shapes.T @ M @ modes.shapes, np.eye(model.n_dof),
+                               atol=1e-8)
+    # nothing outside the assembly skyline
+    assert not np.any(K[~skyline_mask(model)]) and not np.any(M[~skyline_mask(model)])
+
+
+def test_element_parts_sum_to_exact_timoshenko_and_are_derivatives():
+    L, EI, kGA = 0.03, 2.0e3, 5.0e6
+    phi = 12 * EI / (kGA * L**2)
+    g, w = np.polynomial.legendre.leggauss(4)
+    xi, wt = (g + 1) / 2, w * L / 2
+    ones = np.ones(4)
+
+    def parts(ei, kga):
+        p = 12 * ei / (kga * L**2)
+        return element_parts(np.zeros(4, int), xi, wt, ei * ones, kga * ones, ones, ones,
+                             np.array([L]), np.array([p]))
+
+    pr = parts(EI, kGA)
+    K = pr.k_bend[0] + pr.k_shear[0]
+    c = EI / (L**3 * (1 + phi))
+    exact = c * np.array([
+        [12, 6 * L, -12, 6 * L],
+        [6 * L, (4 + phi) * L**2, -6 * L, (2 - phi) * L**2],
+        [-12, -6 * L, 12, -6 * L],
+        [6 * L, (2 - phi) * L**2, -6 * L, (4 + phi) * L**2]])
+    np.testing.assert_allclose(K, exact, rtol=1e-12, atol=1e-9 * np.abs(exact).max())
+    h = 1e-6
+    up_e, up_g = parts(EI * (1 + h), kGA), parts(EI, kGA * (1 + h))
+    dK_dEI = (up_e.k_bend[0] + up_e.k_shear[0] - K) / h
+    dK_dkGA = (up_g.k_bend[0] + up_g.k_shear[0] - K) / h
+    np.testing.assert_allclose(dK_dEI, pr.k_bend[0], atol=1e-5 * np.abs(K).max())
+    np.testing.assert_allclose(dK_dkGA, pr.k_shear[0], atol=1e-5 * np.abs(K).max())
+
+
+def test_suspension_and_sensor_mass():
+    length, d = 0.8, 0.05
+    bare = build_model(uniform(length, d), WOOD, n_elements=40)
+    mp = mass_properties(bare)
+    k = 200.0
+    hung = build_model(uniform(length, d), WOOD, n_elements=40,
+                       attachments=(Attachment(0.0, k_n_per_m=k), Attachment(length, k_n_per_m=k)))
+    f = model_modes(hung, n_modes=3).freq_hz
+    bounce = np.sqrt(2 * k / mp.mass_kg) / (2 * np.pi)
+    i_cg = mp.mass_kg * length**2 / 12  # slender rod; the Euler model has no rotary inertia
+    pitch = np.sqrt(2 * k * (length / 2) ** 2 / i_cg) / (2 * np.pi)
+    np.testing.assert_allclose(f[:2], sorted([bounce, pitch]), rtol=1e-3)
+    sensor = build_model(uniform(length, d), WOOD, n_elements=40,
+                         attachments=(Attachment(0.73 * length, mass_kg=0.004),))
+    K, M = assemble(sensor)
+    R = rigid_body_shapes(sensor.node_x_m, assemble(bare)[1])
+    one = np.zeros(sensor.n_dof)
+    one[0::2] = 1.0
+    assert one @ M @ one == pytest.approx(mp.mass_kg + 0.004, rel=1e-12)
+    assert model_modes(sensor, 3).freq_hz[2] < model_modes(bare, 3).freq_hz[2]
+    assert np.abs(K @ R).max() < 1e-12 * np.abs(K).max()
+
+
+@settings(max_examples=8, deadline=None)
+@given(length=st.floats(0.5, 1.0), d=st.floats(0.02, 0.07), E=st.floats(8e9, 16e9))
+def test_uniform_beam_first_mode_any_size(length, d, E):
+    mat = Material(E, 600.0)
+    f1 = model_modes(build_model(uniform(length, d), mat, n_elements=40), 3).freq_hz[2]
+    exact = 4.730041**2 / (2 * np.pi * length**2) * np.sqrt(E * (d**2 / 16) / 600.0)
+    assert f1 == pytest.approx(exact, rel=1e-3)

@@ -1,0 +1,95 @@
+"""The physical model of what can change between a baseline test and a re-test.
+
+Relative to the bat's calibrated reference (``BatReference``):
+
+- moisture: uniform factors on the wood's stiffness (E and G together) and density,
+  ``K = s_E K_wood + K_bungees``, ``M = s_rho M_wood + M_sensor``;
+- the accelerometer re-mounted ``sensor_shift_m`` from where it was (same mass);
+- optionally an axial core (``Core``: depth, diameter, fill density ratio, fill modulus,
+  plug), built exactly into the section properties (Cowper shear coefficient included).
+
+``make_predictor`` returns a function of these parameters giving the paired elastic modes'
+frequencies and mass-normalised shapes at the test points. Wood matrices are cached per core
+so that changes of moisture or sensor position cost one eigen-solution only.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from updating.calibration import BatReference
+from updating.fe_model import BatModel, assemble, attachment_matrices, point_vector
+from updating.modes import solve_modes
+from updating.profile import Profile
+from updating.sections import Core
+
+
+@dataclass(frozen=True)
+class ChangeParams:
+    """One state of the bat relative to its reference (see module docstring)."""
+
+    stiffness_scale: float = 1.0
+    density_scale: float = 1.0
+    sensor_shift_m: float = 0.0
+    core: Core | None = None
+
+
+@dataclass(frozen=True)
+class WoodSystem:
+    """The bat without its accelerometer: model, K_wood (+ bungees), M_wood, shape rows of
+    the test points."""
+
+    model: BatModel
+    K: np.ndarray
+    M: np.ndarray
+    K_bungees: np.ndarray
+    point_rows: np.ndarray
+
+
+def wood_system(
+    profile: Profile, reference: BatReference, points_m: np.ndarray, core: Core | None,
+) -> WoodSystem:
+    """Model of the bat (wood only) with nodes at the test points, and its bungees."""
+    model = replace(reference, sensor_mass_kg=0.0).build(profile, points_m, core=core)
+    K, M = assemble(model, with_attachments=False)
+    Kb, _ = attachment_matrices(model)
+    idx = np.searchsorted(model.node_x_m, points_m - 1e-9)
+    if np.any(np.abs(model.node_x_m[np.minimum(idx, model.n_nodes - 1)] - points_m) > 1e-9):
+        raise ValueError("test points must be nodes of the model")
+    return WoodSystem(model, K, M, Kb, 2 * idx)
+
+
+def make_predictor(
+    profile: Profile, reference: BatReference, points_m: np.ndarray, sensor_x_m: float,
+    n_solve: int,
+) -> Callable[[ChangeParams], tuple[np.ndarray, np.ndarray]]:
+    """f(params) -> (freq_hz (n_solve,), shapes at the points (n_points, n_solve)).
+
+    All of the lowest ``n_solve`` modes are returned (suspension modes included); the caller
+    selects the elastic ones by index. ``sensor_x_m`` is the accelerometer's position before
+    any shift.
+    """
+    points_m = np.asarray(points_m, dtype=float)
+    cache: dict[Core | None, WoodSystem] = {}
+
+    def system(core: Core | None) -> WoodSystem:
+        if core not in cache:
+            if len(cache) > 32:
+                cache.clear()
+            cache[core] = wood_system(profile, reference, points_m, core)
+        return cache[core]
+
+    def predict(p: ChangeParams) -> tuple[np.ndarray, np.ndarray]:
+        ws = system(p.core)
+        M = p.density_scale * ws.M
+        if reference.sensor_mass_kg:
+            x = float(np.clip(sensor_x_m + p.sensor_shift_m, 0.0, profile.length_m))
+            dofs, n = point_vector(ws.model, x)
+            M[np.ix_(dofs, dofs)] += reference.sensor_mass_kg * np.outer(n, n)
+        modes = solve_modes(p.stiffness_scale * ws.K + ws.K_bungees, M, None, n_solve)
+        return modes.freq_hz, modes.shapes[ws.point_rows]
+
+    return predict

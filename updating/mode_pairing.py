@@ -1,0 +1,41 @@
+"""Pairing of modes between two sets of shapes at the same points (MAC and frequency).
+
+    MAC(a, b) = (a^T b)^2 / ((a^T a)(b^T b))
+
+Pairs maximise the summed score MAC - w |ln(f_a / f_b)| over one-to-one assignments
+(Hungarian algorithm); pairs below ``min_mac`` or further apart than ``max_rel_df`` are
+dropped.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.optimize import linear_sum_assignment
+
+
+def mac_matrix(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """MAC between the columns of a (n, p) and b (n, q): (p, q)."""
+    num = (a.T @ b) ** 2
+    return num / np.outer(np.einsum("ij,ij->j", a, a), np.einsum("ij,ij->j", b, b))
+
+
+def pair_modes(
+    freq_a: np.ndarray, shapes_a: np.ndarray, freq_b: np.ndarray, shapes_b: np.ndarray,
+    min_mac: float = 0.8, max_rel_df: float = 0.15, freq_weight: float = 1.0,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Indices (ia, ib) of paired modes, ascending in ia, and their MAC values."""
+    mac = mac_matrix(shapes_a, shapes_b)
+    dlog = np.abs(np.log(np.asarray(freq_a)[:, None] / np.asarray(freq_b)[None, :]))
+    ia, ib = linear_sum_assignment(-(mac - freq_weight * dlog))
+    ok = (mac[ia, ib] >= min_mac) & (dlog[ia, ib] <= np.log1p(max_rel_df))
+    ia, ib = ia[ok], ib[ok]
+    order = np.argsort(ia)
+    return ia[order], ib[order], mac[ia[order], ib[order]]
+
+
+def align_signs(shapes: np.ndarray, target: np.ndarray) -> np.ndarray:
+    """Columns of ``shapes`` with signs flipped so that each has a non-negative dot with
+    the matching column of ``target``."""
+    s = np.sign(np.einsum("ij,ij->j", shapes, target))
+    s[s == 0] = 1.0
+    return shapes * s

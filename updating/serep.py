@@ -1,0 +1,52 @@
+"""System Equivalent Reduction Expansion Process (O'Callahan, Avitabile, Riemer 1989).
+
+With U_nm the reference modes chosen as the basis (rigid-body modes plus the modes paired
+with the test modes) and U_am their rows at the measured DOFs:
+
+    T = U_nm pinv(U_am),   E_n = T E_a,   M_a = T^T M T,   K_a = T^T K T.
+
+The expansion is exact for any test shape in the span of the basis; the basis must not be
+larger than the number of sensors. ``cond`` = cond(U_am) tells how well the sensors see it.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+
+@dataclass(frozen=True)
+class Serep:
+    """SEREP transformation T (n, a) from the measured DOFs to all DOFs."""
+
+    T: np.ndarray
+    dofs_a: np.ndarray
+    basis: np.ndarray  # U_nm (n, k)
+    cond: float
+
+    def expand(self, shapes_a: np.ndarray) -> np.ndarray:
+        """E_n = T E_a."""
+        return self.T @ shapes_a
+
+    def reduce(self, matrix: np.ndarray) -> np.ndarray:
+        """T^T A T (e.g. the reduced mass for the pseudo-orthogonality check)."""
+        return self.T.T @ matrix @ self.T
+
+
+def serep(basis_n: np.ndarray, dofs_a: np.ndarray) -> Serep:
+    """SEREP from reference shapes ``basis_n`` (n, k) and the measured DOF indices (a,).
+
+    Raises ValueError if the basis has more modes than sensors or the sensors cannot see it.
+    """
+    dofs_a = np.asarray(dofs_a, dtype=int)
+    U_a = basis_n[dofs_a]
+    k, a = basis_n.shape[1], dofs_a.size
+    if k > a:
+        raise ValueError(f"SEREP basis of {k} modes needs at least {k} measured DOFs, got {a}")
+    s = np.linalg.svd(U_a, compute_uv=False)
+    cond = float(s[0] / s[-1]) if s[-1] > 0 else np.inf
+    if not np.isfinite(cond) or cond > 1e10:
+        raise ValueError(f"SEREP: the {a} measured DOFs cannot separate the {k} basis modes "
+                         f"(cond {cond:.2e})")
+    return Serep(basis_n @ np.linalg.pinv(U_a), dofs_a, basis_n, cond)
