@@ -19,6 +19,7 @@ COMMANDS: tuple[str, ...] = (
     "rig",
     "acquire",
     "paper",
+    "fit",
 )
 
 

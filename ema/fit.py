@@ -59,6 +59,7 @@ class ModalFit:
         nodes: (n_nodes,) node numbers of the shape rows (the impact nodes for a roving hammer).
         x_m: (n_nodes,) node positions from the knob end, m.
         driving_index: row of ``nodes`` that is the driving point.
+        driving_frf: (response index, reference index) of the driving-point FRF.
         mpc: (m,) modal phase collinearity, 0..1 (1: real mode).
         mpd: (m,) mean phase deviation, degrees (0: real mode).
         freq_std_hz, damping_std: (m,) spread over the model orders (NaN for the peak method).
@@ -85,6 +86,7 @@ class ModalFit:
     nodes: np.ndarray
     x_m: np.ndarray
     driving_index: int
+    driving_frf: tuple[int, int]
     mpc: np.ndarray
     mpd: np.ndarray
     freq_std_hz: np.ndarray
@@ -253,6 +255,7 @@ def fit_test(
         nodes=np.asarray(nodes),
         x_m=x_m,
         driving_index=int(d_index),
+        driving_frf=(int(i_d), int(j_d)),
         mpc=mpc(shapes[:, el]),
         mpd=mpd(shapes[:, el]),
         freq_std_hz=f_std[el],
