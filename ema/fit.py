@@ -37,7 +37,7 @@ from ema.autopoles import auto_poles, take
 from ema.complexity import mpc, mpd, real_modes
 from ema.frf_data import FrfTest
 from ema.lscf import PoleSweep
-from ema.lsfd import LsfdResult, lsfd
+from ema.lsfd import QUANTITY_POWER, LsfdResult, lsfd
 from ema.mass_line import RigidBody, rigid_body_from_mass_line, rigid_body_from_modes
 from ema.mif import PeakPick, pick_peaks, receptance_power, sum_mif
 from ema.scaling import fix_sign, mass_normalised_shapes
@@ -129,19 +129,24 @@ def _misfit(fit: LsfdResult, h: np.ndarray) -> float:
     return float(np.linalg.norm(h - fit.synth))
 
 
-def _supported(fit: LsfdResult, h: np.ndarray, poles: np.ndarray, min_snr: float) -> np.ndarray:
+def _supported(
+    fit: LsfdResult, h: np.ndarray, poles: np.ndarray, quantity: str, min_snr: float
+) -> np.ndarray:
     """Mask of the modes whose contribution at resonance stands above the local misfit."""
     f = fit.freq_hz
     misfit = np.sqrt(np.mean(np.abs(h - fit.synth) ** 2, axis=1))  # (F,)
+    s = 1j * np.abs(poles)  # i w_r
+    term = s ** QUANTITY_POWER[quantity] * (
+        fit.residue[:, : poles.size] / (s - poles) + np.conj(fit.residue[:, : poles.size])
+        / (s - np.conj(poles))
+    )  # (n_frf, m): each mode's own contribution at its resonance
+    signal = np.sqrt(np.mean(np.abs(term) ** 2, axis=0))
     keep = np.ones(poles.size, dtype=bool)
-    for r, lam in enumerate(poles):
-        fr = abs(lam) / (2 * np.pi)
+    for r, lam in enumerate(poles):  # one window per mode
         half_bw = max(-lam.real / (2 * np.pi), f[1] - f[0])
-        near = np.abs(f - fr) <= 5 * half_bw
-        k = np.argmin(np.abs(f - fr))
-        signal = np.sqrt(np.mean(np.abs(fit.mode_part[k, :, r]) ** 2))
+        near = np.abs(f - abs(lam) / (2 * np.pi)) <= 5 * half_bw
         noise = np.sqrt(np.mean(misfit[near] ** 2)) if near.any() else 0.0
-        keep[r] = signal > min_snr * noise
+        keep[r] = signal[r] > min_snr * noise
     return keep
 
 
@@ -214,7 +219,7 @@ def fit_test(
             fit = with_extra
         else:
             extra = extra[:0]
-    keep = _supported(fit, h_flat[sel], poles, min_snr)
+    keep = _supported(fit, h_flat[sel], poles, test.quantity, min_snr)
     if not keep.all():
         fr, zr, f_std, z_std, count = (a[keep] for a in (fr, zr, f_std, z_std, count))
         poles = poles[keep]

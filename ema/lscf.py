@@ -6,7 +6,7 @@ frequency-shifted complex-coefficient form so that any band [f_lo, f_hi] maps on
 the whole unit circle:
 
     H_o(w) = B_o(z) A(z)^-1,   z = exp(i (w - w_c) dt),   w_c = pi (f_lo + f_hi),
-    dt = span / (f_hi - f_lo),   B_o(z) = sum_k z^k b_ok (1 x m),   A(z) = sum_k z^k A_k (m x m),
+    dt ~ span / (f_hi - f_lo),   B_o(z) = sum_k z^k b_ok (1 x m),   A(z) = sum_k z^k A_k (m x m),
 
 k = 0..p, for outputs o = 1..l and m references; the band covers |angle z| <= span pi
 (span = 0.9), where the powers z^k are nearly orthogonal and the normal equations stay well
@@ -24,7 +24,8 @@ matrix of A(z), lambda_r = ln(z_r) / dt + i w_c; its eigenvectors give the parti
 factors L_r (A(z_r) L_r = 0) and B_o(z_r) L_r is proportional to the mode shape at output o.
 
 All blocks are Toeplitz in (j, k): they are built once from the moments
-c_n[X] = sum_f z_f^n X_f, n = -p..p. R_p = L_p L_p^H, with L_p the leading block of the
+c_n[X] = sum_f z_f^n X_f, n = -p..p (one FFT: dt is rounded so that the lines are an
+N-point grid on the circle). R_p = L_p L_p^H, with L_p the leading block of the
 Cholesky factor of the largest R, so S_o^H R_p^-1 S_o is a running sum over the rows of
 L^-1 S_o and every order of the sweep costs one small solve and one eigenvalue problem.
 
@@ -114,15 +115,20 @@ def lscf_sweep(
     rms = np.sqrt(np.mean(np.abs(h) ** 2, axis=(0, 2)))
     h = h / np.where(rms > 0, rms, 1.0)[None, :, None]
 
-    fc = 0.5 * (lo + hi)
-    dt = span / (hi - lo)
+    # dt = 1 / (N df) with N >= (F - 1) / span lines on the circle: the moments are then one
+    # length-N FFT, c_n = exp(-i pi n (F - 1) / N) N ifft(x)[n mod N]
+    n_f = f.size
+    n_fft = int(np.ceil((n_f - 1) / span))
+    df = (f[-1] - f[0]) / (n_f - 1)
+    fc = 0.5 * (f[0] + f[-1])
+    dt = 1.0 / (n_fft * df)
     n_mom = np.arange(-p_max, p_max + 1)
-    zn = np.exp(2j * np.pi * dt * n_mom[:, None] * (f - fc)[None, :])  # (2p+1, F): z_f^n
+    phase = np.exp(-1j * np.pi * n_mom * (n_f - 1) / n_fft)[:, None]
     hh = np.conj(h)[:, :, :, None] * h[:, :, None, :]  # (F, l, m, m)
     cols = np.concatenate(
         [np.ones((f.size, 1)), h.reshape(f.size, -1), hh.reshape(f.size, -1)], axis=1
     )
-    mom = zn @ cols  # moments c_n of 1, H and conj(H) H
+    mom = phase * (np.fft.ifft(cols, n=n_fft, axis=0) * n_fft)[n_mom % n_fft]  # c_n of 1, H, H^H H
     c_r = mom[:, 0]
     c_s = -mom[:, 1 : 1 + n_out * m].reshape(-1, n_out, m)
     c_t = mom[:, 1 + n_out * m :].reshape(-1, n_out, m, m)

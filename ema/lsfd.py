@@ -38,7 +38,6 @@ class LsfdResult:
         upper: (n_frf, 2) real (U0, U1): residual flexibility m/N and its w^2 term.
         freq_hz: (F_band,) the lines fitted.
         synth: (F_band, n_frf) synthesised FRFs on those lines.
-        mode_part: (F_band, n_frf, m) contribution of each mode to ``synth``.
     """
 
     residue: np.ndarray
@@ -46,7 +45,6 @@ class LsfdResult:
     upper: np.ndarray
     freq_hz: np.ndarray
     synth: np.ndarray
-    mode_part: np.ndarray
 
 
 def _basis(
@@ -103,7 +101,6 @@ def lsfd(
     coef = np.zeros((a.shape[1], y.shape[1]))
     coef[used] = solve_triangular(r, q.T @ y) / scale[used][:, None]  # (2m + 4, n_frf)
     residue = (coef[0 : 2 * m : 2] + 1j * coef[1 : 2 * m : 2]).T  # (n_frf, m)
-    mode_part = np.einsum("fmk,kmn->fnm", modes, coef[: 2 * m].reshape(m, 2, -1).transpose(1, 0, 2))
     synth = basis @ coef
     return LsfdResult(
         residue=residue,
@@ -111,5 +108,4 @@ def lsfd(
         upper=coef[2 * m + 2 : 2 * m + 4].T.copy(),
         freq_hz=f,
         synth=synth,
-        mode_part=mode_part,
     )
