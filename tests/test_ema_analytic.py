@@ -191,3 +191,24 @@ def test_bad_band_and_method_raise():
         fit_test(test, band_hz=(100.0, 5000.0))
     with pytest.raises(ValueError, match="method"):
         fit_test(test, method="magic")
+
+
+def test_polyreference_two_accelerometers_and_roving_accelerometer():
+    """m = 2 references (two accelerometers) and the transposed layout (one hammer point)."""
+    model = _bat_like()
+    n = model.x_m.size
+    nodes = np.arange(10, 10 + n)
+    x = dict(zip(nodes.tolist(), model.x_m.tolist(), strict=True))
+    h = model.accelerance(FREQ, [3, 12], np.arange(n))  # two responses, all references
+    two = fit_test(FrfTest(FREQ, h, nodes[[3, 12]], nodes, x))
+    np.testing.assert_allclose(two.freq_hz, model.freq_hz, rtol=1e-6)
+    np.testing.assert_allclose(two.damping_ratio, model.damping_ratio, rtol=1e-6)
+    expected = model.shapes * np.sign(model.shapes[3])[None, :]
+    np.testing.assert_allclose(two.real_shapes, expected, rtol=1e-6, atol=1e-8)
+    assert two.synthesis_error.shape == (2, n)
+    # roving accelerometer: one impact point (node 13), responses everywhere
+    col = model.accelerance(FREQ, np.arange(n), [3])
+    rov = fit_test(FrfTest(FREQ, col, nodes, nodes[[3]], x))
+    np.testing.assert_array_equal(rov.nodes, nodes)
+    np.testing.assert_allclose(rov.freq_hz, model.freq_hz, rtol=1e-6)
+    np.testing.assert_allclose(rov.real_shapes, expected, rtol=1e-6, atol=1e-8)
