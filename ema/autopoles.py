@@ -127,12 +127,13 @@ def auto_poles(
         core = (sw.freq_hz >= a) & (sw.freq_hz < b if b < hi else sw.freq_hz <= hi)
         sweeps.append((sw, core))
         stabs.append(st)
+    if not sweeps:
+        raise ValueError(f"band {lo:g}-{hi:g} Hz has too few lines ({df:g} Hz apart) for LSCF")
     # drop duplicates near core edges: keep the estimate from the nearest core centre
-    cands = found
     parts = []
-    for i, (sel, centre) in enumerate(cands):
+    for i, (sel, centre) in enumerate(found):
         keep = np.ones(sel.freq_hz.size, dtype=bool)
-        for j, (other, c2) in enumerate(cands):
+        for j, (other, c2) in enumerate(found):
             if j == i or other.freq_hz.size == 0 or sel.freq_hz.size == 0:
                 continue
             close = np.abs(sel.freq_hz[:, None] / other.freq_hz[None, :] - 1) < dup_tol

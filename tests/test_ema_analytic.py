@@ -191,6 +191,8 @@ def test_bad_band_and_method_raise():
         fit_test(test, band_hz=(100.0, 5000.0))
     with pytest.raises(ValueError, match="method"):
         fit_test(test, method="magic")
+    with pytest.raises(ValueError, match="too few lines"):
+        fit_test(test, band_hz=(100.0, 104.0))
 
 
 def test_polyreference_two_accelerometers_and_roving_accelerometer():

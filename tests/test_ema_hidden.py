@@ -85,3 +85,14 @@ def test_random_models_up_to_two_percent_noise(noise, seed, n_modes, n_points, c
     np.testing.assert_array_less(np.abs(fit.damping_ratio[idx[ok]] / z[ok] - 1), 0.05 * scale)
     macs = np.diag(mac(fit.real_shapes[:, idx[ok]], case.model.shapes[:, case.in_band][:, ok]))
     assert np.all(macs > 0.995), macs
+
+
+def test_pure_noise_has_no_modes():
+    rng = np.random.default_rng(5)
+    f = np.arange(6401) * 0.5
+    h = rng.standard_normal((f.size, 1, 12)) + 1j * rng.standard_normal((f.size, 1, 12))
+    from ema.frf_data import FrfTest
+
+    test = FrfTest(f, h, [4], np.arange(1, 13), {k: 0.07 * k for k in range(1, 13)})
+    for method in ("lscf", "peak"):
+        assert fit_test(test, method=method).freq_hz.size == 0
