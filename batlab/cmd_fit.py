@@ -17,6 +17,8 @@ def add_arguments(p) -> None:
                         "peak: MIF peaks with half-power damping")
     p.add_argument("--max-order", type=int, default=None,
                    help="highest LSCF model order per sub-band (default 30)")
+    p.add_argument("--refine", action="store_true",
+                   help="refine the poles by maximum likelihood (slower; LS uncertainties)")
     p.add_argument("--mass-kg", type=float, default=None,
                    help="the bat's mass, kg, for the mass-line scaling check")
     p.add_argument("--json", action="store_true", help="print the modes as JSON on stdout")
@@ -114,7 +116,7 @@ def run(args) -> int:
     print(f"batlab fit: {test.frf.shape[1]} x {test.frf.shape[2]} FRFs, "
           f"{test.freq_hz.size} lines; fitting ({args.method})", file=sys.stderr)
     fit = fit_test(test, band_hz=args.band, method=args.method, max_order=args.max_order,
-                   known_mass_kg=args.mass_kg)
+                   known_mass_kg=args.mass_kg, refine=args.refine)
     print(f"batlab fit: {fit.freq_hz.size} modes", file=sys.stderr)
     if args.out:
         from ema.uff_modes import write_modes_uff

@@ -25,13 +25,14 @@ def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--noise", type=float, default=0.005, help="noise RMS / FRF RMS")
     ap.add_argument("--models", type=int, default=40)
+    ap.add_argument("--refine", action="store_true", help="maximum-likelihood pole refinement")
     args = ap.parse_args()
     rows, missed, invented = [], 0, 0
     for seed in range(args.models):
         rng = np.random.default_rng(1000 + seed)
         case = make_test(seed, n_modes=int(rng.integers(4, 9)), n_points=int(rng.integers(15, 21)),
                          noise=args.noise, close_ratio=float(rng.uniform(0.01, 0.03)))
-        fit = fit_test(case.test)
+        fit = fit_test(case.test, refine=args.refine)
         f = case.model.freq_hz[case.in_band]
         z = case.model.damping_ratio[case.in_band]
         rel = np.abs(fit.freq_hz[None, :] / f[:, None] - 1) if fit.freq_hz.size else None
@@ -45,7 +46,7 @@ def main() -> int:
                          abs(fit.damping_ratio[j] / z[k] - 1), m,
                          abs(fit.freq_hz[j] - f[k]) / fit.freq_std_hz[j]))
     r = np.array(rows)
-    print(f"noise {100 * args.noise:g} %, {args.models} models, {len(r) + missed} modes: "
+    print(f"noise {100 * args.noise:g} %{' refined' if args.refine else ''}, {args.models} models, {len(r) + missed} modes: "
           f"missed {missed}, invented {invented}")
     for lo, hi in ((0.0, 0.01), (0.01, 0.02), (0.02, 0.031)):
         s = (r[:, 0] >= lo) & (r[:, 0] < hi)

@@ -85,6 +85,17 @@ def _concat(parts: list[SelectedPoles], n_out: int) -> SelectedPoles:
     return take(cat, order)
 
 
+def _distinct(poles: np.ndarray, taken: np.ndarray, tol: float = 0.005) -> np.ndarray:
+    """Poles not within tol (relative |d lambda| / |lambda|) of ``taken`` or of each other:
+    near-copies would make collinear LSFD columns."""
+    out: list[complex] = []
+    for lam in poles[np.argsort(np.abs(poles))]:
+        ref = np.r_[taken, out]
+        if ref.size == 0 or np.min(np.abs(ref - lam)) > tol * abs(lam):
+            out.append(lam)
+    return np.asarray(out, dtype=complex)
+
+
 def auto_poles(
     freq_hz: np.ndarray,
     frf: np.ndarray,
@@ -162,6 +173,6 @@ def auto_poles(
         shape=np.concatenate([st.shape[c] for st, (_, c) in zip(stabs, sweeps, strict=True)]),
     )
     return AutoPoles(
-        modes, out, np.concatenate(computational), merged, merged_stab,
+        modes, out, _distinct(np.concatenate(computational), out.pole), merged, merged_stab,
         [fb for _, fb in sub_bands(band_hz)],
     )

@@ -14,6 +14,8 @@
    around it is noise fitted by the model; the residues are then re-estimated without it;
 4. mass-normalised complex shapes from the driving point (``ema.scaling``), real shapes,
    MPC and MPD (``ema.complexity``);
+   Optionally (``refine=True``) the poles are then refined together by maximum likelihood
+   with the residues eliminated (``ema.refine``);
 5. exponential-window damping correction zeta = zeta_measured - 1 / (tau w_r);
 6. modes below ``suspension_max_hz`` are the suspension's rigid-body modes: reported apart,
    and used for the mass check (``ema.mass_line``). A band starting below
@@ -40,6 +42,7 @@ from ema.lscf import PoleSweep
 from ema.lsfd import QUANTITY_POWER, LsfdResult, lsfd
 from ema.mass_line import RigidBody, rigid_body_from_mass_line, rigid_body_from_modes
 from ema.mif import PeakPick, pick_peaks, receptance_power, sum_mif
+from ema.refine import refine_poles
 from ema.scaling import fix_sign, mass_normalised_shapes
 from ema.stabilisation import SelectedPoles, Stability
 
@@ -62,7 +65,8 @@ class ModalFit:
         driving_frf: (response index, reference index) of the driving-point FRF.
         mpc: (m,) modal phase collinearity, 0..1 (1: real mode).
         mpd: (m,) mean phase deviation, degrees (0: real mode).
-        freq_std_hz, damping_std: (m,) spread over the model orders (NaN for the peak method).
+        freq_std_hz, damping_std: (m,) spread over the model orders (NaN for the peak method);
+            with ``refine`` the least-squares standard deviations.
         stable_count: (m,) model orders at which the mode was stable (0 for the peak method).
         synthesis_error: (n_resp, n_ref) relative misfit ||H - H_synth|| / ||H|| in the band.
         synthesis_error_total: the same over all FRFs together.
@@ -158,6 +162,7 @@ def fit_test(
     suspension_max_hz: float = 20.0,
     known_mass_kg: float | None = None,
     min_snr: float = 10.0,
+    refine: bool = False,
 ) -> ModalFit:
     """Natural frequencies, damping ratios and mass-normalised shapes of a test, automatically.
 
@@ -171,6 +176,8 @@ def fit_test(
         known_mass_kg: the bat's mass, for the mass-line check when the band excludes the
             suspension modes.
         min_snr: modes whose resonant contribution is below min_snr x local misfit are dropped.
+        refine: refine all poles together by maximum likelihood (``ema.refine``); the
+            uncertainties are then the least-squares standard deviations.
     """
     if method not in METHODS:
         raise ValueError(f"unknown method {method!r}; use one of {', '.join(METHODS)}")
@@ -227,6 +234,13 @@ def fit_test(
         if selected is not None:
             selected = take(selected, keep)
         fit = lsfd(freq, h_flat, np.concatenate([poles, extra]), test.quantity, band, lower=lower)
+
+    if refine and m:
+        ref = refine_poles(freq, h_flat, fr, zr, test.quantity, band, lower=lower,
+                           extra_poles=extra)
+        fr, zr, f_std, z_std, poles = (ref.freq_hz, ref.damping_ratio, ref.freq_std_hz,
+                                       ref.damping_std, ref.pole)
+        fit = lsfd(freq, h_flat, np.r_[poles, extra], test.quantity, band, lower=lower)
 
     residue = fit.residue[:, :m].reshape(n_resp, n_ref, m)
     row = residue[i_d, :, :] if row_layout else residue[:, j_d, :]
