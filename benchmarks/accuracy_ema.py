@@ -46,7 +46,8 @@ def main() -> int:
                          abs(fit.damping_ratio[j] / z[k] - 1), m,
                          abs(fit.freq_hz[j] - f[k]) / fit.freq_std_hz[j]))
     r = np.array(rows)
-    print(f"noise {100 * args.noise:g} %{' refined' if args.refine else ''}, {args.models} models, {len(r) + missed} modes: "
+    how = " refined" if args.refine else ""
+    print(f"noise {100 * args.noise:g} %{how}, {args.models} models, {len(r) + missed} modes: "
           f"missed {missed}, invented {invented}")
     for lo, hi in ((0.0, 0.01), (0.01, 0.02), (0.02, 0.031)):
         s = (r[:, 0] >= lo) & (r[:, 0] < hi)
