@@ -238,8 +238,8 @@ def fit_test(
     if refine and m:
         ref = refine_poles(freq, h_flat, fr, zr, test.quantity, band, lower=lower,
                            extra_poles=extra)
-        fr, zr, f_std, z_std, poles = (ref.freq_hz, ref.damping_ratio, ref.freq_std_hz,
-                                       ref.damping_std, ref.pole)
+        fr, zr, f_std, z_std, poles, extra = (ref.freq_hz, ref.damping_ratio, ref.freq_std_hz,
+                                              ref.damping_std, ref.pole, ref.extra_pole)
         fit = lsfd(freq, h_flat, np.r_[poles, extra], test.quantity, band, lower=lower)
 
     residue = fit.residue[:, :m].reshape(n_resp, n_ref, m)
