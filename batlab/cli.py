@@ -26,6 +26,7 @@ COMMANDS: tuple[str, ...] = (
     "rig",
     "acquire",
     "paper",
+    "fit",
 )
 
 
