@@ -31,6 +31,7 @@ COMMANDS: tuple[str, ...] = (
     "rig",
     "acquire",
     "paper",
+    "fit",
 )
 
 

@@ -1,0 +1,111 @@
+"""Plots of a modal fit (matplotlib, Agg): stabilisation diagram over the MIF, measured vs
+synthesised FRFs, AutoMAC. Each function writes one PNG atomically and returns its path."""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import numpy as np
+
+from ema.atomic_write import atomic_write
+from ema.fit import ModalFit
+from ema.mac import auto_mac
+
+
+def _figure():
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    return plt
+
+
+def _save(fig, path: Path) -> Path:
+    atomic_write(path, lambda tmp: fig.savefig(tmp, format="png", dpi=110))
+    _figure().close(fig)
+    return path
+
+
+def plot_stabilisation(fit: ModalFit, path: str | os.PathLike) -> Path:
+    """Poles over model order (stable in f, zeta and shape: filled; f only: small) on the MIF."""
+    plt = _figure()
+    fig, ax = plt.subplots(figsize=(11, 5.5))
+    if fit.sweep is not None and fit.stability is not None:
+        sw, st = fit.sweep, fit.stability
+        all_ = st.all
+        f_only = st.freq & ~all_
+        none = ~st.freq
+        ax.plot(sw.freq_hz[none], sw.order[none], ".", color="0.8", ms=2, label="unstable")
+        ax.plot(sw.freq_hz[f_only], sw.order[f_only], "x", color="tab:orange", ms=3,
+                label="stable in f")
+        ax.plot(sw.freq_hz[all_], sw.order[all_], "o", color="tab:green", ms=3,
+                label="stable in f, zeta, shape")
+        ax.set_ylabel("model order")
+    for f in fit.freq_hz:
+        ax.axvline(f, color="tab:red", lw=0.8, alpha=0.6)
+    ax.set_xlabel("frequency, Hz")
+    ax.set_xlim(*fit.band_hz)
+    ax2 = ax.twinx()
+    ax2.semilogy(fit.band_freq_hz, fit.mif, color="k", lw=0.8, label="sum MIF")
+    ax2.set_ylabel("sum MIF, sum |H|^2")
+    ax.set_title(f"Stabilisation diagram ({fit.method}); selected modes in red")
+    ax.legend(loc="upper left", fontsize=8)
+    return _save(fig, Path(path))
+
+
+def plot_synthesis(fit: ModalFit, measured: np.ndarray, path: str | os.PathLike,
+                   n_frfs: int = 4) -> Path:
+    """Magnitude of measured vs synthesised FRFs: the driving point and the worst-fitted ones.
+
+    ``measured`` is the test's FRF array on ``fit.band_freq_hz`` (F_band, n_resp, n_ref).
+    """
+    plt = _figure()
+    h = np.asarray(measured).reshape(fit.band_freq_hz.size, -1)
+    s = fit.synth.reshape(h.shape)
+    err = fit.synthesis_error.ravel()
+    dp = fit.driving_frf[0] * fit.synthesis_error.shape[1] + fit.driving_frf[1]
+    picks = list(dict.fromkeys([dp] + [int(k) for k in np.argsort(err)[::-1][: n_frfs - 1]]))
+    fig, axes = plt.subplots(len(picks), 1, figsize=(10, 2.6 * len(picks)), sharex=True,
+                             squeeze=False)
+    for ax, k in zip(axes[:, 0], picks, strict=True):
+        ax.semilogy(fit.band_freq_hz, np.abs(h[:, k]), color="k", lw=0.8, label="measured")
+        ax.semilogy(fit.band_freq_hz, np.abs(s[:, k]), color="tab:red", lw=0.8, ls="--",
+                    label="synthesised")
+        ax.set_ylabel(f"|H| FRF {k}")
+        what = "driving point" if k == dp else f"FRF {k}"
+        ax.set_title(f"{what}: relative misfit {err[k]:.2%}", fontsize=9)
+    axes[0, 0].legend(fontsize=8)
+    axes[-1, 0].set_xlabel("frequency, Hz")
+    fig.tight_layout()
+    return _save(fig, Path(path))
+
+
+def plot_auto_mac(fit: ModalFit, path: str | os.PathLike) -> Path:
+    """AutoMAC of the fitted (real) shapes."""
+    plt = _figure()
+    m = auto_mac(fit.real_shapes)
+    fig, ax = plt.subplots(figsize=(5.5, 4.8))
+    im = ax.imshow(m, vmin=0, vmax=1, cmap="viridis")
+    labels = [f"{f:.0f}" for f in fit.freq_hz]
+    ax.set_xticks(range(len(labels)), labels, rotation=90, fontsize=7)
+    ax.set_yticks(range(len(labels)), labels, fontsize=7)
+    for (i, j), v in np.ndenumerate(m):
+        ax.text(j, i, f"{v:.2f}", ha="center", va="center", fontsize=6,
+                color="w" if v < 0.5 else "k")
+    fig.colorbar(im, ax=ax)
+    ax.set_title("AutoMAC (mode frequency, Hz)")
+    fig.tight_layout()
+    return _save(fig, Path(path))
+
+
+def plot_fit(fit: ModalFit, measured: np.ndarray, out_dir: str | os.PathLike) -> list[Path]:
+    """All three plots into out_dir (created): stabilisation.png, synthesis.png, automac.png."""
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    return [
+        plot_stabilisation(fit, out / "stabilisation.png"),
+        plot_synthesis(fit, measured, out / "synthesis.png"),
+        plot_auto_mac(fit, out / "automac.png"),
+    ]

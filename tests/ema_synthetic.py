@@ -1,0 +1,112 @@
+"""Random modal models and their noisy FRF tests, for the ema hidden-effect tests."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ema.frf_data import FrfTest
+from rigs.modal_model import ModalModel
+
+
+@dataclass(frozen=True)
+class SyntheticTest:
+    """A roving-hammer test of a known modal model and the modes the fit must find."""
+
+    test: FrfTest
+    model: ModalModel
+    in_band: np.ndarray  # indices of model modes inside the fitted band
+    band_hz: tuple[float, float]
+    driving_index: int
+
+
+def random_modes(
+    rng: np.random.Generator,
+    n_modes: int,
+    n_points: int,
+    band_hz: tuple[float, float] = (20.0, 3200.0),
+    close_ratio: float | None = None,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Frequencies (ascending, >= 4 % apart except one pair close_ratio apart) and damping.
+
+    Damping is log-uniform in 0.3-3 %; the close pair's is capped at close_ratio (modal
+    overlap zeta / separation <= 1: the pair shows two peaks or a shouldered one).
+    """
+    lo, hi = band_hz
+    while True:
+        f = np.sort(np.exp(rng.uniform(np.log(lo + 80.0), np.log(0.97 * hi), n_modes)))
+        if np.all(np.diff(f) / f[:-1] > 0.04):
+            break
+    zeta = np.exp(rng.uniform(np.log(0.003), np.log(0.03), n_modes))
+    if close_ratio is not None:
+        k = int(rng.integers(0, n_modes - 1))
+        f[k + 1] = f[k] * (1 + close_ratio)
+        cap = min(0.03, close_ratio)
+        zeta[k : k + 2] = np.exp(rng.uniform(np.log(0.003), np.log(cap), 2))
+        order = np.argsort(f)
+        f, zeta = f[order], zeta[order]
+    return f, zeta
+
+
+def make_test(
+    seed: int,
+    n_modes: int = 6,
+    n_points: int = 17,
+    noise: float = 0.005,
+    close_ratio: float | None = 0.01,
+    cut_mode: bool = True,
+    quantity: str = "accelerance",
+    df_hz: float = 0.5,
+    f_max_hz: float = 3200.0,
+    suspension: bool = True,
+) -> SyntheticTest:
+    """Roving-hammer FRFs of a random modal model, with complex Gaussian noise of RMS
+    ``noise`` times each FRF's RMS over the axis.
+
+    The model has ``n_modes`` modes in the band (20 Hz to f_max), optionally two ``close_ratio``
+    apart, optionally one more just above f_max (0.2 to 2 % above: the end of the data cuts it),
+    and optionally two suspension rigid-body modes below 10 Hz. Shapes are random with the
+    driving point (the accelerometer, near the barrel end) well away from a node.
+    """
+    rng = np.random.default_rng(seed)
+    band = (20.0, f_max_hz)
+    f, zeta = random_modes(rng, n_modes, n_points, band, close_ratio)
+    shapes = rng.standard_normal((n_points, n_modes)) * 1.5
+    d = n_points - 2
+    shapes[d] = np.sign(shapes[d] + 1e-12) * np.maximum(np.abs(shapes[d]), 1.0)
+    x = np.sort(rng.uniform(0.02, 0.84, n_points))
+    freqs, damp, cols = [f], [zeta], [shapes]
+    if cut_mode:
+        freqs.append([f_max_hz * (1 + rng.uniform(0.002, 0.02))])
+        damp.append([rng.uniform(0.005, 0.02)])
+        cols.append(rng.standard_normal((n_points, 1)) * 1.5)
+    if suspension:
+        mass, x_c, inertia = 0.9, 0.5, 0.045
+        freqs.append([rng.uniform(2.0, 4.0), rng.uniform(5.0, 9.0)])
+        damp.append([0.03, 0.03])
+        # rotate the bounce/pitch pair: any orthonormal mix is a valid pair of rigid modes
+        a = rng.uniform(0, np.pi)
+        rb = np.stack([np.ones(n_points) / np.sqrt(mass), (x - x_c) / np.sqrt(inertia)], axis=1)
+        rot = np.array([[np.cos(a), -np.sin(a)], [np.sin(a), np.cos(a)]])
+        cols.append(rb @ rot)
+    model = ModalModel(np.concatenate(freqs), np.concatenate(damp), np.hstack(cols), x)
+    freq = np.arange(0.0, f_max_hz + df_hz / 2, df_hz)
+    h = model.accelerance(freq, [d], np.arange(n_points))
+    if quantity == "receptance":
+        h = model.receptance(freq, [d], np.arange(n_points))
+    elif quantity == "mobility":
+        h = model.receptance(freq, [d], np.arange(n_points)) * (2j * np.pi * freq)[:, None, None]
+    rms = np.sqrt(np.mean(np.abs(h) ** 2, axis=0, keepdims=True))
+    white = rng.standard_normal(h.shape) + 1j * rng.standard_normal(h.shape)
+    h = h + noise * rms * white / np.sqrt(2)
+    nodes = np.arange(1, n_points + 1)
+    test = FrfTest(
+        freq_hz=freq,
+        frf=h,
+        response_nodes=nodes[[d]],
+        reference_nodes=nodes,
+        node_x_m={int(k): float(v) for k, v in zip(nodes, x, strict=True)},
+        quantity=quantity,
+    )
+    return SyntheticTest(test, model, np.arange(n_modes), band, d)
