@@ -13,17 +13,22 @@ reference is what a good calibration gives: the truth perturbed by E +-1 %, dens
 
 from __future__ import annotations
 
+import json
 from dataclasses import dataclass, replace
+from pathlib import Path
 
 import numpy as np
 
+from ema.frf_io import write_test
 from updating.calibration import BatReference
-from updating.material import Material
+from updating.fe_model import build_model
+from updating.massprops import mass_properties
+from updating.material import Material, material_from_imperial
 from updating.measured import MeasuredModes
-from updating.profile import Profile, make_profile
+from updating.profile import Profile, make_profile, write_profile_csv
 from updating.sections import Core
-from updating.units import IN_TO_M
-from updating.virtual_bat import VirtualBat, simulate_modes
+from updating.units import IN_TO_M, LB_TO_KG
+from updating.virtual_bat import DEFAULT_FREQ_HZ, VirtualBat, simulate_modes, simulate_test
 
 FILLS = {"cork": (0.2, 0.4), "heavy": (1.5, 2.2), "neutral": (0.9, 1.1)}
 
@@ -106,3 +111,88 @@ def case_modes(
                                   shape_noise=rng.uniform(0.01, 0.02),
                                   seed=int(rng.integers(2**31))))
     return out[0], out[1]
+
+
+SPECIES = {  # handbook values at 12 % moisture (../shared/BAT_PHYSICS.md): E psi, lbf/in^3
+    "white ash": (1.74e6, 0.60 * 0.036127),
+    "paper birch": (1.60e6, 0.55 * 0.036127),
+    "yellow birch": (2.02e6, 0.62 * 0.036127),
+    "sugar maple": (1.83e6, 0.63 * 0.036127),
+}
+
+
+@dataclass(frozen=True)
+class LabCase:
+    """A bat as a lab receives it: what it writes down (profile, meta) and the truth behind
+    its two tests.
+
+    Attributes:
+        profile: the caliper profile (noisy copy of the truth's).
+        meta: meta.json's content: species handbook values (not the truth), the scale weight
+            of the real bat (no accelerometer on it), the test points.
+        baseline, retest: the truth of the two tests (re-test: moisture drift, accelerometer
+            re-mounted, and the core if altered).
+        kind: "none" or a fill in FILLS.
+    """
+
+    profile: Profile
+    meta: dict
+    baseline: VirtualBat
+    retest: VirtualBat
+    kind: str
+
+    @property
+    def core(self) -> Core | None:
+        return self.retest.core
+
+
+def lab_case(rng: np.random.Generator, kind: str = "none", serial: str = "SIM-0001") -> LabCase:
+    """A random bat for the full path (FRF files to verdict), ``kind`` "none" or a fill.
+
+    Truth: a random pro profile, a random species with E within +-15 % and density within
+    +-8 % of its handbook values, Timoshenko with E/G 10-18, a 2-6 g accelerometer up to
+    0.05 in off its labelled point, two bungees 100-400 N/m, 0.5 % FRF noise; at the re-test,
+    moisture drift up to +-1 point and the accelerometer moved up to 0.1 in.
+    """
+    truth_profile = pro_profile(rng)
+    profile = Profile(truth_profile.x_m, truth_profile.diameter_m
+                      + 0.003 * IN_TO_M * rng.standard_normal(truth_profile.x_m.size))
+    species = list(SPECIES)[int(rng.integers(len(SPECIES)))]
+    E_psi, wd = SPECIES[species]
+    nominal = material_from_imperial(E_psi, wd)
+    wood = Material(nominal.E_pa * rng.uniform(0.85, 1.15),
+                    nominal.rho_kg_m3 * rng.uniform(0.92, 1.08), rng.uniform(10.0, 18.0))
+    L_in = truth_profile.length_m / IN_TO_M
+    points_in = np.append(np.arange(1.0, L_in - 1.5, 2.0), round(L_in - 1.0, 2))
+    offset = rng.uniform(-0.05, 0.05) * IN_TO_M
+    base = VirtualBat(truth_profile, wood, points_in * IN_TO_M, sensor_offset_m=offset,
+                      sensor_mass_kg=rng.uniform(0.002, 0.006),
+                      bungee_k_n_per_m=rng.uniform(100.0, 400.0), rel_noise=0.005)
+    core = None
+    if kind != "none":
+        lo, hi = FILLS[kind]
+        core = Core(rng.uniform(0.75, 1.25) * IN_TO_M, rng.uniform(6.0, 11.0) * IN_TO_M,
+                    rng.uniform(lo, hi), 0.0, IN_TO_M)
+    retest = replace(base, core=core, moisture_pct=rng.uniform(-1.0, 1.0),
+                     sensor_offset_m=offset + rng.uniform(-0.1, 0.1) * IN_TO_M)
+    bare = build_model(truth_profile, wood, beam="timoshenko", element_length_m=0.5 * IN_TO_M)
+    weight_lb = mass_properties(bare).mass_kg / LB_TO_KG
+    meta = {"serial": serial, "species": species, "nominal_E_psi": E_psi,
+            "nominal_weight_density_lbf_in3": round(wd, 5), "weight_lb": round(weight_lb, 4),
+            "points_in": [round(float(x), 3) for x in points_in]}
+    return LabCase(profile, meta, base, retest, kind)
+
+
+def write_lab_files(case: LabCase, folder, seed: int, freq_hz=None) -> dict:
+    """Write profile.csv, meta.json, baseline.uff and retest.uff (as `batlab simulate` writes
+    them) into ``folder``; returns their paths by name."""
+    folder = Path(folder)
+    freq = DEFAULT_FREQ_HZ if freq_hz is None else np.asarray(freq_hz, dtype=float)
+    paths = {k: folder / n for k, n in (("profile", "profile.csv"), ("meta", "meta.json"),
+                                        ("baseline", "baseline.uff"),
+                                        ("retest", "retest.uff"))}
+    write_profile_csv(paths["profile"], case.profile)
+    paths["meta"].write_text(json.dumps(case.meta, indent=1))
+    write_test(paths["baseline"], simulate_test(case.baseline, freq, seed=seed))
+    write_test(paths["retest"], simulate_test(case.retest, freq, seed=seed + 1))
+    return paths
