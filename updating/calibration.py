@@ -26,6 +26,8 @@ class BatReference:
         beam: "euler" or "timoshenko"; rotary_inertia: include rhoI.
         sensor_mass_kg, sensor_x_m: accelerometer at the driving point.
         bungee_k_n_per_m: each of two bungees 1 in from either end (0: free-free).
+        element_length_m: the mesh the parameters were calibrated on (nodes also at the test
+            points); None: the default ~1 in grid.
     """
 
     E_pa: float
@@ -37,6 +39,7 @@ class BatReference:
     sensor_mass_kg: float = 0.0
     sensor_x_m: float = 0.0
     bungee_k_n_per_m: float = 0.0
+    element_length_m: float | None = None
 
     def material(self) -> Material:
         return Material(self.E_pa, self.rho_kg_m3, self.e_over_g, self.nu)
@@ -54,7 +57,10 @@ class BatReference:
         self, profile: Profile, stations_m=(), core: Core | None = None,
         n_elements: int | None = None, element_length_m: float | None = None,
     ) -> BatModel:
-        """The reference FE model with nodes at ``stations_m`` (the test points)."""
+        """The reference FE model with nodes at ``stations_m`` (the test points), on the
+        calibrated mesh unless ``n_elements`` or ``element_length_m`` says otherwise."""
+        if n_elements is None and element_length_m is None:
+            element_length_m = self.element_length_m
         return build_model(profile, self.material(), beam=self.beam,
                            rotary_inertia=self.rotary_inertia, n_elements=n_elements,
                            element_length_m=element_length_m, stations_m=np.asarray(stations_m),

@@ -161,7 +161,8 @@ def reference_of(setup: Setup, active: frozenset[str], state: State) -> BatRefer
         E_pa=s.E_pa, rho_kg_m3=s.rho_kg_m3, e_over_g=s.e_over_g, nu=setup.handbook.nu,
         beam="timoshenko" if shear else "euler", rotary_inertia="rotary_inertia" in active,
         sensor_mass_kg=s.sensor_mass_kg, sensor_x_m=setup.sensor_x_m,
-        bungee_k_n_per_m=s.bungee_k_n_per_m)
+        bungee_k_n_per_m=s.bungee_k_n_per_m,
+        element_length_m=setup.fine_element_m if "geometry" in active else None)
 
 
 def build(setup: Setup, active: frozenset[str], state: State) -> BatModel:

@@ -141,9 +141,13 @@ def simulate_modes(
 
     The truth model's elastic modes at the impact points (the accelerometer's own mass and
     position included), mass-normalised, with relative Gaussian noise on frequencies and
-    shape entries (``shape_noise`` times each shape's RMS). For fast tests of the updating
-    stage; the full path (simulate_test + ema fit) is the real thing.
+    shape entries (``shape_noise`` times each shape's RMS). Scaled as the fitter scales them,
+    through the driving-point FRF: an accelerometer off its labelled point multiplies each
+    shape by sqrt(phi(sensor) / phi(driving point)) (``change_model.driving_point_scale``).
+    For fast tests of the updating stage; the full path (simulate_test + ema fit) is the real
+    thing.
     """
+    from updating.change_model import driving_point_scale
     from updating.measured import MeasuredModes
 
     model = bat.truth_model()
@@ -151,10 +155,13 @@ def simulate_modes(
     elastic = np.flatnonzero(modes.freq_hz >= 20.0)[:n_modes]
     points = np.asarray(bat.points_m, dtype=float)
     shapes = displacement_at(model, modes.shapes[:, elastic], points)
+    s = bat.sensor_point()
+    at_sensor = displacement_at(model, modes.shapes[:, elastic], [points[s] + bat.sensor_offset_m])
+    shapes = shapes * driving_point_scale(at_sensor[0], shapes[s])
     rng = np.random.default_rng(seed)
     f = modes.freq_hz[elastic] * (1 + freq_noise * rng.standard_normal(elastic.size))
     rms = np.sqrt(np.mean(shapes**2, axis=0))
     shapes = shapes + shape_noise * rms * rng.standard_normal(shapes.shape)
     zeta = damping_ratios(modes.freq_hz[elastic], bat.zeta1, bat.zeta_exponent)
-    return MeasuredModes(f, shapes, points, zeta, float(points[bat.sensor_point()]),
+    return MeasuredModes(f, shapes, points, zeta, float(points[s]),
                          freq_noise * f)

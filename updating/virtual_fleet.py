@@ -8,7 +8,8 @@ accelerometer off its labelled point, two bungees, and a re-test with moisture d
 carry a core 0.75-1.25 in wide, 6-11 in deep with a 1 in plug, filled with cork (density
 ratio 0.2-0.4), a heavy fill (1.5-2.2) or a density-neutral soft fill (0.9-1.1). The
 reference is what a good calibration gives: the truth perturbed by E +-1 %, density
-+-0.5 %, E/G +-10 %, sensor mass +-0.3 g, bungee stiffness +-20 %, sensor at its label.
++-0.5 %, E/G +-10 %, sensor mass +-0.3 g, bungee stiffness +-20 %, sensor at its label,
+on diagnose's fine mesh (its `geometry` extension: 0.5 in elements).
 """
 
 from __future__ import annotations
@@ -96,7 +97,8 @@ def random_case(rng: np.random.Generator, kind: str = "none") -> Case:
         e_over_g * (1 + rng.uniform(-0.1, 0.1)), beam="timoshenko", rotary_inertia=True,
         sensor_mass_kg=sensor_mass + rng.uniform(-3e-4, 3e-4),
         sensor_x_m=float(points[base.sensor_point()]),
-        bungee_k_n_per_m=bungee * (1 + rng.uniform(-0.2, 0.2)))
+        bungee_k_n_per_m=bungee * (1 + rng.uniform(-0.2, 0.2)),
+        element_length_m=base.element_length_m)
     return Case(profile, base, retest, reference, kind)
 
 
