@@ -36,7 +36,12 @@ from updating.change_fit import (
     shape_noise,
     solve,
 )
-from updating.change_model import ChangeParams, make_predictor, wood_system
+from updating.change_model import (
+    ChangeParams,
+    baseline_sensor_offset,
+    make_predictor,
+    wood_system,
+)
 from updating.core_elements import core_element_factors
 from updating.measured import MeasuredModes
 from updating.mode_pairing import align_signs, pair_modes
@@ -123,6 +128,8 @@ def inspect_retest(
     points = np.asarray(baseline.x_m, dtype=float)
     n_solve = max(baseline.freq_hz.size, retest.freq_hz.size) + 6
     predict = make_predictor(profile, reference, points, reference.sensor_x_m, n_solve)
+    offset = baseline_sensor_offset(predict, baseline.freq_hz, baseline.shapes)
+    predict = make_predictor(profile, reference, points, reference.sensor_x_m + offset, n_solve)
     diff, modes = differences(predict, baseline, retest, min_mac)
     space = ParamSpace(profile, plug_m, fill_modulus_ratio,
                        float(retest.sensor_x_m - baseline.sensor_x_m))
@@ -190,6 +197,7 @@ def inspect_retest(
         "core_fit_moisture": {"stiffness_scale": float(full.params.stiffness_scale),
                               "density_scale": float(full.params.density_scale)},
         "sensor_shift_m": float(ps.sensor_shift_m - space.sensor_mount_m),
+        "baseline_sensor_offset_m": offset,
         "depth_scan": scan,
         "plug_m": plug_m, "fill_modulus_ratio": fill_modulus_ratio,
         "time_s": time.perf_counter() - t0,
