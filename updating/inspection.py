@@ -52,6 +52,7 @@ FALLBACK_FREQ_STD_PER_ZETA = 0.05
 """Without the fitter's frequency uncertainty: sigma_f / f = 0.05 zeta (1/20 of the
 half-power half-bandwidth)."""
 INITIAL_SHAPE_NOISE = 0.01
+MAP_MASS_NORMALISED = False
 SCAN_DEPTHS_IN = tuple(float(d) for d in np.arange(4.0, 14.5, 1.0))
 """Core depths (in, from the barrel end) scanned to seed the core fit."""
 
@@ -110,7 +111,8 @@ def _element_map(profile, reference, baseline, retest, modes, h0, sigma, sigma_l
         mp = msso_map(profile, reference, baseline.select(ib), retest.select(ir),
                       stiffness_scale=h0.stiffness_scale, density_scale=h0.density_scale,
                       sensor_shift_m=h0.sensor_shift_m, shape_sigma=sigma,
-                      freq_sigma=float(np.median(sigma_lnf)) / np.sqrt(2))
+                      freq_sigma=float(np.median(sigma_lnf)) / np.sqrt(2),
+                      mass_normalised=MAP_MASS_NORMALISED)
     except ValueError as exc:
         return {"error": str(exc)}
     return mp.to_dict()

@@ -91,7 +91,7 @@ def _update(model, modes: MeasuredModes, dofs, kw) -> ElementUpdate:
     try:
         r0 = refine(model, test, zero_factors(model.n_elements), groups,
                     freq_sigma=kw["freq_sigma"], shape_sigma=kw["shape_sigma"],
-                    prior_sigma=kw["prior_sigma"])
+                    prior_sigma=kw["prior_sigma"], mass_normalised=kw["mass_normalised"])
     except ValueError:  # modes no longer pair from that start either
         return u
     return replace(u, factors=r0.factors, refinement=r0) if r0.chi2_data < rr.chi2_data else u
@@ -101,7 +101,7 @@ def msso_map(
     profile: Profile, reference: BatReference, baseline: MeasuredModes, retest: MeasuredModes,
     *, stiffness_scale: float, density_scale: float, sensor_shift_m: float,
     shape_sigma: float, freq_sigma: float, prior_sigma: float = PRIOR_SIGMA,
-    stiffness: str = "bend", mass: str = "trans",
+    stiffness: str = "bend", mass: str = "trans", mass_normalised: bool = True,
 ) -> MssoMap:
     """The element map of ``retest`` (module docstring).
 
@@ -119,7 +119,8 @@ def msso_map(
     t0 = time.perf_counter()
     points = np.asarray(baseline.x_m, dtype=float)
     kw = {"stiffness": stiffness, "mass": mass, "freq_sigma": freq_sigma,
-          "shape_sigma": shape_sigma, "prior_sigma": prior_sigma}
+          "shape_sigma": shape_sigma, "prior_sigma": prior_sigma,
+          "mass_normalised": mass_normalised}
     model0 = reference.build(profile, points)
     dofs = dofs_at(model0, points)
     ub = _update(model0, baseline, dofs, kw)
