@@ -52,7 +52,7 @@ FALLBACK_FREQ_STD_PER_ZETA = 0.05
 """Without the fitter's frequency uncertainty: sigma_f / f = 0.05 zeta (1/20 of the
 half-power half-bandwidth)."""
 INITIAL_SHAPE_NOISE = 0.01
-MAP_MASS_NORMALISED = False
+MAP_MASS_NORMALISED = True
 SCAN_DEPTHS_IN = tuple(float(d) for d in np.arange(4.0, 14.5, 1.0))
 """Core depths (in, from the barrel end) scanned to seed the core fit."""
 
