@@ -98,7 +98,7 @@ def test_pure_noise_has_no_modes():
         assert fit_test(test, method=method).freq_hz.size == 0
 
 
-@settings(max_examples=3, deadline=None, derandomize=True, phases=NO_SHRINK)
+@settings(max_examples=2, deadline=None, derandomize=True, phases=NO_SHRINK)
 @given(**CASES)
 def test_refinement_is_at_least_as_good(seed, n_modes, n_points, close):
     """Maximum-likelihood refinement: same modes, errors within 4 x its own standard deviations
