@@ -102,15 +102,15 @@ def differences(
     return diff, modes
 
 
-def _element_map(profile, reference, baseline, retest, modes, h0, sigma, sigma_lnf) -> dict:
+def _element_map(profile, reference, baseline, retest, modes, drift, sigma, sigma_lnf) -> dict:
     """The MSSO map of the paired modes as a dict for ``details["msso"]`` ({"error": ...}
     when the modes cannot be updated element by element)."""
     ib = [int(np.argmin(np.abs(baseline.freq_hz - m["baseline_hz"]))) for m in modes]
     ir = [int(np.argmin(np.abs(retest.freq_hz - m["retest_hz"]))) for m in modes]
     try:
         mp = msso_map(profile, reference, baseline.select(ib), retest.select(ir),
-                      stiffness_scale=h0.stiffness_scale, density_scale=h0.density_scale,
-                      sensor_shift_m=h0.sensor_shift_m, shape_sigma=sigma,
+                      stiffness_scale=drift.stiffness_scale, density_scale=drift.density_scale,
+                      sensor_shift_m=drift.sensor_shift_m, shape_sigma=sigma,
                       freq_sigma=float(np.median(sigma_lnf)) / np.sqrt(2),
                       mass_normalised=MAP_MASS_NORMALISED)
     except ValueError as exc:
@@ -200,7 +200,9 @@ def inspect_retest(
         m["moisture_fit_change_pct"] = 100 * (f_null[j] / diff.f0[k] - 1)
         m["core_fit_change_pct"] = 100 * (f_fit[j] / diff.f0[k] - 1)
 
-    msso = _element_map(profile, reference, baseline, retest, modes, null.params, sigma,
+    # the accepted model's drift: when there is a core, the moisture-only fit's uniform scales
+    # absorb part of it and the map would show that as a change of the whole bat
+    msso = _element_map(profile, reference, baseline, retest, modes, ps, sigma,
                         diff.sigma_lnf)
     if "error" not in msso:
         msso["agrees_with_fit"] = _agree(msso["region_m"], region)

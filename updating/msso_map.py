@@ -6,8 +6,9 @@ the reference first, so the map shows only the local change:
 1. the calibrated reference, meshed with nodes at the test points, is updated element by
    element to the **baseline** test (SEREP + MSSO + Levenberg-Marquardt, ``update_elements``):
    the calibration's residual errors (E, E/G, bungees, sensor mass) are absorbed here;
-2. that model gets the moisture-only (H0) fit's uniform scales (EI and kGA by s_E, rhoA and
-   rhoI by s_rho) and the accelerometer where H0 put it;
+2. that model gets the accepted fit's uniform drift scales (EI and kGA by s_E, rhoA and rhoI
+   by s_rho) and the accelerometer where that fit put it (the moisture+core fit when the bat
+   is altered: the moisture-only fit's scales absorb part of a core);
 3. the re-test is updated against it: K_I = K + sum beta_i k_bend_i,
    M_I = M + sum alpha_i m_trans_i (bending and translational factors; ``update_elements``
    with the re-test's paired modes at the measured translational DOFs, weighted by the noise
@@ -108,7 +109,7 @@ def msso_map(
     Args:
         profile, reference: the bat and its calibrated reference.
         baseline, retest: paired elastic modes (mass-normalised shapes at the test points).
-        stiffness_scale, density_scale, sensor_shift_m: the moisture-only fit (H0).
+        stiffness_scale, density_scale, sensor_shift_m: the accepted fit's drift.
         shape_sigma: shape noise relative to each mode's RMS; freq_sigma: relative frequency
             noise of one test.
         prior_sigma: smoothness prior of the refinement (``refine.prior_matrix``).
