@@ -77,13 +77,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 def _profile_model(args: argparse.Namespace, points_m: np.ndarray):
     """ModalModel of a bat at ``points_m`` from its profile (updating's virtual bat: FE model,
     Timoshenko, 3 g accelerometer at the driving point, two 150 N/m bungees)."""
-    from rigs.modal_model import ModalModel
     from updating.bat_input import parse_core_spec, read_meta
-    from updating.fe_model import displacement_at
     from updating.material import paper_material
-    from updating.modes import model_modes
     from updating.profile import read_profile_csv
-    from updating.virtual_bat import VirtualBat, damping_ratios
+    from updating.virtual_bat import VirtualBat, modal_model
 
     profile = read_profile_csv(args.profile)
     material = read_meta(args.meta).material if args.meta else paper_material()
@@ -91,13 +88,8 @@ def _profile_model(args: argparse.Namespace, points_m: np.ndarray):
     bat = VirtualBat(profile, material, points_m, sensor_index=accel, sensor_mass_kg=0.003,
                      bungee_k_n_per_m=150.0,
                      core=parse_core_spec(args.alter) if args.alter else None)
-    fe = bat.truth_model()
-    modes = model_modes(fe, n_modes=min(fe.n_dof, 30))
-    keep = modes.freq_hz > 0.5  # suspension modes stay (bungees); numerically-zero ones go
-    f = modes.freq_hz[keep]
-    shapes = displacement_at(fe, modes.shapes[:, keep], points_m)
-    return ModalModel(f, damping_ratios(f, bat.zeta1, bat.zeta_exponent), shapes,
-                      points_m), bat.sensor_point()
+    modal, _ = modal_model(bat)
+    return modal, bat.sensor_point()
 
 
 def run(args: argparse.Namespace) -> int:

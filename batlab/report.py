@@ -99,25 +99,50 @@ def mac_figure(result: InspectionResult):
 
 
 def element_figure(result: InspectionResult):
-    """alpha and beta per element as bars, over the bat's profile drawn to scale (inches)."""
+    """alpha and beta per element as bars, over the bat's profile drawn to scale (inches):
+    the physical fit's factors (how much; left half of each element, left axis) beside the
+    MSSO map (where; right half, hatched, right axis), each region shaded."""
     import matplotlib.pyplot as plt
 
     v, prof = result.verdict, result.profile
     x0, x1 = np.asarray(v.element_x0_m) / IN_TO_M, np.asarray(v.element_x1_m) / IN_TO_M
+    w = x1 - x0
     length_in = prof.length_m / IN_TO_M
     d_max = float(prof.diameter_m.max()) / IN_TO_M
-    fig, axes = plt.subplots(3, 1, sharex=True, figsize=(10, 6.4),
+    fig, axes = plt.subplots(3, 1, sharex=True, figsize=(10, 6.8),
                              gridspec_kw={"height_ratios": [2.2, 2.2, 1.0]})
     region = v.region_m if v.altered else None
-    for ax, vals, name, color in ((axes[0], v.alpha, "alpha (mass)", "C0"),
-                                  (axes[1], v.beta, "beta (stiffness)", "C1")):
-        ax.bar(x0, np.asarray(vals), width=x1 - x0, align="edge", color=color,
-               edgecolor="k", lw=0.4)
+    msso = (v.details or {}).get("msso") or {}
+    has_map = "alpha" in msso and len(msso["alpha"]) == len(x0)
+    for ax, vals, key, name, color in ((axes[0], v.alpha, "alpha", "alpha (mass)", "C0"),
+                                       (axes[1], v.beta, "beta", "beta (stiffness)", "C1")):
+        ax.bar(x0, np.asarray(vals), width=w / 2 if has_map else w, align="edge", color=color,
+               edgecolor="k", lw=0.4, label="physical core fit (how much)")
         ax.axhline(0, color="k", lw=0.6)
         ax.set_ylabel(name)
         ax.grid(alpha=0.3, axis="y")
         if region is not None:
             ax.axvspan(region[0] / IN_TO_M, region[1] / IN_TO_M, color="C3", alpha=0.12)
+        if has_map:
+            ax2 = ax.twinx()
+            vm = np.asarray(msso[key])
+            ax2.bar(x0 + w / 2, vm, width=w / 2, align="edge", color="none", edgecolor="C2",
+                    hatch="////", lw=0.6, label="MSSO map (where)")
+            lim = 1.1 * max(float(np.max(np.abs(vm))), 1e-6)
+            ax2.set_ylim(-lim, lim)
+            ax2.set_ylabel(f"{key}, MSSO map", color="C2")
+            ax2.tick_params(axis="y", colors="C2")
+            if msso.get("region_m"):
+                a, b = msso["region_m"]
+                ax2.axvspan(a / IN_TO_M, b / IN_TO_M, fill=False, hatch="..", color="C2",
+                            alpha=0.25, lw=0)
+            lo, hi = ax.get_ylim()
+            m = max(abs(lo), abs(hi), 1e-6)
+            ax.set_ylim(-m, m)  # both zero lines at the same height
+            if key == "alpha":
+                h1, l1 = ax.get_legend_handles_labels()
+                h2, l2 = ax2.get_legend_handles_labels()
+                ax.legend(h1 + h2, l1 + l2, fontsize=8, loc="upper left")
     axes[0].set_title("Element factors along the bat (knob at 0)")
     ax = axes[2]
     x = prof.x_m / IN_TO_M
@@ -251,6 +276,21 @@ def render_html(result: InspectionResult) -> str:
 
     parts.append("<h2>Element changes along the bat</h2>")
     parts.append(_img(_png(element_figure(result)), "element factors over the bat profile"))
+    msso = (v.details or {}).get("msso") or {}
+    if "error" in msso:
+        parts.append(f"<p class='note'>MSSO map not available: {html.escape(msso['error'])}</p>")
+    elif "alpha" in msso:
+        reg = msso.get("region_m")
+        where = ("no significant local change" if not reg else
+                 f"changed region {reg[0] / IN_TO_M:.1f} – {reg[1] / IN_TO_M:.1f} in")
+        parts.append(
+            "<p class='note'>Solid bars, left axis: the element ratios of the fitted core (how "
+            "much; the contract's elements). Hatched bars, right axis: the MSSO map of the "
+            "re-test against the baseline-updated reference with the fitted moisture and sensor "
+            f"shift removed (where; {where}, peak z {msso.get('peak_z', 0):.1f}, "
+            f"{'agrees' if msso.get('agrees_with_fit') else 'disagrees'} with the fit). Its "
+            "stiffness bars also carry the core's shear loss, so they are larger than the "
+            "bending ratio.</p>")
     parts.append("<h2>Mass properties</h2>")
     rows = mass_rows(result)
     w0, cg0, i0 = rows[0][1:]

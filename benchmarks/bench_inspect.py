@@ -25,11 +25,72 @@ import numpy as np  # noqa: E402
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
+from updating.core_elements import core_element_factors  # noqa: E402
 from updating.inspection import inspect_retest  # noqa: E402
 from updating.units import IN_TO_M  # noqa: E402
 from updating.virtual_fleet import FILLS, case_modes, random_case  # noqa: E402
 
 KINDS = ["none"] * 3 + list(FILLS)  # half altered, fills in turn
+
+
+def _loc(x0, x1, alpha, beta, true_alpha, true_beta, region) -> dict:
+    """How one element map localises the true core: is the element of largest |alpha|
+    (|beta|) a cored one, the share of sum alpha^2 (beta^2) on cored elements, the map's
+    region start (in) and the RMS error of the factors against the true section ratios."""
+    cored = (true_alpha != 0) | (true_beta != 0)
+    out = {"region_start_in": None if region is None else region[0] / IN_TO_M,
+           "rms_err_alpha": float(np.sqrt(np.mean((alpha - true_alpha) ** 2))),
+           "rms_err_beta": float(np.sqrt(np.mean((beta - true_beta) ** 2)))}
+    for name, f in (("alpha", alpha), ("beta", beta)):
+        tot = float(np.sum(f**2))
+        out[f"peak_in_{name}"] = bool(cored[np.argmax(np.abs(f))]) if tot else False
+        out[f"share_{name}"] = float(np.sum(f[cored] ** 2) / tot) if tot else 0.0
+    return out
+
+
+def localisation(case, v) -> dict:
+    """Localisation of the core by the MSSO map and by the fitted core's element ratios."""
+    model = case.reference.build(case.profile, v.element_x0_m[1:])
+    t = core_element_factors(model, case.core)
+    m = v.details["msso"]
+    out = {"map_time_s": m.get("time_s", np.nan), "map_z": m.get("peak_z", np.nan),
+           "map_region": m.get("region_m") is not None}
+    if case.core is None or "error" in m:
+        return out
+    a, b = np.asarray(m["alpha"]), np.asarray(m["beta"])
+    out["map"] = _loc(v.element_x0_m, v.element_x1_m, a, b, t.alpha, t.beta, m["region_m"])
+    out["fit"] = _loc(v.element_x0_m, v.element_x1_m, v.alpha, v.beta, t.alpha, t.beta,
+                      v.region_m)
+    return out
+
+
+def localisation_table(rows: list[dict]) -> None:
+    """Markdown table of both sources' localisation over the altered bats."""
+    alt = [r for r in rows if r["kind"] != "none" and "map" in r]
+    print("\n## Localisation of the core: MSSO map vs fitted-core ratios\n")
+    print("| source | peak alpha in core | peak beta in core | share alpha^2 | share beta^2 |"
+          " region found | start err in (median / max) | rms err alpha | rms err beta |")
+    print("|---|---|---|---|---|---|---|---|---|")
+    for src in ("map", "fit"):
+        loc = [r[src] for r in alt]
+        n = len(loc)
+        errs = np.array([abs(x["region_start_in"] - r["start_in"]) for x, r in zip(loc, alt,
+                         strict=True) if x["region_start_in"] is not None])
+        found = errs.size
+        e_txt = f"{np.median(errs):.2f} / {errs.max():.2f}" if found else "-"
+        print(f"| {src} | {sum(x['peak_in_alpha'] for x in loc)}/{n} | "
+              f"{sum(x['peak_in_beta'] for x in loc)}/{n} | "
+              f"{np.mean([x['share_alpha'] for x in loc]):.2f} | "
+              f"{np.mean([x['share_beta'] for x in loc]):.2f} | {found}/{n} | {e_txt} | "
+              f"{np.mean([x['rms_err_alpha'] for x in loc]):.4f} | "
+              f"{np.mean([x['rms_err_beta'] for x in loc]):.4f} |")
+    clean = [r for r in rows if r["kind"] == "none"]
+    if clean:
+        z = np.array([r["map_z"] for r in clean])
+        print(f"unaltered bats: map peak z median {np.median(z):.1f}, max {z.max():.1f}; "
+              f"map region found on {sum(r['map_region'] for r in clean)}/{len(clean)}")
+    t = np.array([r["map_time_s"] for r in rows])
+    print(f"map time: median {np.nanmedian(t):.2f} s, max {np.nanmax(t):.2f} s")
 
 
 def run_case(seed: int, kind: str) -> dict:
@@ -45,6 +106,7 @@ def run_case(seed: int, kind: str) -> dict:
         L = case.profile.length_m
         row.update(start_in=(L - case.core.depth_m) / IN_TO_M,
                    d_in=case.core.diameter_m / IN_TO_M, ratio=case.core.fill_density_ratio)
+    row.update(localisation(case, v))
     if v.altered:
         row.update(est_start_in=v.region_m[0] / IN_TO_M, est_d_in=v.core_diameter_m / IN_TO_M,
                    est_ratio=v.fill_density_ratio,
@@ -102,6 +164,8 @@ def main() -> int:
               f"{a[:, 1].max():.1f} % (15), fill ratio {a[:, 2].max():.1f} % (25)")
         ok = (a[:, 0] <= 1.5) & (a[:, 1] <= 15) & (a[:, 2] <= 25)
         print(f"within all three targets: {np.sum(ok)}/{len(errs)}")
+
+    localisation_table(rows)
 
     t = np.array([r["time_s"] for r in rows])
     print(f"\ntime per inspection: median {np.median(t):.2f} s, max {t.max():.2f} s")

@@ -14,7 +14,9 @@
 
    p = P(F_{q, N-p_1} > F); altered when p < false_alarm; confidence = 1 - p.
 4. Reading: the H1 core (region, diameter, fill ratio) with standard uncertainties from the
-   Jacobian, and the element factors it implies (or MSSO's, when available).
+   Jacobian, and the element factors it implies.
+5. The MSSO element map (``msso_map``), independent of the core fit: the re-test against the
+   baseline-updated reference with H0's moisture and sensor shift removed (``details["msso"]``).
 """
 
 from __future__ import annotations
@@ -45,6 +47,7 @@ from updating.change_model import (
 from updating.core_elements import core_element_factors
 from updating.measured import MeasuredModes
 from updating.mode_pairing import align_signs, pair_modes
+from updating.msso_map import msso_map
 from updating.profile import Profile
 from updating.units import IN_TO_M
 from updating.verdict import Verdict
@@ -54,6 +57,7 @@ FALLBACK_FREQ_STD_PER_ZETA = 0.05
 """Without the fitter's frequency uncertainty: sigma_f / f = 0.05 zeta (1/20 of the
 half-power half-bandwidth)."""
 INITIAL_SHAPE_NOISE = 0.01
+MAP_MASS_NORMALISED = True
 SCAN_DEPTHS_IN = tuple(float(d) for d in np.arange(4.0, 14.5, 1.0))
 """Core depths (in, from the barrel end) scanned to seed the core fit."""
 
@@ -101,6 +105,29 @@ def differences(
               "reference_hz": float(c), "mac_reference": float(mac_model[int(i)])}
              for a, b, m, c, i in zip(fb, fr, mac_br, f_mod[jmod], ib, strict=True)]
     return diff, modes
+
+
+def _element_map(profile, reference, baseline, retest, modes, drift, sigma, sigma_lnf) -> dict:
+    """The MSSO map of the paired modes as a dict for ``details["msso"]`` ({"error": ...}
+    when the modes cannot be updated element by element)."""
+    ib = [int(np.argmin(np.abs(baseline.freq_hz - m["baseline_hz"]))) for m in modes]
+    ir = [int(np.argmin(np.abs(retest.freq_hz - m["retest_hz"]))) for m in modes]
+    try:
+        mp = msso_map(profile, reference, baseline.select(ib), retest.select(ir),
+                      stiffness_scale=drift.stiffness_scale, density_scale=drift.density_scale,
+                      sensor_shift_m=drift.sensor_shift_m, shape_sigma=sigma,
+                      freq_sigma=float(np.median(sigma_lnf)) / np.sqrt(2),
+                      mass_normalised=MAP_MASS_NORMALISED)
+    except ValueError as exc:
+        return {"error": str(exc)}
+    return mp.to_dict()
+
+
+def _agree(map_region, fit_region) -> bool:
+    """Both say "no local change", or both regions overlap."""
+    if map_region is None or fit_region is None:
+        return map_region is None and fit_region is None
+    return bool(map_region[0] < fit_region[1] and fit_region[0] < map_region[1])
 
 
 def inspect_retest(
@@ -180,6 +207,13 @@ def inspect_retest(
         m["moisture_fit_change_pct"] = 100 * (f_null[j] / diff.f0[k] - 1)
         m["core_fit_change_pct"] = 100 * (f_fit[j] / diff.f0[k] - 1)
 
+    # the accepted model's drift: when there is a core, the moisture-only fit's uniform scales
+    # absorb part of it and the map would show that as a change of the whole bat
+    msso = _element_map(profile, reference, baseline, retest, modes, ps, sigma,
+                        diff.sigma_lnf)
+    if "error" not in msso:
+        msso["agrees_with_fit"] = _agree(msso["region_m"], region)
+
     c = full.params.core
     details = {
         "statistic": "F (moisture+core vs moisture-only, nested least squares)",
@@ -199,6 +233,7 @@ def inspect_retest(
         "sensor_shift_m": float(ps.sensor_shift_m - space.sensor_mount_m),
         "baseline_sensor_offset_m": offset,
         "depth_scan": scan,
+        "msso": msso,
         "plug_m": plug_m, "fill_modulus_ratio": fill_modulus_ratio,
         "time_s": time.perf_counter() - t0,
     }

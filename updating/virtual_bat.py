@@ -101,22 +101,29 @@ def damping_ratios(freq_hz: np.ndarray, zeta1: float, exponent: float) -> np.nda
     return z
 
 
-def simulate_test(
-    bat: VirtualBat, freq_hz: np.ndarray = DEFAULT_FREQ_HZ, seed: int | None = None,
-    max_mode_hz: float = 12000.0,
-) -> FrfTest:
-    """Simulate the roving-hammer, fixed-accelerometer test of ``bat``: one FRF per point."""
+def modal_model(bat: VirtualBat, max_mode_hz: float = 12000.0) -> tuple[ModalModel, np.ndarray]:
+    """The truth's modes below ``max_mode_hz`` at the impact points, and the accelerometer's
+    own shape row (1, m) at its true position (which may be off its labelled point)."""
     model = bat.truth_model()
     modes = model_modes(model, n_modes=min(model.n_dof, 60))
     keep = modes.freq_hz <= max_mode_hz
     shapes = modes.shapes[:, keep]
     f_modes = modes.freq_hz[keep]
     points = np.asarray(bat.points_m, dtype=float)
-    at_points = displacement_at(model, shapes, points)
-    s = bat.sensor_point()
-    sensor_shape = displacement_at(model, shapes, [points[s] + bat.sensor_offset_m])
+    sensor_x = points[bat.sensor_point()] + bat.sensor_offset_m
     modal = ModalModel(f_modes, damping_ratios(f_modes, bat.zeta1, bat.zeta_exponent),
-                       at_points, points)
+                       displacement_at(model, shapes, points), points)
+    return modal, displacement_at(model, shapes, [sensor_x])
+
+
+def simulate_test(
+    bat: VirtualBat, freq_hz: np.ndarray = DEFAULT_FREQ_HZ, seed: int | None = None,
+    max_mode_hz: float = 12000.0,
+) -> FrfTest:
+    """Simulate the roving-hammer, fixed-accelerometer test of ``bat``: one FRF per point."""
+    modal, sensor_shape = modal_model(bat, max_mode_hz)
+    points = modal.x_m
+    s = bat.sensor_point()
     h = simulate_frf(modal, freq_hz, np.array([s]), np.arange(points.size), bat.rel_noise,
                      bat.floor_noise, seed, resp_shapes=sensor_shape)
     nodes = np.arange(1, points.size + 1)
