@@ -175,7 +175,7 @@ def _worker(path: str, worker: int, n: int) -> None:
     with reg.open_registry(path) as conn:
         reg.add_bat(conn, make_bat(f"W{worker}"), f"w{worker}.uff", f"w{worker}".encode())
         shared = None
-        for _ in range(50):  # wait for worker 0's bat
+        for _ in range(1500):  # wait up to 30 s for worker 0's bat (spawned under load)
             try:
                 shared = reg.get_bat(conn, "W0")
                 break

@@ -178,7 +178,9 @@ def inspect_retest(
     n, p1, q = diff.n_data, 6, 3
     dof = n - p1
     rss0, rss1 = null.rss, min(full.rss, null.rss)
-    F = max(rss0 - rss1, 0.0) / q / (rss1 / dof)
+    # residual variance per datum, not below 1: the weights hold the noise floors
+    # (SHAPE_NOISE_FLOOR), and data cleaner than them must not make model error significant
+    F = max(rss0 - rss1, 0.0) / q / max(rss1 / dof, 1.0)
     p_value = float(f_dist.sf(F, q, dof))
     altered = p_value < false_alarm
 
