@@ -69,6 +69,18 @@ def pro_profile(rng: np.random.Generator, caliper_noise_in: float = 0.0) -> Prof
     return make_profile(x * IN_TO_M, d * IN_TO_M, "random bat")
 
 
+def random_retest(rng: np.random.Generator, base: VirtualBat, kind: str) -> VirtualBat:
+    """The re-test weeks later: a random core of ``kind`` (or none), moisture drift up to
+    +-1 point, the accelerometer re-mounted up to 0.1 in from where it was."""
+    core = None
+    if kind != "none":
+        lo, hi = FILLS[kind]
+        core = Core(rng.uniform(0.75, 1.25) * IN_TO_M, rng.uniform(6.0, 11.0) * IN_TO_M,
+                    rng.uniform(lo, hi), 0.0, IN_TO_M)
+    return replace(base, core=core, moisture_pct=rng.uniform(-1.0, 1.0),
+                   sensor_offset_m=base.sensor_offset_m + rng.uniform(-0.1, 0.1) * IN_TO_M)
+
+
 def random_case(rng: np.random.Generator, kind: str = "none") -> Case:
     """A random bat; ``kind`` "none" (unaltered) or a fill in FILLS."""
     truth_profile = pro_profile(rng)
@@ -85,13 +97,7 @@ def random_case(rng: np.random.Generator, kind: str = "none") -> Case:
     base = VirtualBat(truth_profile, Material(E, rho, e_over_g), points,
                       sensor_offset_m=offset, sensor_mass_kg=sensor_mass,
                       bungee_k_n_per_m=bungee)
-    core = None
-    if kind != "none":
-        lo, hi = FILLS[kind]
-        core = Core(rng.uniform(0.75, 1.25) * IN_TO_M, rng.uniform(6.0, 11.0) * IN_TO_M,
-                    rng.uniform(lo, hi), 0.0, IN_TO_M)
-    retest = replace(base, core=core, moisture_pct=rng.uniform(-1.0, 1.0),
-                     sensor_offset_m=offset + rng.uniform(-0.1, 0.1) * IN_TO_M)
+    retest = random_retest(rng, base, kind)
     reference = BatReference(
         E * (1 + rng.uniform(-0.01, 0.01)), rho * (1 + rng.uniform(-0.005, 0.005)),
         e_over_g * (1 + rng.uniform(-0.1, 0.1)), beam="timoshenko", rotary_inertia=True,
@@ -170,13 +176,7 @@ def lab_case(rng: np.random.Generator, kind: str = "none", serial: str = "SIM-00
     base = VirtualBat(truth_profile, wood, points_in * IN_TO_M, sensor_offset_m=offset,
                       sensor_mass_kg=rng.uniform(0.002, 0.006),
                       bungee_k_n_per_m=rng.uniform(100.0, 400.0), rel_noise=0.005)
-    core = None
-    if kind != "none":
-        lo, hi = FILLS[kind]
-        core = Core(rng.uniform(0.75, 1.25) * IN_TO_M, rng.uniform(6.0, 11.0) * IN_TO_M,
-                    rng.uniform(lo, hi), 0.0, IN_TO_M)
-    retest = replace(base, core=core, moisture_pct=rng.uniform(-1.0, 1.0),
-                     sensor_offset_m=offset + rng.uniform(-0.1, 0.1) * IN_TO_M)
+    retest = random_retest(rng, base, kind)
     bare = build_model(truth_profile, wood, beam="timoshenko", element_length_m=0.5 * IN_TO_M)
     weight_lb = mass_properties(bare).mass_kg / LB_TO_KG
     meta = {"serial": serial, "species": species, "nominal_E_psi": E_psi,
