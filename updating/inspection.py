@@ -107,7 +107,8 @@ def differences(
     return diff, modes
 
 
-def _element_map(profile, reference, baseline, retest, modes, drift, sigma, sigma_lnf) -> dict:
+def _element_map(profile, reference, baseline, retest, modes, drift, offset, sigma,
+                 sigma_lnf) -> dict:
     """The MSSO map of the paired modes as a dict for ``details["msso"]`` ({"error": ...}
     when the modes cannot be updated element by element)."""
     ib = [int(np.argmin(np.abs(baseline.freq_hz - m["baseline_hz"]))) for m in modes]
@@ -115,7 +116,8 @@ def _element_map(profile, reference, baseline, retest, modes, drift, sigma, sigm
     try:
         mp = msso_map(profile, reference, baseline.select(ib), retest.select(ir),
                       stiffness_scale=drift.stiffness_scale, density_scale=drift.density_scale,
-                      sensor_shift_m=drift.sensor_shift_m, shape_sigma=sigma,
+                      sensor_shift_m=drift.sensor_shift_m, baseline_sensor_offset_m=offset,
+                      shape_sigma=sigma,
                       freq_sigma=float(np.median(sigma_lnf)) / np.sqrt(2),
                       mass_normalised=MAP_MASS_NORMALISED)
     except ValueError as exc:
@@ -211,7 +213,7 @@ def inspect_retest(
 
     # the accepted model's drift: when there is a core, the moisture-only fit's uniform scales
     # absorb part of it and the map would show that as a change of the whole bat
-    msso = _element_map(profile, reference, baseline, retest, modes, ps, sigma,
+    msso = _element_map(profile, reference, baseline, retest, modes, ps, offset, sigma,
                         diff.sigma_lnf)
     if "error" not in msso:
         msso["agrees_with_fit"] = _agree(msso["region_m"], region)

@@ -3,9 +3,10 @@
 Independent of the physical core fit. What every bat does between two tests is removed from
 the reference first, so the map shows only the local change:
 
-1. the calibrated reference, meshed with nodes at the test points, is updated element by
-   element to the **baseline** test (SEREP + MSSO + Levenberg-Marquardt, ``update_elements``):
-   the calibration's residual errors (E, E/G, bungees, sensor mass) are absorbed here;
+1. the calibrated reference, meshed with nodes at the test points, with the accelerometer
+   where ``baseline_sensor_offset`` put it at the baseline, is updated element by element to
+   the **baseline** test (SEREP + MSSO + Levenberg-Marquardt, ``update_elements``): the
+   calibration's residual errors (E, E/G, bungees, sensor mass) are absorbed here;
 2. that model gets the accepted fit's uniform drift scales (EI and kGA by s_E, rhoA and rhoI
    by s_rho) and the accelerometer where that fit put it (the moisture+core fit when the bat
    is altered: the moisture-only fit's scales absorb part of a core);
@@ -14,9 +15,16 @@ the reference first, so the map shows only the local change:
    with the re-test's paired modes at the measured translational DOFs, weighted by the noise
    levels the inspection estimated, and a fixed smoothness prior ``prior_sigma``).
 
+Before each update the measured shapes psi are freed of the roving-hammer fitter's
+driving-point factor (``change_model.driving_point_scale``): psi / sqrt(phi(x_s) / phi(x_d)),
+with phi the paired modes of the model being updated, x_s the accelerometer's position in that
+model and x_d the test's labelled driving point. The sensor is re-mounted between the tests,
+so the two factors differ per mode and would otherwise show up as element changes.
+
 Region: ``core_reading.changed_region`` (contiguous run of significant factors around the
 peak, z = hypot(beta / s_beta, alpha / s_alpha) > 3 with s the refinement's linearised
-standard deviations; on unaltered fleet bats the peak z stayed below 2.3).
+standard deviations; on unaltered fleet bats the peak z stayed at or below 2.0,
+docs/inspection.md).
 """
 
 from __future__ import annotations
@@ -27,12 +35,14 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from updating.calibration import BatReference
+from updating.change_model import driving_point_scale
 from updating.core_reading import changed_region
 from updating.element_update import ElementUpdate, dofs_at, update_elements
 from updating.factors import apply_factors, choose_groups, zero_factors
+from updating.fe_model import BatModel, displacement_at
 from updating.measured import MeasuredModes
 from updating.profile import Profile
-from updating.refine import ModalData, refine
+from updating.refine import ModalData, full_modes, paired_elastic, refine
 
 PRIOR_SIGMA = 0.03
 """Smoothness prior of the map's refinement (first differences of neighbouring factors):
@@ -81,6 +91,18 @@ class MssoMap:
                 "groups": list(self.groups), "time_s": self.time_s}
 
 
+def _without_driving_point_factor(
+    model: BatModel, modes: MeasuredModes, dofs, sensor_x_m: float,
+) -> MeasuredModes:
+    """``modes`` with each shape divided by sqrt(phi(x_s) / phi(x_d))
+    (``driving_point_scale``): phi the model's modes paired with them, x_s = ``sensor_x_m``
+    where the accelerometer sat, x_d = ``modes.sensor_x_m`` the labelled driving point."""
+    lam, Phi = full_modes(model)
+    idx = paired_elastic(lam, Phi, ModalData(modes.freq_hz, modes.shapes, dofs), 2)
+    phi_s, phi_d = displacement_at(model, Phi[:, idx], [sensor_x_m, modes.sensor_x_m])
+    return replace(modes, shapes=modes.shapes / driving_point_scale(phi_s, phi_d))
+
+
 def _update(model, modes: MeasuredModes, dofs, kw) -> ElementUpdate:
     """update_elements, redone from no change when the MSSO seed led the refinement astray."""
     u = update_elements(model, modes.freq_hz, modes.shapes, dofs, **kw)
@@ -101,7 +123,8 @@ def _update(model, modes: MeasuredModes, dofs, kw) -> ElementUpdate:
 def msso_map(
     profile: Profile, reference: BatReference, baseline: MeasuredModes, retest: MeasuredModes,
     *, stiffness_scale: float, density_scale: float, sensor_shift_m: float,
-    shape_sigma: float, freq_sigma: float, prior_sigma: float = PRIOR_SIGMA,
+    baseline_sensor_offset_m: float = 0.0, shape_sigma: float, freq_sigma: float,
+    prior_sigma: float = PRIOR_SIGMA,
     stiffness: str = "bend", mass: str = "trans", mass_normalised: bool = True,
 ) -> MssoMap:
     """The element map of ``retest`` (module docstring).
@@ -109,7 +132,10 @@ def msso_map(
     Args:
         profile, reference: the bat and its calibrated reference.
         baseline, retest: paired elastic modes (mass-normalised shapes at the test points).
-        stiffness_scale, density_scale, sensor_shift_m: the accepted fit's drift.
+        stiffness_scale, density_scale, sensor_shift_m: the accepted fit's drift (the shift
+            relative to the baseline's sensor position, as ``ChangeParams.sensor_shift_m``).
+        baseline_sensor_offset_m: the baseline's sensor position relative to
+            ``reference.sensor_x_m`` (``change_model.baseline_sensor_offset``).
         shape_sigma: shape noise relative to each mode's RMS; freq_sigma: relative frequency
             noise of one test.
         prior_sigma: smoothness prior of the refinement (``refine.prior_matrix``).
@@ -122,14 +148,17 @@ def msso_map(
     kw = {"stiffness": stiffness, "mass": mass, "freq_sigma": freq_sigma,
           "shape_sigma": shape_sigma, "prior_sigma": prior_sigma,
           "mass_normalised": mass_normalised}
-    model0 = reference.build(profile, points)
+    L = profile.length_m
+    x_base = float(np.clip(reference.sensor_x_m + baseline_sensor_offset_m, 0.0, L))
+    x_re = float(np.clip(x_base + sensor_shift_m, 0.0, L))
+    model0 = replace(reference, sensor_x_m=x_base).build(profile, points)
     dofs = dofs_at(model0, points)
-    ub = _update(model0, baseline, dofs, kw)
-    x_sensor = float(np.clip(reference.sensor_x_m + sensor_shift_m, 0.0, profile.length_m))
+    ub = _update(model0, _without_driving_point_factor(model0, baseline, dofs, x_base),
+                 dofs, kw)
     moist = replace(reference, E_pa=reference.E_pa * stiffness_scale,
-                    rho_kg_m3=reference.rho_kg_m3 * density_scale, sensor_x_m=x_sensor)
+                    rho_kg_m3=reference.rho_kg_m3 * density_scale, sensor_x_m=x_re)
     model = apply_factors(moist.build(profile, points), ub.factors)
-    u = _update(model, retest, dofs, kw)
+    u = _update(model, _without_driving_point_factor(model, retest, dofs, x_re), dofs, kw)
     alpha, beta = u.factors.alpha_trans, u.factors.beta_bend
     s_a, s_b = u.refinement.std.alpha_trans, u.refinement.std.beta_bend
     el, z = changed_region(beta, alpha, s_b, s_a)
