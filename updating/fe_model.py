@@ -209,10 +209,6 @@ def scale_sections(
     return replace(model, samples=samples, phi=phi, parts=parts)
 
 
-def with_attachments(model: BatModel, attachments: tuple[Attachment, ...]) -> BatModel:
-    return replace(model, attachments=tuple(attachments))
-
-
 def point_vector(model: BatModel, x_m: float) -> tuple[np.ndarray, np.ndarray]:
     """(dofs, N_w) of the element containing x: a point load's consistent distribution."""
     from updating.beam_element import shape_functions

@@ -14,9 +14,5 @@ LBF_IN3_TO_KG_M3 = LBF_TO_N / IN_TO_M**3 / G0_M_S2
 KG_M2_TO_LB_IN2 = 1.0 / (LB_TO_KG * IN_TO_M**2)
 
 
-def in_to_m(x_in):
-    return x_in * IN_TO_M
-
-
 def m_to_in(x_m):
     return x_m / IN_TO_M
