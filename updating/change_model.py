@@ -127,7 +127,8 @@ def baseline_sensor_offset(
     """
     from scipy.optimize import minimize_scalar
 
-    from updating.mode_pairing import align_signs, pair_modes
+    from updating.mode_pairing import pair_modes
+    from updating.pairing import align_signs
 
     f0, phi0 = predict(ChangeParams())
     elastic = np.flatnonzero(f0 >= 20.0)
@@ -140,7 +141,7 @@ def baseline_sensor_offset(
 
     def cost(offset_m: float) -> float:
         _, phi = predict(ChangeParams(sensor_shift_m=offset_m))
-        return float(np.sum(((psi - align_signs(phi[:, elastic[jm]], psi)) / rms) ** 2))
+        return float(np.sum(((psi - align_signs(psi, phi[:, elastic[jm]])) / rms) ** 2))
 
     res = minimize_scalar(cost, bounds=(-max_offset_m, max_offset_m), method="bounded",
                           options={"xatol": 1e-5})

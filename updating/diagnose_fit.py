@@ -22,6 +22,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import scipy.optimize
 
+from ema.mac import mac
 from updating.diagnose_model import (
     BOUNDS,
     ModalSolution,
@@ -34,12 +35,6 @@ from updating.diagnose_model import (
 )
 
 
-def mac_matrix(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """Modal assurance criterion between the columns of a (n, p) and b (n, q): (p, q)."""
-    num = np.abs(a.T @ b) ** 2
-    return num / np.outer(np.sum(a * a, axis=0), np.sum(b * b, axis=0))
-
-
 def pair_modes(
     measured: np.ndarray, model: np.ndarray, min_mac: float = 0.5,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -49,10 +44,10 @@ def pair_modes(
     """
     from scipy.optimize import linear_sum_assignment
 
-    mac = mac_matrix(measured, model)
-    rows, cols = linear_sum_assignment(-mac)
-    keep = mac[rows, cols] >= min_mac
-    return rows[keep], cols[keep], mac[rows, cols][keep]
+    m = mac(measured, model)
+    rows, cols = linear_sum_assignment(-m)
+    keep = m[rows, cols] >= min_mac
+    return rows[keep], cols[keep], m[rows, cols][keep]
 
 
 @dataclass(frozen=True)
@@ -181,9 +176,9 @@ def fit_model(
     cov = s2 * np.linalg.pinv(jac.T @ jac) if p else np.zeros((0, 0))
     model_hz = sol.elastic_hz[obs.model_index]
     shapes = sol.shapes[:, obs.model_index]
-    mac = np.diag(mac_matrix(obs.shapes, shapes))
+    mac_values = np.diag(mac(obs.shapes, shapes))
     rms = float(100 * np.sqrt(np.mean((model_hz / obs.freq_hz - 1) ** 2)))
-    return Fit(frozenset(active), from_vector(start, names, x), names, x, cov, model_hz, mac,
+    return Fit(frozenset(active), from_vector(start, names, x), names, x, cov, model_hz, mac_values,
                shapes, rms, float(res[:m] @ res[:m]), float(res[m:k] @ res[m:k]))
 
 

@@ -46,8 +46,9 @@ from updating.change_model import (
 )
 from updating.core_elements import core_element_factors
 from updating.measured import MeasuredModes
-from updating.mode_pairing import align_signs, pair_modes
+from updating.mode_pairing import pair_modes
 from updating.msso_map import msso_map
+from updating.pairing import align_signs
 from updating.profile import Profile
 from updating.units import IN_TO_M
 from updating.verdict import Verdict
@@ -95,8 +96,8 @@ def differences(
     ib, ir, mac_br = ib[keep], ir[keep], mac_br[keep]
     jmod = np.array([to_model[b] for b in ib])
     psi_b = baseline.shapes[:, ib]
-    psi_r = align_signs(retest.shapes[:, ir], psi_b)
-    phi0 = align_signs(phi_mod[:, jmod], psi_b)
+    psi_r = align_signs(psi_b, retest.shapes[:, ir])
+    phi0 = align_signs(psi_b, phi_mod[:, jmod])
     fb, fr = baseline.freq_hz[ib], retest.freq_hz[ir]
     sig = np.hypot(_rel_freq_std(baseline)[ib], _rel_freq_std(retest)[ir])
     rms = np.hypot(np.sqrt(np.mean(psi_b**2, axis=0)), np.sqrt(np.mean(psi_r**2, axis=0)))

@@ -12,11 +12,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.optimize import linear_sum_assignment
 
-
-def mac_matrix(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """MAC between the columns of a (n, p) and b (n, q): (p, q)."""
-    num = (a.T @ b) ** 2
-    return num / np.outer(np.einsum("ij,ij->j", a, a), np.einsum("ij,ij->j", b, b))
+from ema.mac import mac
 
 
 def pair_modes(
@@ -24,18 +20,10 @@ def pair_modes(
     min_mac: float = 0.8, max_rel_df: float = 0.15, freq_weight: float = 1.0,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Indices (ia, ib) of paired modes, ascending in ia, and their MAC values."""
-    mac = mac_matrix(shapes_a, shapes_b)
+    m = mac(shapes_a, shapes_b)
     dlog = np.abs(np.log(np.asarray(freq_a)[:, None] / np.asarray(freq_b)[None, :]))
-    ia, ib = linear_sum_assignment(-(mac - freq_weight * dlog))
-    ok = (mac[ia, ib] >= min_mac) & (dlog[ia, ib] <= np.log1p(max_rel_df))
+    ia, ib = linear_sum_assignment(-(m - freq_weight * dlog))
+    ok = (m[ia, ib] >= min_mac) & (dlog[ia, ib] <= np.log1p(max_rel_df))
     ia, ib = ia[ok], ib[ok]
     order = np.argsort(ia)
-    return ia[order], ib[order], mac[ia[order], ib[order]]
-
-
-def align_signs(shapes: np.ndarray, target: np.ndarray) -> np.ndarray:
-    """Columns of ``shapes`` with signs flipped so that each has a non-negative dot with
-    the matching column of ``target``."""
-    s = np.sign(np.einsum("ij,ij->j", shapes, target))
-    s[s == 0] = 1.0
-    return shapes * s
+    return ia[order], ib[order], m[ia[order], ib[order]]

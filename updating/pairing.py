@@ -14,14 +14,7 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.optimize
 
-
-def mac(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """MAC matrix (columns of a) x (columns of b); a (k, p), b (k, q) -> (p, q)."""
-    a = np.asarray(a).reshape(a.shape[0], -1)
-    b = np.asarray(b).reshape(b.shape[0], -1)
-    num = np.abs(a.conj().T @ b) ** 2
-    den = np.outer(np.sum(np.abs(a) ** 2, axis=0), np.sum(np.abs(b) ** 2, axis=0))
-    return num / np.where(den > 0, den, 1.0)
+from ema.mac import mac
 
 
 @dataclass(frozen=True)
