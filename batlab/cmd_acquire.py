@@ -10,10 +10,11 @@ from __future__ import annotations
 
 import argparse
 import json
-import os
 import sys
 from dataclasses import asdict
 from pathlib import Path
+
+from ema.atomic_write import atomic_write
 
 HELP = "run a roving-hammer impact test over a serial port (or replay a recorded stream)"
 
@@ -78,9 +79,7 @@ def _positions_m(args: argparse.Namespace, points: list[int]) -> dict[int, float
 
 
 def _write_json_atomic(path: Path, obj: dict) -> None:
-    tmp = path.with_name(f".{path.name}.tmp")
-    tmp.write_text(json.dumps(obj, indent=1))
-    os.replace(tmp, path)
+    atomic_write(path, lambda tmp: tmp.write_text(json.dumps(obj, indent=1)))
 
 
 def run(args: argparse.Namespace) -> int:

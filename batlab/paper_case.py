@@ -11,6 +11,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ema.atomic_write import atomic_write
 from updating.core_reading import CoreReading, read_core
 from updating.element_update import ElementUpdate, update_elements
 from updating.factors import ElementFactors
@@ -106,9 +107,7 @@ def plot_figures(case: PaperCase, out_dir: str | Path) -> list[Path]:
         ax.legend(fontsize=8)
         fig.tight_layout()
         path = out / f"figure{fig_no}_{label.split()[0]}.png"
-        tmp = path.with_name(path.stem + ".tmp.png")
-        fig.savefig(tmp, dpi=120)
+        atomic_write(path, lambda tmp, fig=fig: fig.savefig(tmp, dpi=120, format="png"))
         plt.close(fig)
-        tmp.replace(path)
         paths.append(path)
     return paths
