@@ -1,4 +1,4 @@
-"""The `batlab` command line: one sub-command per module `batlab/cmd_<name>.py`.
+"""The `batlab` command line: one sub-command per module `batlab/commands/<name>.py`.
 
 Each command module defines ``HELP`` (one line), ``add_arguments(parser)`` and
 ``run(args) -> int``. Modules import heavy dependencies inside ``run`` so that
@@ -42,7 +42,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
     for name in COMMANDS:
-        module = importlib.import_module(f"batlab.cmd_{name}")
+        module = importlib.import_module(f"batlab.commands.{name}")
         p = sub.add_parser(name, help=module.HELP, description=module.HELP)
         module.add_arguments(p)
         p.set_defaults(_run=module.run)

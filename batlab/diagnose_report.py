@@ -46,7 +46,7 @@ def write_plot(result, path: Path, title: str = "") -> Path:
     import matplotlib.pyplot as plt
     import numpy as np
 
-    from ema.atomic_write import atomic_write
+    from ema.io.atomic_write import atomic_write
 
     f = result.measured_hz
     nominal = 100 * (result.nominal.model_hz / f - 1)

@@ -4,11 +4,11 @@ from __future__ import annotations
 
 import numpy as np
 
-from updating.fe_model import BatModel
-from updating.massprops import mass_properties
-from updating.modes import model_modes
-from updating.placement import effective_independence
-from updating.units import KG_M2_TO_LB_IN2, LB_TO_KG, m_to_in
+from updating.model.assembly import BatModel
+from updating.model.mass_properties import mass_properties
+from updating.model.modes import model_modes
+from updating.model.placement import effective_independence
+from updating.model.units import KG_M2_TO_LB_IN2, LB_TO_KG, m_to_in
 
 
 def summarise_model(model: BatModel, n_modes: int = 8, n_points: int = 16) -> dict:

@@ -11,17 +11,17 @@ from pathlib import Path
 
 import numpy as np
 
-from ema.atomic_write import atomic_write
-from updating.core_reading import CoreReading, read_core
-from updating.element_update import ElementUpdate, update_elements
-from updating.factors import ElementFactors
-from updating.fe_model import BatModel, build_model
-from updating.material import paper_material
-from updating.modes import model_modes
-from updating.profile import paper_profile
-from updating.refine import ModalData, with_noise
-from updating.sections import Core
-from updating.units import IN_TO_M
+from ema.io.atomic_write import atomic_write
+from updating.model.assembly import BatModel, build_model
+from updating.model.material import paper_material
+from updating.model.modes import model_modes
+from updating.model.profile import paper_profile
+from updating.model.sections import Core
+from updating.model.units import IN_TO_M
+from updating.msso.core_reading import CoreReading, read_core
+from updating.msso.factors import ElementFactors
+from updating.msso.iterate import ModalData, with_noise
+from updating.msso.update import ElementUpdate, update_elements
 
 PAPER = {"alpha_mean": -0.0918, "beta_mean": -0.0167, "core_diameter_in": 0.971,
          "density_ratio": 0.291}

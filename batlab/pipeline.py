@@ -21,13 +21,13 @@ from pathlib import Path
 import numpy as np
 
 from batlab import registry as reg
-from ema.frf_data import FrfTest
-from updating.bat_input import BatMeta, read_meta
-from updating.calibration import BatReference
-from updating.measured import MeasuredModes, from_fit
-from updating.profile import Profile, make_profile, read_profile_csv
-from updating.units import IN_TO_M, LB_TO_KG
-from updating.verdict import Verdict
+from ema.io.frf_data import FrfTest
+from updating.correlate.measured import MeasuredModes, from_fit
+from updating.inspect.verdict import Verdict
+from updating.model.lab_input import BatMeta, read_meta
+from updating.model.profile import Profile, make_profile, read_profile_csv
+from updating.model.reference import BatReference
+from updating.model.units import IN_TO_M, LB_TO_KG
 
 POINT_TOL_M = 0.25 * IN_TO_M
 """A re-test impact point may sit this far from the baseline's (marks on the bat)."""
@@ -74,7 +74,7 @@ class InspectionResult:
 
 def read_frf(path: str | os.PathLike) -> FrfTest:
     """Read an FRF test file (UFF, CSV, NPZ) with a driving point; one-line errors naming it."""
-    from ema.frf_io import read_test
+    from ema.io.frf_io import read_test
 
     path = Path(path)
     if not path.is_file():
@@ -191,8 +191,8 @@ def modes_from_dict(d: dict) -> MeasuredModes:
 
 
 def calibrate(profile: Profile, meta: BatMeta, baseline: FittedTest):
-    """Diagnose the baseline: the calibrated reference (``updating.diagnose``)."""
-    from updating.diagnose import diagnose
+    """Diagnose the baseline: the calibrated reference (``updating.diagnose.run``)."""
+    from updating.diagnose.run import diagnose
 
     susp = getattr(baseline.fit, "suspension_freq_hz", None)
     susp = None if susp is None or len(susp) == 0 else np.asarray(susp)
@@ -203,8 +203,8 @@ def inspect_modes(
     profile: Profile, reference: BatReference, baseline: MeasuredModes, retest: MeasuredModes,
     false_alarm: float,
 ) -> Verdict:
-    """Phase 3: the verdict on a re-test against the reference (``updating.inspection``)."""
-    from updating.inspection import inspect_retest
+    """Phase 3: the verdict on a re-test against the reference (``updating.inspect.run``)."""
+    from updating.inspect.run import inspect_retest
 
     return inspect_retest(profile, reference, baseline, retest, false_alarm=false_alarm)
 

@@ -19,10 +19,10 @@ from pathlib import Path
 import numpy as np
 
 from batlab.pipeline import InspectionResult, contract_dict
-from ema.atomic_write import atomic_write
-from updating.massprops import MassProperties, mass_properties
-from updating.sections import Core
-from updating.units import IN_TO_M, KG_M2_TO_LB_IN2, LB_TO_KG
+from ema.io.atomic_write import atomic_write
+from updating.model.mass_properties import MassProperties, mass_properties
+from updating.model.sections import Core
+from updating.model.units import IN_TO_M, KG_M2_TO_LB_IN2, LB_TO_KG
 
 
 def _data_uri(png: bytes) -> str:
@@ -80,7 +80,7 @@ def mac_figure(result: InspectionResult):
     """MAC between the baseline's and the re-test's mode shapes (same points)."""
     import matplotlib.pyplot as plt
 
-    from ema.mac import mac
+    from ema.shapes.mac import mac
 
     a, b = result.baseline.modes, result.retest.modes
     m = mac(a.shapes, b.shapes)
@@ -172,7 +172,8 @@ def element_mass_change(result: InspectionResult, n_quad: int = 24) -> MassPrope
     """Mass, first and second moments added by the element factors, as a MassProperties of the
     change: dm = sum alpha_e int rho A dx, d(m x_cg) = sum alpha_e int rho A x dx,
     dI_knob = sum alpha_e int (rho A x^2 + rho I) dx, I = pi D^4 / 64 (the section's own
-    rotary inertia, as in ``updating.massprops``); cg_m holds d(m x_cg) / dm, i_cg is 0."""
+    rotary inertia, as in ``updating.model.mass_properties``);
+    cg_m holds d(m x_cg) / dm, i_cg is 0."""
     v, prof = result.verdict, result.profile
     rho = result.reference.rho_kg_m3
     x0, x1 = np.asarray(v.element_x0_m), np.asarray(v.element_x1_m)

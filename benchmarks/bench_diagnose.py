@@ -19,14 +19,14 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from updating.bat_input import BatMeta  # noqa: E402
-from updating.diagnose import diagnose  # noqa: E402
-from updating.fe_model import build_model  # noqa: E402
-from updating.massprops import mass_properties  # noqa: E402
-from updating.material import Material, material_from_imperial  # noqa: E402
-from updating.profile import make_profile  # noqa: E402
-from updating.units import IN_TO_M  # noqa: E402
-from updating.virtual_bat import VirtualBat, simulate_modes  # noqa: E402
+from updating.diagnose.run import diagnose  # noqa: E402
+from updating.model.assembly import build_model  # noqa: E402
+from updating.model.lab_input import BatMeta  # noqa: E402
+from updating.model.mass_properties import mass_properties  # noqa: E402
+from updating.model.material import Material, material_from_imperial  # noqa: E402
+from updating.model.profile import make_profile  # noqa: E402
+from updating.model.units import IN_TO_M  # noqa: E402
+from updating.simulate.virtual_bat import VirtualBat, simulate_modes  # noqa: E402
 
 X_IN = np.array([0, 0.5, 1.0, 2, 8, 14, 20, 24, 28, 33.5, 34])
 D_IN = np.array([1.6, 1.6, 1.0, 0.95, 0.97, 1.2, 1.9, 2.4, 2.55, 2.55, 2.45])

@@ -2,7 +2,7 @@
 
     python benchmarks/bench_inspect.py [--bats 24] [--null 40] [--seed 1]
 
-Each bat comes from updating.virtual_fleet (a truth model richer than the reference; moisture
+Each bat comes from updating.simulate.fleet (a truth model richer than the reference; moisture
 drift and a re-mounted accelerometer between the tests; a good calibration's reference), its
 modes with realistic noise from simulate_modes. Prints the confusion table, the error table
 of the altered bats, the time per inspection, and the false-alarm rate measured on ``--null``
@@ -25,10 +25,10 @@ import numpy as np  # noqa: E402
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from updating.core_elements import core_element_factors  # noqa: E402
-from updating.inspection import inspect_retest  # noqa: E402
-from updating.units import IN_TO_M  # noqa: E402
-from updating.virtual_fleet import FILLS, case_modes, random_case  # noqa: E402
+from updating.inspect.run import inspect_retest  # noqa: E402
+from updating.model.units import IN_TO_M  # noqa: E402
+from updating.msso.core_elements import core_element_factors  # noqa: E402
+from updating.simulate.fleet import FILLS, case_modes, random_case  # noqa: E402
 
 KINDS = ["none"] * 3 + list(FILLS)  # half altered, fills in turn
 

@@ -20,16 +20,16 @@ import numpy as np  # noqa: E402
 
 sys.path.insert(0, ".")
 
-from updating.factors import zero_factors  # noqa: E402
-from updating.fe_model import build_model  # noqa: E402
-from updating.material import paper_material  # noqa: E402
-from updating.modes import model_modes  # noqa: E402
-from updating.msso import msso_elements  # noqa: E402
-from updating.profile import paper_profile  # noqa: E402
-from updating.refine import ModalData, expansion_pass, full_modes, paired_elastic, refine  # noqa: E402
-from updating.sections import Core  # noqa: E402
-from updating.serep import serep  # noqa: E402
-from updating.units import IN_TO_M  # noqa: E402
+from updating.correlate.serep import serep  # noqa: E402
+from updating.model.assembly import build_model  # noqa: E402
+from updating.model.material import paper_material  # noqa: E402
+from updating.model.modes import model_modes  # noqa: E402
+from updating.model.profile import paper_profile  # noqa: E402
+from updating.model.sections import Core  # noqa: E402
+from updating.model.units import IN_TO_M  # noqa: E402
+from updating.msso.factors import zero_factors  # noqa: E402
+from updating.msso.iterate import ModalData, expansion_pass, full_modes, paired_elastic, refine  # noqa: E402
+from updating.msso.skyline import msso_elements  # noqa: E402
 
 
 def measure(fn):

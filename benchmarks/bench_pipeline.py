@@ -2,7 +2,7 @@
 
     python benchmarks/bench_pipeline.py [--n 24] [--seed 1] [--registry 3] [--keep DIR]
 
-For each of N seeded random bats (``updating.virtual_fleet.lab_case``: smooth profile with
+For each of N seeded random bats (``updating.simulate.fleet.lab_case``: smooth profile with
 caliper noise, a random species with E +-15 % and density +-8 % of the handbook values that
 meta.json gives, Timoshenko with E/G 10-18, a 2-6 g accelerometer, bungees, 0.5 % FRF noise;
 at the re-test moisture up to +-1 point and the accelerometer moved up to 0.1 in; half altered
@@ -41,8 +41,8 @@ import numpy as np  # noqa: E402
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from batlab.cli import main as batlab_main  # noqa: E402
-from updating.units import IN_TO_M  # noqa: E402
-from updating.virtual_fleet import FILLS, lab_case, write_lab_files  # noqa: E402
+from updating.model.units import IN_TO_M  # noqa: E402
+from updating.simulate.fleet import FILLS, lab_case, write_lab_files  # noqa: E402
 
 KINDS = ["none", "cork", "none", "heavy", "none", "neutral"]  # half altered, fills in turn
 TARGETS = {"right": 0.90, "start_in": 1.5, "d_pct": 15.0, "ratio_pct": 25.0}

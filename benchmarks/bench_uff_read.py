@@ -1,7 +1,7 @@
 """Read speed of batlab's UFF reader against pyuff's own, on one typical bat test.
 
 20 FRFs x 6401 lines (0 to 3200 Hz by 0.5 Hz), complex double, ASCII and binary 58.
-Prints the best of a few repeats for ``ema.uff.read_uff`` and for
+Prints the best of a few repeats for ``ema.io.uff.read_uff`` and for
 ``pyuff.UFF(path).read_sets()`` on the same file, and their ratio.
 
     python benchmarks/bench_uff_read.py
@@ -19,8 +19,8 @@ import pyuff
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from ema.frf_data import FrfTest  # noqa: E402
-from ema.uff import read_uff, write_uff  # noqa: E402
+from ema.io.frf_data import FrfTest  # noqa: E402
+from ema.io.uff import read_uff, write_uff  # noqa: E402
 from rigs.modal_model import ModalModel  # noqa: E402
 
 N_POINTS, N_LINES, DF_HZ, REPEATS = 20, 6401, 0.5, 5

@@ -20,15 +20,15 @@ import numpy as np  # noqa: E402
 
 sys.path.insert(0, ".")
 
-from updating.core_reading import changed_region, core_from_factors  # noqa: E402
-from updating.element_update import update_elements  # noqa: E402
-from updating.fe_model import build_model  # noqa: E402
-from updating.material import paper_material  # noqa: E402
-from updating.modes import model_modes  # noqa: E402
-from updating.profile import paper_profile  # noqa: E402
-from updating.refine import ModalData, with_noise  # noqa: E402
-from updating.sections import Core  # noqa: E402
-from updating.units import IN_TO_M  # noqa: E402
+from updating.model.assembly import build_model  # noqa: E402
+from updating.model.material import paper_material  # noqa: E402
+from updating.model.modes import model_modes  # noqa: E402
+from updating.model.profile import paper_profile  # noqa: E402
+from updating.model.sections import Core  # noqa: E402
+from updating.model.units import IN_TO_M  # noqa: E402
+from updating.msso.core_reading import changed_region, core_from_factors  # noqa: E402
+from updating.msso.iterate import ModalData, with_noise  # noqa: E402
+from updating.msso.update import update_elements  # noqa: E402
 
 TRUE = {"alpha": -(2 / 3) / 2.7**2, "beta": -(1 / 2.7) ** 4, "d": 1.0, "r": 1 / 3}
 CORE = slice(23, 32)

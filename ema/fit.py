@@ -2,23 +2,23 @@
 
 ``fit_test`` runs, with no human picking:
 
-1. poles: polyreference LSCF over an order sweep in overlapping sub-bands (``ema.lscf``,
-   ``ema.autopoles``), stabilisation and automatic selection (``ema.stabilisation``); stable
-   poles just outside the band (modes the band edge cuts) join the LSFD as computational
-   poles (when there is a misfit above 1e-4 and they lower it by 5 % or more) but are not
-   reported; or, with
-   ``method="peak"``, sum-MIF peaks with half-power damping (``ema.mif``);
-2. residues of every FRF with lower and upper residual terms (``ema.lsfd``);
+1. poles: polyreference LSCF over an order sweep in overlapping sub-bands (``ema.poles.lscf``,
+   ``ema.poles.autopoles``), stabilisation and automatic selection
+   (``ema.poles.stabilisation``); stable poles just outside the band (modes the band edge
+   cuts) join the LSFD as computational poles (when there is a misfit above 1e-4 and they
+   lower it by 5 % or more) but are not reported; or, with ``method="peak"``, sum-MIF
+   peaks with half-power damping (``ema.poles.mif``);
+2. residues of every FRF with lower and upper residual terms (``ema.shapes.lsfd``);
 3. modes without support in the data are dropped: a mode whose contribution at its own
    resonance, RMS over the FRFs, is below ``min_snr`` times the RMS misfit of the synthesis
    around it is noise fitted by the model; the residues are then re-estimated without it;
-4. mass-normalised complex shapes from the driving point (``ema.scaling``), real shapes,
-   MPC and MPD (``ema.complexity``);
+4. mass-normalised complex shapes from the driving point (``ema.shapes.scaling``), real shapes,
+   MPC and MPD (``ema.shapes.complexity``);
    Optionally (``refine=True``) the poles are then refined together by maximum likelihood
-   with the residues eliminated (``ema.refine``);
+   with the residues eliminated (``ema.poles.refine``);
 5. exponential-window damping correction zeta = zeta_measured - 1 / (tau w_r);
 6. modes below ``suspension_max_hz`` are the suspension's rigid-body modes: reported apart,
-   and used for the mass check (``ema.mass_line``). A band starting below
+   and used for the mass check (``ema.shapes.mass_line``). A band starting below
    ``suspension_max_hz`` fits them as modes and drops the lower residual terms (which would
    trade off against them); otherwise the lower residual is the mass line.
 
@@ -35,16 +35,16 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ema.autopoles import auto_poles, take
-from ema.complexity import mpc, mpd, real_modes
-from ema.frf_data import FrfTest
-from ema.lscf import PoleSweep
-from ema.lsfd import QUANTITY_POWER, LsfdResult, lsfd
-from ema.mass_line import RigidBody, rigid_body_from_mass_line, rigid_body_from_modes
-from ema.mif import PeakPick, pick_peaks, receptance_power, sum_mif
-from ema.refine import refine_poles
-from ema.scaling import fix_sign, mass_normalised_shapes
-from ema.stabilisation import SelectedPoles, Stability
+from ema.io.frf_data import FrfTest
+from ema.poles.autopoles import auto_poles, take
+from ema.poles.lscf import PoleSweep
+from ema.poles.mif import PeakPick, pick_peaks, receptance_power, sum_mif
+from ema.poles.refine import refine_poles
+from ema.poles.stabilisation import SelectedPoles, Stability
+from ema.shapes.complexity import mpc, mpd, real_modes
+from ema.shapes.lsfd import QUANTITY_POWER, LsfdResult, lsfd
+from ema.shapes.mass_line import RigidBody, rigid_body_from_mass_line, rigid_body_from_modes
+from ema.shapes.scaling import fix_sign, mass_normalised_shapes
 
 METHODS = ("lscf", "peak")
 
@@ -56,7 +56,7 @@ class ModalFit:
     Attributes:
         freq_hz: (m,) undamped natural frequencies |lambda| / 2 pi, Hz.
         damping_ratio: (m,) viscous damping ratios (exponential window removed).
-        shapes: (n_nodes, m) complex mass-normalised shapes, 1/sqrt(kg) (``ema.scaling``).
+        shapes: (n_nodes, m) complex mass-normalised shapes, 1/sqrt(kg) (``ema.shapes.scaling``).
         real_shapes: (n_nodes, m) nearest real shapes, 1/sqrt(kg); sign: driving-point entry
             positive (largest-magnitude entry positive when the driving point is a node).
         nodes: (n_nodes,) node numbers of the shape rows (the impact nodes for a roving hammer).
@@ -176,7 +176,7 @@ def fit_test(
         known_mass_kg: the bat's mass, for the mass-line check when the band excludes the
             suspension modes.
         min_snr: modes whose resonant contribution is below min_snr x local misfit are dropped.
-        refine: refine all poles together by maximum likelihood (``ema.refine``); the
+        refine: refine all poles together by maximum likelihood (``ema.poles.refine``); the
             uncertainties are then the least-squares standard deviations.
     """
     if method not in METHODS:

@@ -8,9 +8,9 @@ from pathlib import Path
 
 import numpy as np
 
-from ema.atomic_write import atomic_write
 from ema.fit import ModalFit
-from ema.mac import auto_mac
+from ema.io.atomic_write import atomic_write
+from ema.shapes.mac import auto_mac
 
 
 def _figure():

@@ -6,7 +6,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ema.frf_data import FrfTest
+from ema.io.frf_data import FrfTest
 from rigs.modal_model import ModalModel
 
 

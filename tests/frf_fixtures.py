@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ema.frf_data import FrfTest
+from ema.io.frf_data import FrfTest
 from rigs.modal_model import ModalModel
 
 LENGTH_M = 0.84

@@ -14,9 +14,9 @@ from types import SimpleNamespace
 import numpy as np
 from scipy.signal import find_peaks
 
-from updating.calibration import BatReference
-from updating.units import IN_TO_M
-from updating.verdict import Verdict
+from updating.inspect.verdict import Verdict
+from updating.model.reference import BatReference
+from updating.model.units import IN_TO_M
 
 
 def fake_fit(test, known_mass_kg=None):

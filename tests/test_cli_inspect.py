@@ -15,11 +15,11 @@ import pytest
 
 from batlab import pipeline
 from batlab.cli import main
-from ema.frf_data import FrfTest
-from ema.frf_io import read_test, write_test
+from ema.io.frf_data import FrfTest
+from ema.io.frf_io import read_test, write_test
 from tests.inspect_standins import use_standins
-from updating.units import IN_TO_M
-from updating.verdict import Verdict
+from updating.inspect.verdict import Verdict
+from updating.model.units import IN_TO_M
 
 SAMPLE = Path("data_samples/smooth_bat")
 CONTRACT_KEYS = {"serial", "altered", "region_in", "core_diameter_in", "fill_density_ratio",

@@ -10,9 +10,9 @@ import pytest
 
 from batlab.cli import main
 from batlab.registry import history, open_registry
-from ema.frf_io import read_test
+from ema.io.frf_io import read_test
 from tests.inspect_standins import use_standins
-from updating.units import IN_TO_M
+from updating.model.units import IN_TO_M
 
 
 def test_demo_writes_everything(tmp_path, monkeypatch, capsys):

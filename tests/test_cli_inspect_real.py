@@ -13,12 +13,12 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from ema.frf_io import write_test
-from updating.bat_input import read_meta
-from updating.material import Material
-from updating.profile import read_profile_csv
-from updating.units import IN_TO_M
-from updating.virtual_bat import VirtualBat, simulate_test
+from ema.io.frf_io import write_test
+from updating.model.lab_input import read_meta
+from updating.model.material import Material
+from updating.model.profile import read_profile_csv
+from updating.model.units import IN_TO_M
+from updating.simulate.virtual_bat import VirtualBat, simulate_test
 
 SAMPLE = Path("data_samples/smooth_bat")
 

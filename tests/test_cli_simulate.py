@@ -9,7 +9,7 @@ import pytest
 import pyuff
 
 from batlab.cli import main
-from ema.frf_io import read_test
+from ema.io.frf_io import read_test
 
 SAMPLES = Path(__file__).resolve().parent.parent / "data_samples"
 
@@ -47,9 +47,11 @@ def test_sample_is_what_the_script_makes(tmp_path, monkeypatch, capsys):
             "--beam", "euler", "--e-over-g", "2.6", *common, "--seed", "1", "--out", str(out)]
     assert main(args) == 0
     # the same seed gives the same test, to the round-off of the suspension modes (their
-    # eigenvalues are ~1e-11 of the largest; BLAS thread count reorders sums)
+    # eigenvalues are ~1e-11 of the largest; BLAS and numpy versions reorder sums): 1e-4
+    # relative, or 1e-7 of the largest FRF value near anti-resonances
     ours, sample = read_test(out), read_test(SAMPLES / "paper_bat" / "baseline.uff")
-    np.testing.assert_allclose(ours.frf, sample.frf, rtol=1e-4, atol=1e-9)
+    atol = 1e-7 * np.abs(sample.frf).max()
+    np.testing.assert_allclose(ours.frf, sample.frf, rtol=1e-4, atol=atol)
     assert ours.node_x_m == sample.node_x_m
     test = read_test(SAMPLES / "paper_bat" / "corked.uff")
     assert np.all(np.isfinite(test.frf)) and test.frf.shape == (3201, 1, 17)

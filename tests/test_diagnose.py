@@ -5,18 +5,18 @@ import json
 import numpy as np
 import pytest
 
-from updating.bat_input import BatMeta
-from updating.calibration import BatReference
-from updating.diagnose import diagnose
-from updating.diagnose_model import CAUSES, Setup, State, free_parameters, from_vector, solve
-from updating.diagnose_model import to_vector as vector_of
-from updating.fe_model import build_model
-from updating.massprops import mass_properties
-from updating.material import Material, paper_material
-from updating.modes import model_modes
-from updating.profile import make_profile, paper_profile
-from updating.units import IN_TO_M, LBF_IN3_TO_KG_M3, PSI_TO_PA
-from updating.virtual_bat import VirtualBat, simulate_modes
+from updating.diagnose.model import CAUSES, Setup, State, free_parameters, from_vector, solve
+from updating.diagnose.model import to_vector as vector_of
+from updating.diagnose.run import diagnose
+from updating.model.assembly import build_model
+from updating.model.lab_input import BatMeta
+from updating.model.mass_properties import mass_properties
+from updating.model.material import Material, paper_material
+from updating.model.modes import model_modes
+from updating.model.profile import make_profile, paper_profile
+from updating.model.reference import BatReference
+from updating.model.units import IN_TO_M, LBF_IN3_TO_KG_M3, PSI_TO_PA
+from updating.simulate.virtual_bat import VirtualBat, simulate_modes
 
 X_IN = np.array([0, 0.5, 1.0, 2, 8, 14, 20, 24, 28, 33.5, 34])
 D_IN = np.array([1.6, 1.6, 1.0, 0.95, 0.97, 1.2, 1.9, 2.4, 2.55, 2.55, 2.45])

@@ -7,13 +7,13 @@ import numpy as np
 import pytest
 
 from batlab.cli import main
-from ema.frf_io import write_test
-from updating.fe_model import build_model
-from updating.massprops import mass_properties
-from updating.material import Material, material_from_imperial
-from updating.profile import make_profile, write_profile_csv
-from updating.units import IN_TO_M, LB_TO_KG, PSI_TO_PA
-from updating.virtual_bat import VirtualBat, simulate_test
+from ema.io.frf_io import write_test
+from updating.model.assembly import build_model
+from updating.model.mass_properties import mass_properties
+from updating.model.material import Material, material_from_imperial
+from updating.model.profile import make_profile, write_profile_csv
+from updating.model.units import IN_TO_M, LB_TO_KG, PSI_TO_PA
+from updating.simulate.virtual_bat import VirtualBat, simulate_test
 
 HAS_FITTER = importlib.util.find_spec("ema.fit") is not None
 X_IN = np.array([0, 0.5, 1.0, 2, 8, 14, 20, 24, 28, 33.5, 34])

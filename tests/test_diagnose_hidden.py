@@ -5,14 +5,14 @@ import numpy as np
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from updating.bat_input import BatMeta
-from updating.diagnose import diagnose
-from updating.fe_model import build_model
-from updating.massprops import mass_properties
-from updating.material import Material, material_from_imperial
-from updating.profile import make_profile
-from updating.units import IN_TO_M
-from updating.virtual_bat import VirtualBat, simulate_modes
+from updating.diagnose.run import diagnose
+from updating.model.assembly import build_model
+from updating.model.lab_input import BatMeta
+from updating.model.mass_properties import mass_properties
+from updating.model.material import Material, material_from_imperial
+from updating.model.profile import make_profile
+from updating.model.units import IN_TO_M
+from updating.simulate.virtual_bat import VirtualBat, simulate_modes
 
 X_IN = np.array([0, 0.5, 1.0, 2, 8, 14, 20, 24, 28, 33.5, 34])
 D_IN = np.array([1.6, 1.6, 1.0, 0.95, 0.97, 1.2, 1.9, 2.4, 2.55, 2.55, 2.45])

@@ -6,11 +6,11 @@ import numpy as np
 import pytest
 
 from batlab.cli import main
-from ema.frf_data import FrfTest
-from ema.mac import mac
+from ema.io.frf_data import FrfTest
+from ema.shapes.mac import mac
 from rigs.modal_model import ModalModel
 
-uff = pytest.importorskip("ema.uff")  # the FRF file readers (branch uff) must be present
+uff = pytest.importorskip("ema.io.uff")  # the FRF file readers (branch uff) must be present
 
 
 @pytest.fixture(scope="module")
@@ -45,7 +45,7 @@ def test_fit_json_recovers_the_modes(case, capsys, tmp_path):
     assert doc["modes"][0]["shape"]["nodes"] == list(range(1, 17))
     assert np.all(np.diag(mac(shape, model.shapes)) > 0.999)
     assert doc["synthesis_error"]["total"] < 0.02
-    from ema.uff_modes import read_modes_uff
+    from ema.io.uff_modes import read_modes_uff
 
     modes = read_modes_uff(out)
     np.testing.assert_allclose(modes.freq_hz, f, rtol=1e-5)

@@ -12,7 +12,7 @@ from hypothesis import Phase, given, settings
 from hypothesis import strategies as st
 
 from ema.fit import fit_test
-from ema.mac import mac
+from ema.shapes.mac import mac
 
 NO_SHRINK = (Phase.explicit, Phase.generate)  # a fit per example: shrinking would take minutes
 CASES = dict(
@@ -91,7 +91,7 @@ def test_pure_noise_has_no_modes():
     rng = np.random.default_rng(5)
     f = np.arange(6401) * 0.5
     h = rng.standard_normal((f.size, 1, 12)) + 1j * rng.standard_normal((f.size, 1, 12))
-    from ema.frf_data import FrfTest
+    from ema.io.frf_data import FrfTest
 
     test = FrfTest(f, h, [4], np.arange(1, 13), {k: 0.07 * k for k in range(1, 13)})
     for method in ("lscf", "peak"):

@@ -5,14 +5,14 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from updating.beam_element import element_parts
-from updating.fe_model import Attachment, assemble, build_model, skyline_mask
-from updating.massprops import mass_properties
-from updating.material import Material, paper_material
-from updating.modes import model_modes, rigid_body_shapes, solve_modes
-from updating.profile import make_profile, paper_profile
-from updating.sections import Core
-from updating.units import IN_TO_M, LB_TO_KG
+from updating.model.assembly import Attachment, assemble, build_model, skyline_mask
+from updating.model.element import element_parts
+from updating.model.mass_properties import mass_properties
+from updating.model.material import Material, paper_material
+from updating.model.modes import model_modes, rigid_body_shapes, solve_modes
+from updating.model.profile import make_profile, paper_profile
+from updating.model.sections import Core
+from updating.model.units import IN_TO_M, LB_TO_KG
 
 PAPER_HZ = [141.5, 555.9, 979.0, 1956.2]
 WOOD = Material(E_pa=12e9, rho_kg_m3=650.0)
@@ -91,7 +91,9 @@ def test_mesh_convergence_from_above():
     f = [model_modes(build_model(paper_profile(), paper_material(), n_elements=n), 6)
          .elastic().freq_hz for n in (33, 66, 132, 264)]
     diffs = np.diff(np.array(f), axis=0)
-    assert np.all(diffs <= 1e-9)  # consistent mass: upper bounds that decrease
+    # consistent mass: upper bounds that decrease (to the eigen-solver's round-off, ~1e-9
+    # relative at 264 elements)
+    assert np.all(diffs <= 1e-8 * np.array(f)[1:])
     assert np.all(np.abs(diffs[-1]) < np.abs(diffs[0]) / 10)
 
 

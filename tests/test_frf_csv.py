@@ -6,8 +6,8 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from ema.frf_csv import read_frf_csv
-from ema.frf_io import read_test, write_test
+from ema.io.frf_csv import read_frf_csv
+from ema.io.frf_io import read_test, write_test
 from tests.frf_fixtures import bat_test
 
 

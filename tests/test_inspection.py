@@ -7,23 +7,23 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from ema.mac import mac
-from updating.bat_input import BatMeta
-from updating.calibration import BatReference
-from updating.change_model import ChangeParams, make_predictor
-from updating.core_elements import core_element_factors
-from updating.diagnose import diagnose
-from updating.fe_model import build_model
-from updating.inspection import inspect_retest
-from updating.massprops import mass_properties
-from updating.material import Material
-from updating.mode_pairing import pair_modes
-from updating.pairing import align_signs
-from updating.profile import make_profile
-from updating.sections import Core, cowper_k
-from updating.units import IN_TO_M
-from updating.virtual_bat import moisture_scales, simulate_modes
-from updating.virtual_fleet import case_modes, random_case
+from ema.shapes.mac import mac
+from updating.correlate.mode_pairing import pair_modes
+from updating.correlate.pairing import align_signs
+from updating.diagnose.run import diagnose
+from updating.inspect.model import ChangeParams, make_predictor
+from updating.inspect.run import inspect_retest
+from updating.model.assembly import build_model
+from updating.model.lab_input import BatMeta
+from updating.model.mass_properties import mass_properties
+from updating.model.material import Material
+from updating.model.profile import make_profile
+from updating.model.reference import BatReference
+from updating.model.sections import Core, cowper_k
+from updating.model.units import IN_TO_M
+from updating.msso.core_elements import core_element_factors
+from updating.simulate.fleet import case_modes, random_case
+from updating.simulate.virtual_bat import moisture_scales, simulate_modes
 
 CYLINDER = make_profile(np.array([0.0, 33.0]) * IN_TO_M, np.array([2.7, 2.7]) * IN_TO_M)
 WOOD = Material(12.0e9, 640.0, 14.0)

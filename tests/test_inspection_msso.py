@@ -9,9 +9,9 @@ the fitted-core factors (the contract's elements) and the map.
 import numpy as np
 import pytest
 
-from updating.core_elements import core_element_factors
-from updating.inspection import inspect_retest
-from updating.virtual_fleet import case_modes, random_case
+from updating.inspect.run import inspect_retest
+from updating.msso.core_elements import core_element_factors
+from updating.simulate.fleet import case_modes, random_case
 
 
 def _inspect(seed, kind):

@@ -5,12 +5,12 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from updating.fe_model import build_model
-from updating.massprops import core_from_mass_change, mass_properties
-from updating.material import Material
-from updating.profile import make_profile
-from updating.sections import Core
-from updating.units import IN_TO_M
+from updating.model.assembly import build_model
+from updating.model.mass_properties import core_from_mass_change, mass_properties
+from updating.model.material import Material
+from updating.model.profile import make_profile
+from updating.model.sections import Core
+from updating.model.units import IN_TO_M
 
 # a smooth pro-style profile: knob, handle, taper, barrel
 X_IN = [0, 0.5, 1.0, 2, 8, 14, 20, 24, 28, 33.5, 34]

@@ -4,15 +4,15 @@ import numpy as np
 import pytest
 import scipy.sparse as sp
 
-from updating.fe_model import assemble, build_model, skyline_mask
-from updating.massprops import mass_properties
-from updating.material import paper_material
-from updating.modes import model_modes
-from updating.msso import msso_elements, msso_skyline
-from updating.profile import paper_profile
-from updating.sections import Core
-from updating.tikhonov import solve
-from updating.units import IN_TO_M
+from updating.model.assembly import assemble, build_model, skyline_mask
+from updating.model.mass_properties import mass_properties
+from updating.model.material import paper_material
+from updating.model.modes import model_modes
+from updating.model.profile import paper_profile
+from updating.model.sections import Core
+from updating.model.units import IN_TO_M
+from updating.msso.regularisation import solve
+from updating.msso.skyline import msso_elements, msso_skyline
 
 ALPHA = -(2 / 3) / 2.7**2
 BETA = -(1 / 2.7) ** 4

@@ -1,6 +1,6 @@
 """Hidden-effect regression of issue "Inspect" on the full path, at CI size.
 
-Seeded random bats from a model richer than the reference (``updating.virtual_fleet.lab_case``:
+Seeded random bats from a model richer than the reference (``updating.simulate.fleet.lab_case``:
 smooth profile, handbook E and density off by up to 15 % and 8 %, Timoshenko with E/G 10-18,
 accelerometer mass, bungees, 0.5 % FRF noise; at the re-test moisture drift up to +-1 point
 and the accelerometer moved up to 0.1 in), one unaltered and one of each fill, are written as a
@@ -21,8 +21,8 @@ import numpy as np
 import pytest
 
 from batlab.cli import main as batlab_main
-from updating.units import IN_TO_M
-from updating.virtual_fleet import lab_case, write_lab_files
+from updating.model.units import IN_TO_M
+from updating.simulate.fleet import lab_case, write_lab_files
 
 CASES = [("none", 11), ("cork", 12), ("heavy", 13), ("neutral", 14)]
 

@@ -5,17 +5,17 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from updating.core_reading import read_core
-from updating.element_update import dofs_at, update_elements
-from updating.factors import zero_factors
-from updating.fe_model import build_model
-from updating.massprops import mass_properties
-from updating.material import Material, paper_material
-from updating.modes import model_modes
-from updating.profile import paper_profile
-from updating.refine import ModalData, expansion_pass, iterate_expansion, with_noise
-from updating.sections import Core, cowper_k
-from updating.units import IN_TO_M
+from updating.model.assembly import build_model
+from updating.model.mass_properties import mass_properties
+from updating.model.material import Material, paper_material
+from updating.model.modes import model_modes
+from updating.model.profile import paper_profile
+from updating.model.sections import Core, cowper_k
+from updating.model.units import IN_TO_M
+from updating.msso.core_reading import read_core
+from updating.msso.factors import zero_factors
+from updating.msso.iterate import ModalData, expansion_pass, iterate_expansion, with_noise
+from updating.msso.update import dofs_at, update_elements
 
 ALPHA = -(2 / 3) / 2.7**2
 BETA = -(1 / 2.7) ** 4

@@ -16,8 +16,8 @@ import pytest
 from batlab import pipeline
 from batlab.report import element_mass_change, mass_rows, write_report
 from tests.inspect_standins import use_standins
-from updating.massprops import mass_properties
-from updating.units import IN_TO_M, LB_TO_KG
+from updating.model.mass_properties import mass_properties
+from updating.model.units import IN_TO_M, LB_TO_KG
 
 SAMPLE = Path("data_samples/smooth_bat")
 

@@ -3,14 +3,14 @@
 import numpy as np
 import pytest
 
-from updating.fe_model import assemble, build_model
-from updating.material import paper_material
-from updating.modes import model_modes
-from updating.pairing import mac, pair_modes, pseudo_orthogonality
-from updating.profile import paper_profile
-from updating.sections import Core
-from updating.serep import serep
-from updating.units import IN_TO_M
+from updating.correlate.pairing import mac, pair_modes, pseudo_orthogonality
+from updating.correlate.serep import serep
+from updating.model.assembly import assemble, build_model
+from updating.model.material import paper_material
+from updating.model.modes import model_modes
+from updating.model.profile import paper_profile
+from updating.model.sections import Core
+from updating.model.units import IN_TO_M
 
 
 @pytest.fixture(scope="module")

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 import serial
 
-from batlab.cmd_rig import uniform_beam_modes
+from batlab.commands.rig import uniform_beam_modes
 from rigs import protocol as p
 from rigs.capture import CaptureSettings, HitCapture, check_hit
 from rigs.driver import DeviceError, SerialDevice, open_port

@@ -11,7 +11,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from batlab.cmd_rig import DEFAULT_POINTS_IN, IN_TO_M, uniform_beam_modes
+from batlab.commands.rig import DEFAULT_POINTS_IN, IN_TO_M, uniform_beam_modes
 from rigs.frf_estimate import added_damping_ratio
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -101,7 +101,7 @@ def test_rig_serve_and_acquire_with_every_fault(tmp_path):
     assert json.loads(rep.stdout)["rejected"] == summary["rejected"]
 
     # the FRFs: driving-point peaks at the structure's frequencies, damping after the window
-    from ema.frf_io import read_test
+    from ema.io.frf_io import read_test
 
     test = read_test(out)
     assert test.exp_window_tau_s == 0.5 and list(test.response_nodes) == [16]

@@ -11,10 +11,10 @@ import pyuff
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from ema.frf_data import FrfTest
-from ema.frf_io import read_test, require_driving_point, write_test
-from ema.uff import read_uff, write_uff
-from ema.uff_modes import read_modes_uff, write_modes_uff
+from ema.io.frf_data import FrfTest
+from ema.io.frf_io import read_test, require_driving_point, write_test
+from ema.io.uff import read_uff, write_uff
+from ema.io.uff_modes import read_modes_uff, write_modes_uff
 from rigs.modal_model import ModalModel
 from tests.frf_fixtures import bat_test
 

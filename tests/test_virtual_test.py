@@ -6,12 +6,12 @@ from scipy.signal import find_peaks
 
 from rigs.modal_model import ModalModel
 from rigs.virtual_test import simulate_frf
-from updating.fe_model import Attachment, assemble, build_model
-from updating.material import Material
-from updating.modes import model_modes
-from updating.profile import paper_profile
-from updating.units import IN_TO_M
-from updating.virtual_bat import VirtualBat, simulate_test
+from updating.model.assembly import Attachment, assemble, build_model
+from updating.model.material import Material
+from updating.model.modes import model_modes
+from updating.model.profile import paper_profile
+from updating.model.units import IN_TO_M
+from updating.simulate.virtual_bat import VirtualBat, simulate_test
 
 WOOD = Material(12.5e9, 600.0, 14.0)
 POINTS = np.arange(1, 34, 2) * IN_TO_M

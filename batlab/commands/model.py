@@ -1,0 +1,58 @@
+"""`batlab model`: pre-test analysis of a bat (FE model, mass properties, modes, test points)."""
+
+from __future__ import annotations
+
+import json
+import sys
+
+HELP = "build a bat's FE model from its profile: mass properties, free-free modes, test points"
+
+
+def add_arguments(p) -> None:
+    p.add_argument("--profile", help="profile.csv (x_in,diameter_in); default: the paper's bat")
+    p.add_argument("--meta", help="meta.json for the material (default: the paper's birch)")
+    p.add_argument("--beam", choices=("euler", "timoshenko"), default="euler")
+    p.add_argument("--e-over-g", type=float, default=None, help="E/G (default 2.6, isotropic)")
+    p.add_argument("--rotary-inertia", choices=("on", "off"), default=None,
+                   help="default: on for timoshenko, off for euler")
+    p.add_argument("--elements", type=int, default=None, help="number of elements (default ~1 in)")
+    p.add_argument("--alter", default=None, help="e.g. cork:depth=10,d=1.0,ratio=0.33,plug=1 (in)")
+    p.add_argument("--modes", type=int, default=8, help="number of modes to list (incl. rigid)")
+    p.add_argument("--points", type=int, default=16, help="number of test points to suggest")
+    p.add_argument("--json", action="store_true", help="print JSON on stdout")
+
+
+def run(args) -> int:
+    from batlab.model_summary import summarise_model
+    from updating.model.assembly import build_model
+    from updating.model.lab_input import parse_core_spec, read_meta
+    from updating.model.material import ISOTROPIC_E_OVER_G, paper_material
+    from updating.model.profile import paper_profile, read_profile_csv
+
+    profile = read_profile_csv(args.profile) if args.profile else paper_profile()
+    e_over_g = args.e_over_g if args.e_over_g is not None else ISOTROPIC_E_OVER_G
+    if args.meta:
+        material = read_meta(args.meta, e_over_g).material
+    else:
+        material = paper_material()
+        material = type(material)(material.E_pa, material.rho_kg_m3, e_over_g)
+    if e_over_g <= 0:
+        raise ValueError("--e-over-g must be positive")
+    core = parse_core_spec(args.alter) if args.alter else None
+    rotary = None if args.rotary_inertia is None else args.rotary_inertia == "on"
+    model = build_model(profile, material, beam=args.beam, rotary_inertia=rotary,
+                        n_elements=args.elements, core=core)
+    out = summarise_model(model, n_modes=args.modes, n_points=args.points)
+    if args.json:
+        print(json.dumps(out))
+    else:
+        print(f"{model.n_elements} elements, {out['ndof']} DOF, {args.beam} beam", file=sys.stdout)
+        print(f"weight {out['weight_lb']:.4f} lb, centre of mass {out['cg_in']:.3f} in "
+              f"from the knob, I_knob {out['moi_knob_lb_in2']:.1f} lb in^2, "
+              f"I_cg {out['moi_cg_lb_in2']:.1f} lb in^2")
+        print("mode  frequency_hz")
+        for i, f in enumerate(out["frequencies_hz"], 1):
+            print(f"{i:4d}  {f:12.2f}")
+        pts = ", ".join(f"{x:.1f}" for x in out["suggested_points_in"])
+        print(f"suggested test points (in from the knob): {pts}")
+    return 0

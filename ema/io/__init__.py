@@ -1,0 +1,1 @@
+"""FRF and mode files (UFF, CSV, NPZ), the in-memory test, atomic writes."""

@@ -1,0 +1,50 @@
+"""One entry point for FRF test files, by extension: .uff/.unv (UFF), .csv, .npz.
+
+``read_test`` is the reader the pipeline uses: besides reading, it demands a driving point
+(a reference node equal to a response node), as the input contract does.
+"""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+from ema.io.frf_csv import read_frf_csv, write_frf_csv
+from ema.io.frf_data import FrfTest
+from ema.io.frf_npz import read_frf_npz, write_frf_npz
+from ema.io.uff import read_uff, write_uff
+
+READERS = {".uff": read_uff, ".unv": read_uff, ".csv": read_frf_csv, ".npz": read_frf_npz}
+WRITERS = {".uff": write_uff, ".unv": write_uff, ".csv": write_frf_csv, ".npz": write_frf_npz}
+
+
+def _suffix(path: Path, table: dict) -> str:
+    ext = path.suffix.lower()
+    if ext not in table:
+        raise ValueError(f"{path}: unknown FRF file type {ext!r} (expected .uff, .unv, .csv "
+                         "or .npz)")
+    return ext
+
+
+def require_driving_point(test: FrfTest, path: str | os.PathLike) -> FrfTest:
+    """``test`` unchanged if it has a driving-point FRF; ValueError naming ``path`` if not."""
+    try:
+        _ = test.driving_point
+    except ValueError:
+        raise ValueError(
+            f"{path}: no driving-point FRF (no impact node equals the response node(s) "
+            f"{test.response_nodes.tolist()})"
+        ) from None
+    return test
+
+
+def read_test(path: str | os.PathLike) -> FrfTest:
+    """Read an FRF test file of any supported type and check it has a driving point."""
+    path = Path(path)
+    return require_driving_point(READERS[_suffix(path, READERS)](path), path)
+
+
+def write_test(path: str | os.PathLike, test: FrfTest) -> None:
+    """Write an FRF test file, its type chosen by extension (UFF written binary)."""
+    path = Path(path)
+    WRITERS[_suffix(path, WRITERS)](path, test)

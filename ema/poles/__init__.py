@@ -1,0 +1,1 @@
+"""Pole estimation: peak picking, LSCF/PolyMAX, stabilisation, sub-bands, refinement."""

@@ -1,0 +1,178 @@
+"""Automatic LSCF poles over a wide band, fitted in overlapping sub-bands.
+
+A single z-domain model over 20-3200 Hz needs a very high order before two close modes at
+150 Hz separate (they sit in a small arc of the unit circle), while a model of 20-400 Hz with
+dt = 1 / (2 x 400 Hz) separates them at order 20-30. So the band is cut into *core* bands
+whose edges double (lo, max(2 lo, lo + 80 Hz), then x2 up to hi); each core is fitted
+(``ema.poles.lscf``) over itself widened by ``overlap`` of its width on both sides, and its poles
+selected automatically (``ema.poles.stabilisation``). A mode is taken from the sub-band whose
+core holds it; modes found twice near a core edge (within ``dup_tol`` in frequency and
+20 % in damping) are kept once, from the sub-band whose core centre is nearest. Stable poles
+outside the whole band or closer to its edges than their half-power half-width zeta f plus
+2 lines (a mode the band edge cuts: its estimate is unreliable) are returned apart, and so
+are all poles of the highest order in that edge zone (up to 10 % beyond the band; damping
+0-20 %): the LSFD step uses them as computational poles that absorb the cut modes, they are
+not reported as modes.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ema.poles.lscf import PoleSweep, lscf_sweep
+from ema.poles.stabilisation import SelectedPoles, Stability, select_poles, stability
+
+
+@dataclass(frozen=True)
+class AutoPoles:
+    """Selected modes in the band, extra poles just outside it, and the stabilisation data."""
+
+    modes: SelectedPoles
+    outside: SelectedPoles
+    computational: np.ndarray
+    sweep: PoleSweep
+    stability: Stability
+    sub_bands: list
+
+
+def sub_bands(
+    band_hz: tuple[float, float], overlap: float = 0.25
+) -> list[tuple[tuple[float, float], tuple[float, float]]]:
+    """[(core, fitted band), ...] covering band_hz (see module docstring)."""
+    lo, hi = band_hz
+    edges = [lo, max(2 * lo, lo + 80.0)]
+    while edges[-1] < hi:
+        edges.append(2 * edges[-1])
+    edges[-1] = hi
+    if len(edges) > 2 and (edges[-1] - edges[-2]) < 0.3 * (edges[-2] - edges[-3]):
+        del edges[-2]
+    out = []
+    for a, b in zip(edges[:-1], edges[1:], strict=True):
+        w = overlap * (b - a)
+        out.append(((a, b), (max(lo, a - w), min(hi, b + w))))
+    return out
+
+
+def take(sel: SelectedPoles, keep: np.ndarray) -> SelectedPoles:
+    return SelectedPoles(
+        freq_hz=sel.freq_hz[keep],
+        damping_ratio=sel.damping_ratio[keep],
+        freq_std_hz=sel.freq_std_hz[keep],
+        damping_std=sel.damping_std[keep],
+        pole=sel.pole[keep],
+        count=sel.count[keep],
+        shape=sel.shape[keep],
+    )
+
+
+def _concat(parts: list[SelectedPoles], n_out: int) -> SelectedPoles:
+    if not parts:
+        e = np.zeros(0)
+        return SelectedPoles(e, e, e, e, e.astype(complex), e.astype(int),
+                             np.zeros((0, n_out), complex))
+    order = np.argsort(np.concatenate([p.freq_hz for p in parts]))
+    cat = SelectedPoles(
+        freq_hz=np.concatenate([p.freq_hz for p in parts]),
+        damping_ratio=np.concatenate([p.damping_ratio for p in parts]),
+        freq_std_hz=np.concatenate([p.freq_std_hz for p in parts]),
+        damping_std=np.concatenate([p.damping_std for p in parts]),
+        pole=np.concatenate([p.pole for p in parts]),
+        count=np.concatenate([p.count for p in parts]),
+        shape=np.concatenate([p.shape for p in parts], axis=0),
+    )
+    return take(cat, order)
+
+
+def _distinct(poles: np.ndarray, taken: np.ndarray, tol: float = 0.005) -> np.ndarray:
+    """Poles not within tol (relative |d lambda| / |lambda|) of ``taken`` or of each other:
+    near-copies would make collinear LSFD columns."""
+    out: list[complex] = []
+    for lam in poles[np.argsort(np.abs(poles))]:
+        ref = np.r_[taken, out]
+        if ref.size == 0 or np.min(np.abs(ref - lam)) > tol * abs(lam):
+            out.append(lam)
+    return np.asarray(out, dtype=complex)
+
+
+def auto_poles(
+    freq_hz: np.ndarray,
+    frf: np.ndarray,
+    band_hz: tuple[float, float],
+    max_order: int = 40,
+    dup_tol: float = 0.003,
+    order_step: int = 1,
+) -> AutoPoles:
+    """Physical poles in band_hz of frf (F, l, m) (polyreference orientation), automatically."""
+    freq_hz = np.asarray(freq_hz, dtype=float)
+    df = freq_hz[1] - freq_hz[0]
+    n_out = frf.shape[1]
+    lo, hi = band_hz
+    found, outside, sweeps, stabs, computational = [], [], [], [], []
+    for (a, b), (fa, fb) in sub_bands(band_hz):
+        n_lines = int((fb - fa) / df)
+        p = min(int(max_order), n_lines // 4)
+        if p < 4:
+            continue
+        sw = lscf_sweep(freq_hz, frf, (fa, fb), p, order_step=order_step)
+        st = stability(sw)
+        wide = select_poles(sw, st, freq_range_hz=(0.9 * fa, 1.1 * fb))
+        centre = np.sqrt(a * b)
+        in_core = (wide.freq_hz >= a - dup_tol * a) & (wide.freq_hz <= b + dup_tol * b)
+        guard = wide.damping_ratio * wide.freq_hz + 2 * df
+        inside = (wide.freq_hz > lo + guard) & (wide.freq_hz < hi - guard)
+        found.append((take(wide, in_core & inside), centre))
+        edge = ~inside & (((wide.freq_hz > 0.5 * (a + b)) & (b >= hi)) |
+                          ((wide.freq_hz < 0.5 * (a + b)) & (a <= lo)))
+        outside.append(take(wide, edge))
+        # computational poles: every pole of the highest order at the band's edges
+        top = sw.order == sw.orders[-1]
+        zt, ft = sw.damping_ratio, sw.freq_hz
+        g = zt * ft + 2 * df
+        comp = top & (zt > 0) & (zt < 0.2) & (
+            ((b >= hi) & (ft >= hi - g) & (ft <= 1.1 * hi)) |
+            ((a <= lo) & (ft <= lo + g) & (ft >= 0.9 * lo)))
+        computational.append(sw.pole[comp])
+        # stabilisation data: the poles of this sub-band's core
+        core = (sw.freq_hz >= a) & (sw.freq_hz < b if b < hi else sw.freq_hz <= hi)
+        sweeps.append((sw, core))
+        stabs.append(st)
+    if not sweeps:
+        raise ValueError(f"band {lo:g}-{hi:g} Hz has too few lines ({df:g} Hz apart) for LSCF")
+    # drop duplicates near core edges: keep the estimate from the nearest core centre
+    parts = []
+    for i, (sel, centre) in enumerate(found):
+        keep = np.ones(sel.freq_hz.size, dtype=bool)
+        for j, (other, c2) in enumerate(found):
+            if j == i or other.freq_hz.size == 0 or sel.freq_hz.size == 0:
+                continue
+            close = np.abs(sel.freq_hz[:, None] / other.freq_hz[None, :] - 1) < dup_tol
+            close &= np.abs(sel.damping_ratio[:, None] / other.damping_ratio[None, :] - 1) < 0.2
+            dist_self = np.abs(np.log(sel.freq_hz / centre))
+            dist_other = np.abs(np.log(other.freq_hz[None, :] / c2))
+            worse = close & ((dist_self[:, None] > dist_other) |
+                             ((dist_self[:, None] == dist_other) & (j < i)))
+            keep &= ~worse.any(axis=1)
+        parts.append(take(sel, keep))
+    modes = _concat(parts, n_out)
+    out = _concat(outside, n_out)
+    merged = PoleSweep(
+        order=np.concatenate([s.order[c] for s, c in sweeps]),
+        pole=np.concatenate([s.pole[c] for s, c in sweeps]),
+        freq_hz=np.concatenate([s.freq_hz[c] for s, c in sweeps]),
+        damping_ratio=np.concatenate([s.damping_ratio[c] for s, c in sweeps]),
+        shape=np.concatenate([s.shape[c] for s, c in sweeps], axis=0),
+        participation=np.concatenate([s.participation[c] for s, c in sweeps], axis=0),
+        orders=np.unique(np.concatenate([s.orders for s, _ in sweeps])),
+        band_hz=(lo, hi),
+    )
+    merged_stab = Stability(
+        freq=np.concatenate([st.freq[c] for st, (_, c) in zip(stabs, sweeps, strict=True)]),
+        damping=np.concatenate([st.damping[c] for st, (_, c) in zip(stabs, sweeps, strict=True)]),
+        shape=np.concatenate([st.shape[c] for st, (_, c) in zip(stabs, sweeps, strict=True)]),
+    )
+    return AutoPoles(
+        modes, out, _distinct(np.concatenate(computational), out.pole), merged, merged_stab,
+        [fb for _, fb in sub_bands(band_hz)],
+    )

@@ -1,0 +1,1 @@
+"""Mode shapes from poles: LSFD residues, scaling, complexity, mass line, MAC."""

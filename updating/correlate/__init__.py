@@ -1,0 +1,1 @@
+"""Test against model: measured modes, mode pairing (MAC), SEREP expansion."""

@@ -1,0 +1,194 @@
+"""Least-squares fit of one member of the diagnosis model family to measured modes.
+
+Residuals (dimensionless; frequencies are what the RMS error measures):
+
+    e_r  = f_r(model) / f_r(measured) - 1                        paired elastic modes
+    s_ir = (sigma_f / sigma_s) (y_ir - sign_r u_ir) / rms(y_r)    shape entries
+    b_j  = (sigma_f / sigma_b) (f_j(model) / f_j(suspension) - 1)  suspension modes (if any)
+
+u_r is the model's mass-normalised shape at the test points, y_r the measured one (both in
+1/sqrt(kg), so the shapes carry the absolute mass scale: the scale weight fixes the total, the
+accelerometer shows in the amplitude and curvature near the driving point). sigma_f is the
+relative frequency uncertainty, sigma_s that of a shape entry relative to its mode's RMS,
+sigma_b that of a (heavily damped) suspension frequency.
+Solved by scipy's trust-region reflective least squares with the analytic Jacobian
+(updating.diagnose.model); parameter covariance s^2 (J^T J)^-1 with s^2 = SSR / (N - p).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+import scipy.optimize
+
+from ema.shapes.mac import mac
+from updating.diagnose.model import (
+    BOUNDS,
+    ModalSolution,
+    Setup,
+    State,
+    free_parameters,
+    from_vector,
+    solve,
+    to_vector,
+)
+
+
+def pair_modes(
+    measured: np.ndarray, model: np.ndarray, min_mac: float = 0.5,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Pair measured and model shapes one-to-one by maximum total MAC (assignment problem).
+
+    Returns (measured index, model index, MAC) of the pairs whose MAC is at least min_mac.
+    """
+    from scipy.optimize import linear_sum_assignment
+
+    m = mac(measured, model)
+    rows, cols = linear_sum_assignment(-m)
+    keep = m[rows, cols] >= min_mac
+    return rows[keep], cols[keep], m[rows, cols][keep]
+
+
+@dataclass(frozen=True)
+class Observations:
+    """The measured data a fit matches.
+
+    Attributes:
+        freq_hz: (m,) paired elastic frequencies, Hz.
+        shapes: (n_points, m) their mass-normalised shapes at the test points.
+        model_index: (m,) the paired elastic mode of the model (0 = first elastic).
+        sigma_f: relative frequency uncertainty (residual scale).
+        sigma_s: uncertainty of a shape entry relative to its mode's RMS.
+        suspension_hz: (<= 2,) measured suspension (rigid-body) frequencies, Hz.
+        sigma_b: their relative uncertainty.
+    """
+
+    freq_hz: np.ndarray
+    shapes: np.ndarray
+    model_index: np.ndarray
+    sigma_f: float = 5e-4
+    sigma_s: float = 0.01
+    suspension_hz: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    sigma_b: float = 0.01
+
+    @property
+    def n_model_modes(self) -> int:
+        return int(self.model_index.max()) + 1
+
+
+@dataclass(frozen=True)
+class Fit:
+    """One fitted model: its extensions, parameters, modes and residuals.
+
+    Attributes:
+        active: the extensions switched on.
+        state: fitted parameter values (inactive ones as given).
+        names: the free parameters; x their values; cov their covariance.
+        model_hz: (m,) model frequencies of the paired modes; mac: (m,) MAC with measured.
+        shapes: (n_points, m) the model's mass-normalised shapes of the paired modes.
+        rms_pct: RMS of 100 (f_model / f_measured - 1) over the paired modes.
+        ssr_freq, ssr_shape: sums of squared frequency and shape residuals (the
+            suspension residuals, present only with that extension, are left out so that
+            fits of different extensions compare).
+    """
+
+    active: frozenset[str]
+    state: State
+    names: tuple[str, ...]
+    x: np.ndarray
+    cov: np.ndarray
+    model_hz: np.ndarray
+    mac: np.ndarray
+    shapes: np.ndarray
+    rms_pct: float
+    ssr_freq: float
+    ssr_shape: float
+
+    def chi2(self, sigma_f: float) -> float:
+        """(ssr_freq + ssr_shape) / sigma_f^2."""
+        return (self.ssr_freq + self.ssr_shape) / sigma_f**2
+
+    def std(self, name: str) -> float:
+        """Standard uncertainty of a free parameter (in its own units: ln or grams or kN/m)."""
+        i = self.names.index(name)
+        return float(np.sqrt(max(self.cov[i, i], 0.0)))
+
+
+def residuals(sol: ModalSolution, obs: Observations, with_suspension: bool):
+    """(residual vector, Jacobian (N, p)) of one modal solution."""
+    f_ratio = sol.elastic_hz[obs.model_index] / obs.freq_hz
+    res = [f_ratio - 1.0]
+    jac = [(f_ratio[None, :] * sol.dlnf[:, obs.model_index]).T]
+    u = sol.shapes[:, obs.model_index]
+    du = sol.dshapes[:, :, obs.model_index]
+    y = obs.shapes
+    sign = np.where(np.sum(u * y, axis=0) < 0, -1.0, 1.0)
+    w = obs.sigma_f / obs.sigma_s / np.sqrt(np.mean(y * y, axis=0))
+    res.append((w * (y - sign * u)).ravel())
+    jac.append(-(w * sign * du).reshape(du.shape[0], y.size).T)
+    if with_suspension and obs.suspension_hz.size:
+        meas = np.sort(obs.suspension_hz)[:2]
+        if meas.size == 2:
+            idx = np.arange(2)
+        else:  # one suspension mode seen: the nearer of bounce and pitch
+            with np.errstate(divide="ignore"):
+                idx = np.array([np.argmin(np.abs(np.log(sol.low_hz / meas[0])))])
+        r = sol.low_hz[idx] / meas
+        w = obs.sigma_f / obs.sigma_b
+        res.append(w * (r - 1.0))
+        jac.append((w * r[None, :] * sol.dlnf_low[:, idx]).T)
+    return np.concatenate(res), np.vstack(jac)
+
+
+def fit_model(
+    setup: Setup, active: frozenset[str], obs: Observations, start: State,
+) -> Fit:
+    """Fit the free parameters of the extensions ``active`` to ``obs`` from ``start``."""
+    names = free_parameters(active, setup)
+    n_modes = obs.n_model_modes
+    with_susp = "suspension" in active
+    cache: dict[bytes, tuple[np.ndarray, np.ndarray, ModalSolution]] = {}
+
+    def evaluate(x):
+        key = np.asarray(x, dtype=float).tobytes()
+        if key not in cache:
+            cache.clear()
+            sol = solve(setup, active, from_vector(start, names, x), n_modes, names)
+            cache[key] = (*residuals(sol, obs, with_susp), sol)
+        return cache[key]
+
+    if names:
+        lo = np.array([BOUNDS[n][0] for n in names])
+        hi = np.array([BOUNDS[n][1] for n in names])
+        x0 = np.clip(to_vector(start, names), lo + 1e-9 * (hi - lo), hi - 1e-9 * (hi - lo))
+        out = scipy.optimize.least_squares(
+            lambda x: evaluate(x)[0], x0, jac=lambda x: evaluate(x)[1], bounds=(lo, hi),
+            x_scale="jac", method="trf", xtol=1e-10, ftol=1e-12, gtol=1e-12, max_nfev=60)
+        x = out.x
+    else:
+        x = np.zeros(0)
+    res, jac, sol = evaluate(x)
+    n, p, m = res.size, len(names), obs.freq_hz.size
+    k = m + obs.shapes.size
+    ssr = float(res @ res)
+    s2 = ssr / (n - p) if n > p else obs.sigma_f**2
+    cov = s2 * np.linalg.pinv(jac.T @ jac) if p else np.zeros((0, 0))
+    model_hz = sol.elastic_hz[obs.model_index]
+    shapes = sol.shapes[:, obs.model_index]
+    mac_values = np.diag(mac(obs.shapes, shapes))
+    rms = float(100 * np.sqrt(np.mean((model_hz / obs.freq_hz - 1) ** 2)))
+    return Fit(frozenset(active), from_vector(start, names, x), names, x, cov, model_hz, mac_values,
+               shapes, rms, float(res[:m] @ res[:m]), float(res[m:k] @ res[m:k]))
+
+
+def shape_sigma(fit: Fit, obs: Observations, floor: float) -> float:
+    """Random scatter of the measured shape entries about a fitted model's, relative to each
+    mode's RMS, once each mode's own scale q is taken out (so a wrong mass scale does not
+    pass for noise): median over modes of |y - q u| / |y| sqrt(n / (n - 1)), at least
+    ``floor``."""
+    u, y = fit.shapes, obs.shapes
+    q = np.sum(u * y, axis=0) / np.sum(u * u, axis=0)
+    n = y.shape[0]
+    rel = np.linalg.norm(y - q * u, axis=0) / np.linalg.norm(y, axis=0) * np.sqrt(n / max(n - 1, 1))
+    return max(floor, float(np.median(rel)))

@@ -1,0 +1,269 @@
+"""The diagnosis model family: the paper's nominal bat model plus switchable physical extensions.
+
+Nominal (METHOD.md): Euler-Bernoulli, isotropic, handbook E and density, ~1 in elements,
+nothing attached. Each extension adds physics and at most one parameter:
+
+    modulus             E                                fitted, parameter ln E
+    density             rho = weight / wood volume        from the scale; fitted (ln rho) from
+                                                          the mode-shape scale only when the
+                                                          weight is unknown
+    shear_deformation   Timoshenko beam, E/G             fitted, ln(E/G)
+    rotary_inertia      rho I in the mass                no parameter (physics)
+    sensor_mass         point mass at the driving point  fitted, grams
+    suspension          two bungees 1 in from the ends   fitted, kN/m each
+    geometry            finer mesh (0.5 in) with nodes   no parameter
+                        at the test points
+
+Modal sensitivities of mass-normalised modes with the full modal basis (Fox & Kapoor 1968;
+exact for distinct eigenvalues):
+
+    d lam_r = phi_r^T (K' - lam_r M') phi_r
+    d phi_r = sum_{s != r} phi_s phi_s^T (K' - lam_r M') phi_r / (lam_r - lam_s)
+              - 1/2 (phi_r^T M' phi_r) phi_r
+
+with K' = K_structure (d/d ln E), -K_shear (d/d ln E/G, k_shear = kGA dK/dkGA),
+M' = M_structure (d/d ln rho), n n^T / 1000 (d/d sensor grams, n the shape functions at the
+sensor), 1000 sum n n^T (d/d bungee kN/m).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+from functools import cached_property
+
+import numpy as np
+import scipy.linalg
+
+from updating.model.assembly import (
+    BatModel,
+    assemble,
+    build_model,
+    place,
+    point_vector,
+)
+from updating.model.mass_properties import mass_properties
+from updating.model.material import ISOTROPIC_E_OVER_G, Material
+from updating.model.profile import Profile
+from updating.model.reference import BatReference
+from updating.model.units import IN_TO_M
+
+CAUSES = ("modulus", "density", "shear_deformation", "rotary_inertia", "sensor_mass",
+          "suspension", "geometry")
+FINE_ELEMENT_M = 0.5 * IN_TO_M
+BUNGEE_FROM_END_M = IN_TO_M  # as BatReference places them
+
+
+@dataclass(frozen=True)
+class Setup:
+    """What is known of one bat before any fit: profile, handbook wood, scale weight, test.
+
+    Attributes:
+        profile: caliper profile.
+        handbook: the species' handbook material (E, rho; isotropic E/G).
+        weight_kg: the bat's weight on a scale (accelerometer not mounted), or None.
+        points_m: impact points from the knob end, m.
+        sensor_x_m: the accelerometer (driving point) position, m.
+        fine_element_m: element length of the 'geometry' extension, m.
+    """
+
+    profile: Profile
+    handbook: Material
+    weight_kg: float | None
+    points_m: np.ndarray
+    sensor_x_m: float
+    fine_element_m: float = FINE_ELEMENT_M
+
+    @cached_property
+    def rho_from_weight(self) -> float | None:
+        """Mass density that makes the model weigh what the scale says: rho = W / int A dx."""
+        if self.weight_kg is None:
+            return None
+        unit = build_model(self.profile, Material(1.0, 1.0))
+        return self.weight_kg / mass_properties(unit).mass_kg
+
+
+@dataclass(frozen=True)
+class State:
+    """Physical parameter values of the model family (SI); inactive ones are ignored."""
+
+    E_pa: float
+    rho_kg_m3: float
+    e_over_g: float = 10.0
+    sensor_mass_kg: float = 1e-3
+    bungee_k_n_per_m: float = 100.0
+
+
+def free_parameters(active: frozenset[str], setup: Setup) -> tuple[str, ...]:
+    """Names of the fitted parameters of a set of extensions, in a fixed order."""
+    names = []
+    if "modulus" in active:
+        names.append("ln_E")
+    if "density" in active and setup.weight_kg is None:
+        names.append("ln_rho")
+    if "shear_deformation" in active:
+        names.append("ln_e_over_g")
+    if "sensor_mass" in active:
+        names.append("sensor_g")
+    if "suspension" in active:
+        names.append("bungee_kn_per_m")
+    return tuple(names)
+
+
+def to_vector(state: State, names: tuple[str, ...]) -> np.ndarray:
+    value = {"ln_E": np.log(state.E_pa), "ln_rho": np.log(state.rho_kg_m3),
+             "ln_e_over_g": np.log(state.e_over_g), "sensor_g": 1e3 * state.sensor_mass_kg,
+             "bungee_kn_per_m": 1e-3 * state.bungee_k_n_per_m}
+    return np.array([value[n] for n in names])
+
+
+def from_vector(state: State, names: tuple[str, ...], x: np.ndarray) -> State:
+    changes = {}
+    for n, v in zip(names, x, strict=True):
+        if n == "ln_E":
+            changes["E_pa"] = float(np.exp(v))
+        elif n == "ln_rho":
+            changes["rho_kg_m3"] = float(np.exp(v))
+        elif n == "ln_e_over_g":
+            changes["e_over_g"] = float(np.exp(v))
+        elif n == "sensor_g":
+            changes["sensor_mass_kg"] = 1e-3 * float(v)
+        else:
+            changes["bungee_k_n_per_m"] = 1e3 * float(v)
+    return replace(state, **changes)
+
+
+# physical ranges; E/G >= 2 = 2 (1 + nu) with nu >= 0 (the isotropic limit; wood: 9-20)
+BOUNDS = {"ln_E": (np.log(1e8), np.log(1e11)), "ln_rho": (np.log(50.0), np.log(3000.0)),
+          "ln_e_over_g": (np.log(2.0), np.log(60.0)), "sensor_g": (0.0, 100.0),
+          "bungee_kn_per_m": (0.0, 100.0)}
+
+
+def effective_state(setup: Setup, active: frozenset[str], state: State) -> State:
+    """The values the model of ``active`` really uses (nominal ones where an extension is off)."""
+    hb = setup.handbook
+    rho = hb.rho_kg_m3
+    if "density" in active:
+        rho = setup.rho_from_weight or state.rho_kg_m3
+    return State(
+        E_pa=state.E_pa if "modulus" in active else hb.E_pa,
+        rho_kg_m3=rho,
+        e_over_g=state.e_over_g if "shear_deformation" in active else ISOTROPIC_E_OVER_G,
+        sensor_mass_kg=state.sensor_mass_kg if "sensor_mass" in active else 0.0,
+        bungee_k_n_per_m=state.bungee_k_n_per_m if "suspension" in active else 0.0,
+    )
+
+
+def reference_of(setup: Setup, active: frozenset[str], state: State) -> BatReference:
+    """The calibrated reference (updating.model.reference) of a fitted model."""
+    s = effective_state(setup, active, state)
+    shear = "shear_deformation" in active
+    return BatReference(
+        E_pa=s.E_pa, rho_kg_m3=s.rho_kg_m3, e_over_g=s.e_over_g, nu=setup.handbook.nu,
+        beam="timoshenko" if shear else "euler", rotary_inertia="rotary_inertia" in active,
+        sensor_mass_kg=s.sensor_mass_kg, sensor_x_m=setup.sensor_x_m,
+        bungee_k_n_per_m=s.bungee_k_n_per_m,
+        element_length_m=setup.fine_element_m if "geometry" in active else None)
+
+
+def build(setup: Setup, active: frozenset[str], state: State) -> BatModel:
+    """The FE model of the extensions ``active`` with parameter values ``state``."""
+    ref = reference_of(setup, active, state)
+    fine = "geometry" in active
+    return ref.build(setup.profile, stations_m=setup.points_m if fine else (),
+                     element_length_m=setup.fine_element_m if fine else None)
+
+
+@dataclass(frozen=True)
+class ModalSolution:
+    """Modes of one model and their sensitivities to the free parameters.
+
+    Attributes:
+        elastic_hz: (k,) elastic frequencies (the two lowest modes, rigid or suspension,
+            excluded), Hz.
+        low_hz: (2,) the two lowest (suspension) frequencies, Hz; ~0 when free-free.
+        shapes: (n_points, k) mass-normalised elastic shapes at the test points.
+        dlnf: (p, k) d ln f / d parameter of the elastic modes.
+        dlnf_low: (p, 2) the same for the two lowest modes.
+        dshapes: (p, n_points, k) d shape / d parameter at the test points.
+    """
+
+    elastic_hz: np.ndarray
+    low_hz: np.ndarray
+    shapes: np.ndarray
+    dlnf: np.ndarray
+    dlnf_low: np.ndarray
+    dshapes: np.ndarray
+
+
+def interpolation_matrix(model: BatModel, x_m: np.ndarray) -> np.ndarray:
+    """(P, n) matrix N with w(x_p) = N[p] @ dofs: the element shape functions N_w at each x
+    (vectorised fe_model.displacement_at)."""
+    from updating.model.element import shape_functions
+
+    x = np.asarray(x_m, dtype=float)
+    e = np.clip(np.searchsorted(model.node_x_m, x, side="right") - 1, 0, model.n_elements - 1)
+    L = model.element_length_m[e]
+    n_w = shape_functions((x - model.node_x_m[e]) / L, L, model.phi[e]).n_w
+    out = np.zeros((x.size, model.n_dof))
+    out[np.arange(x.size)[:, None], model.dofs[e]] = n_w
+    return out
+
+
+def derivative_matrices(
+    model: BatModel, names: tuple[str, ...], setup: Setup,
+) -> list[tuple[np.ndarray | None, np.ndarray | None]]:
+    """(dK, dM) per parameter name (None: zero)."""
+    out = []
+    n = model.n_dof
+    for name in names:
+        if name == "ln_E":
+            out.append((assemble(model, with_attachments=False)[0], None))
+        elif name == "ln_rho":
+            out.append((None, assemble(model, with_attachments=False)[1]))
+        elif name == "ln_e_over_g":
+            out.append((-place(model, model.parts.k_shear), None))
+        elif name == "sensor_g":
+            dofs, nw = point_vector(model, setup.sensor_x_m)
+            dM = np.zeros((n, n))
+            dM[np.ix_(dofs, dofs)] = 1e-3 * np.outer(nw, nw)
+            out.append((None, dM))
+        else:
+            dK = np.zeros((n, n))
+            for x in (BUNGEE_FROM_END_M, setup.profile.length_m - BUNGEE_FROM_END_M):
+                dofs, nw = point_vector(model, x)
+                dK[np.ix_(dofs, dofs)] += 1e3 * np.outer(nw, nw)
+            out.append((dK, None))
+    return out
+
+
+def solve(
+    setup: Setup, active: frozenset[str], state: State, n_elastic: int,
+    names: tuple[str, ...] = (),
+) -> ModalSolution:
+    """Lowest ``n_elastic`` elastic modes of the model, with sensitivities to ``names``."""
+    model = build(setup, active, state)
+    K, M = assemble(model)
+    _, phi = scipy.linalg.eigh(K, M)
+    # Rayleigh quotients: accurate to round-off squared (phi is M-normalised by eigh)
+    lam = np.clip(np.einsum("ij,ij->j", phi, K @ phi), 0.0, None)
+    k = min(n_elastic, model.n_dof - 2)
+    sel = np.arange(2, 2 + k)
+    low = np.arange(2)
+    f = np.sqrt(lam) / (2 * np.pi)
+    n_pts = interpolation_matrix(model, setup.points_m)
+    p = len(names)
+    dlnf = np.zeros((p, k))
+    dlnf_low = np.zeros((p, 2))
+    dshapes = np.zeros((p, n_pts.shape[0], k))
+    for j, (dK, dM) in enumerate(derivative_matrices(model, names, setup)):
+        A = phi.T @ dK @ phi if dK is not None else np.zeros_like(K)
+        B = phi.T @ dM @ phi if dM is not None else np.zeros_like(K)
+        dlam = np.diag(A) - lam * np.diag(B)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            dlnf[j] = dlam[sel] / (2 * lam[sel])
+            dlnf_low[j] = np.where(lam[low] > 0, dlam[low] / (2 * lam[low]), 0.0)
+            gap = lam[sel][None, :] - lam[:, None]  # (n, k): lam_r - lam_s
+            coef = (A[:, sel] - lam[sel][None, :] * B[:, sel]) / gap
+        coef[sel, np.arange(k)] = -0.5 * np.diag(B)[sel]
+        dshapes[j] = n_pts @ (phi @ coef)
+    return ModalSolution(f[sel], f[low], n_pts @ phi[:, sel], dlnf, dlnf_low, dshapes)

@@ -1,0 +1,332 @@
+"""Diagnose: what the paper's model gets wrong about a bat's baseline test, why, and the fix.
+
+1. Pair the measured modes with the nominal model's (Euler-Bernoulli, isotropic, handbook E
+   and density, ~1 in elements, nothing attached) by MAC.
+2. Causes, by forward selection: from the nominal model, try each remaining extension
+   (updating.diagnose.model.CAUSES), refit all free parameters (updating.diagnose.fit), keep
+   the one that lowers the RMS frequency error most. Its gain (percentage points) is measured,
+   not assumed. It counts only if the gain is at least ``min_gain_pct`` and significant given
+   the frequency uncertainty: the drop of the frequency chi-square sum(e_r^2) / sigma_f^2
+   exceeds the 99 % point of chi-square with as many degrees of freedom as new parameters (at
+   least one). The selection stops at the first extension that fails.
+3. What was measured rather than fitted joins next: the density from the scale weight and,
+   when the test saw them, the bungees from the suspension modes.
+4. Calibration: further extensions join while they improve the fit of frequencies and
+   mass-normalised shapes by more than they cost (Akaike: chi-square drop above 2 per
+   parameter); the accelerometer's mass is mostly seen here, in the shapes.
+Every extension of the calibrated model has its measured frequency gain; those whose gain
+qualifies as in 2 are named causes.
+5. Backward check: each named cause is removed from the calibrated model in turn; if that
+   costs less than the naming test of 2 (the greedy order let it stand in for later ones) it
+   is not named, and it leaves the model unless the Akaike test of 4 keeps it.
+The calibrated model is the bat's reference for inspect.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+
+import numpy as np
+import scipy.stats
+
+from updating.correlate.measured import MeasuredModes
+from updating.diagnose.fit import Fit, Observations, fit_model, pair_modes, shape_sigma
+from updating.diagnose.model import (
+    CAUSES,
+    Setup,
+    State,
+    free_parameters,
+    reference_of,
+    solve,
+)
+from updating.model.lab_input import BatMeta
+from updating.model.profile import Profile
+from updating.model.reference import BatReference
+from updating.model.units import IN_TO_M, LBF_IN3_TO_KG_M3, PSI_TO_PA
+
+MIN_GAIN_PCT = 0.05
+FINE_ELEMENT_IN = 0.5
+CONFIDENCE = 0.99
+
+
+@dataclass(frozen=True)
+class Step:
+    """One extension tried in the forward selection, and the fit with it added.
+
+    role: "cause" (named), "calibration" (in the calibrated model, its frequency gain too
+    small to name) or "rejected". chi2_drop_freq / chi2_drop: drop of the frequency /
+    frequency-and-shape chi-square; new_params: parameters it added (at least 1).
+    """
+
+    name: str
+    rms_before_pct: float
+    rms_after_pct: float
+    chi2_drop_freq: float
+    chi2_drop: float
+    new_params: int
+    role: str
+    fit: Fit
+
+    @property
+    def named(self) -> bool:
+        return self.role == "cause"
+
+    @property
+    def gain_pct(self) -> float:
+        return self.rms_before_pct - self.rms_after_pct
+
+
+@dataclass(frozen=True)
+class Diagnosis:
+    """Result of diagnose().
+
+    Attributes:
+        measured_hz: (m,) paired measured frequencies, Hz (ascending).
+        measured_index: (m,) their index in the measured modes.
+        model_index: (m,) the paired elastic mode of the model (0: the first).
+        nominal: fit of the nominal model (no parameters); extended: the calibrated model.
+        steps: the selection path, each extension with its measured gain, in the order added
+            (their gains add up to the drop from the nominal to the calibrated RMS error, up
+            to the small shifts when the shape weights are re-estimated),
+            then the extensions left out (role "rejected").
+        unpaired_hz: measured modes no model mode matched (MAC below the threshold).
+        min_gain_pct: naming threshold, percentage points.
+        reference: the calibrated reference (updating.model.reference.BatReference).
+        fine_element_m: element length of the 'geometry' extension, m.
+    """
+
+    measured_hz: np.ndarray
+    measured_index: np.ndarray
+    model_index: np.ndarray
+    nominal: Fit
+    extended: Fit
+    steps: tuple[Step, ...]
+    unpaired_hz: np.ndarray
+    min_gain_pct: float
+    reference: BatReference
+    fine_element_m: float = FINE_ELEMENT_IN * IN_TO_M
+
+    @property
+    def causes(self) -> tuple[Step, ...]:
+        """Named causes, largest gain first."""
+        return tuple(sorted((s for s in self.steps if s.named), key=lambda s: -s.gain_pct))
+
+    def cause_value(self, name: str) -> tuple[dict, dict]:
+        """(value, standard uncertainty) of a cause in the contract's units, from the
+        calibrated model."""
+        ref, fit = self.reference, self.extended
+
+        def rel_std(par: str) -> float:
+            return fit.std(par) if par in fit.names else 0.0
+
+        if name == "modulus":
+            e_psi = ref.E_pa / PSI_TO_PA
+            return {"E_psi": e_psi}, {"E_psi": e_psi * rel_std("ln_E")}
+        if name == "density":
+            wd = ref.rho_kg_m3 / LBF_IN3_TO_KG_M3
+            return ({"weight_density_lbf_in3": wd},
+                    {"weight_density_lbf_in3": wd * rel_std("ln_rho")})
+        if name == "shear_deformation":
+            return ({"E_over_G": ref.e_over_g},
+                    {"E_over_G": ref.e_over_g * rel_std("ln_e_over_g")})
+        if name == "sensor_mass":
+            return {"mass_g": 1e3 * ref.sensor_mass_kg}, {"mass_g": rel_std("sensor_g")}
+        if name == "suspension":
+            return ({"k_n_per_m": ref.bungee_k_n_per_m},
+                    {"k_n_per_m": 1e3 * rel_std("bungee_kn_per_m")})
+        if name == "geometry":
+            return ({"element_length_in": self.fine_element_m / IN_TO_M,
+                     "nodes_at_test_points": True}, {})
+        return {}, {}
+
+    def to_json_dict(self) -> dict:
+        """The contract's `batlab diagnose` object (../shared/CONTRACT.md) plus extra keys."""
+        ref = self.reference
+        modes = [{"measured_hz": float(f), "nominal_hz": float(n), "extended_hz": float(e),
+                  "mac": float(m)}
+                 for f, n, e, m in zip(self.measured_hz, self.nominal.model_hz,
+                                       self.extended.model_hz, self.extended.mac, strict=True)]
+        causes = []
+        for s in self.causes:
+            value, std = self.cause_value(s.name)
+            causes.append({"name": s.name, "gain_pct": s.gain_pct, "value": value,
+                           "uncertainty": std, "rms_before_pct": s.rms_before_pct,
+                           "rms_after_pct": s.rms_after_pct})
+        return {
+            "modes": modes,
+            "rms_error_pct": {"nominal": self.nominal.rms_pct, "extended": self.extended.rms_pct},
+            "causes": causes,
+            "calibrated": {"E_psi": ref.E_pa / PSI_TO_PA, "E_over_G": ref.e_over_g,
+                           "weight_density_lbf_in3": ref.rho_kg_m3 / LBF_IN3_TO_KG_M3,
+                           "sensor_mass_g": 1e3 * ref.sensor_mass_kg},
+            "not_named": [{"name": s.name, "gain_pct": s.gain_pct,
+                           "in_reference": s.role == "calibration"}
+                          for s in self.steps if not s.named],
+            "min_gain_pct": self.min_gain_pct,
+            "unpaired_hz": [float(f) for f in self.unpaired_hz],
+            "reference": ref.to_dict(),
+        }
+
+
+def observations(
+    setup: Setup, measured: MeasuredModes, suspension_hz, min_mac: float,
+) -> tuple[Observations, np.ndarray, np.ndarray]:
+    """Pair measured modes with the nominal model's; (observations, measured index, unpaired)."""
+    m = measured.freq_hz.size
+    nominal = solve(setup, frozenset(), start_state(setup, suspension_hz), m + 4)
+    meas_idx, model_idx, _ = pair_modes(measured.shapes, nominal.shapes, min_mac)
+    order = np.argsort(measured.freq_hz[meas_idx])
+    meas_idx, model_idx = meas_idx[order], model_idx[order]
+    if meas_idx.size == 0:
+        raise ValueError("no measured mode matches a model mode (MAC below "
+                         f"{min_mac}): check the test points and the profile")
+    f = measured.freq_hz[meas_idx]
+    sigma_f = 5e-4
+    if measured.freq_std_hz is not None and np.all(np.isfinite(measured.freq_std_hz)):
+        sigma_f = max(1e-4, float(np.median(measured.freq_std_hz[meas_idx] / f)))
+    susp = np.sort(np.asarray([] if suspension_hz is None else suspension_hz, dtype=float))
+    obs = Observations(f, measured.shapes[:, meas_idx], model_idx, sigma_f,
+                       suspension_hz=susp[susp > 0][:2])
+    unpaired = np.setdiff1d(np.arange(m), meas_idx)
+    return obs, meas_idx, measured.freq_hz[unpaired]
+
+
+def start_state(setup: Setup, suspension_hz=None) -> State:
+    """Starting values: handbook wood, typical wood E/G, a 1 g sensor, bungees from the
+    lowest suspension mode (bounce of the whole mass on two springs) or 100 N/m."""
+    rho = setup.rho_from_weight or setup.handbook.rho_kg_m3
+    k = 100.0
+    if suspension_hz is not None and len(suspension_hz) and setup.weight_kg:
+        k = float((2 * np.pi * np.min(suspension_hz)) ** 2 * setup.weight_kg / 2)
+    return State(setup.handbook.E_pa, rho, 10.0, 1e-3, k)
+
+
+def chi2_drop(before: Fit, after: Fit, sigma_f: float, frequencies_only: bool) -> float:
+    """Drop of the chi-square: frequencies only, or frequencies and shapes."""
+    if frequencies_only:
+        return (before.ssr_freq - after.ssr_freq) / sigma_f**2
+    return before.chi2(sigma_f) - after.chi2(sigma_f)
+
+
+def forward_select(
+    setup: Setup, obs: Observations, current: Fit, remaining: list[str], role: str,
+    accept, key, reweight=None,
+) -> tuple[list[Step], Fit, list[Step], Observations]:
+    """Greedy forward selection: add the extension with the largest ``key`` while ``accept``.
+
+    ``reweight(fit, obs) -> obs`` (optional) re-estimates the residual weights from the fit
+    after each accepted step (the current fit is then refitted with them).
+    Returns (accepted steps, the fit with them, the trials of the round that stopped, obs).
+    """
+    steps: list[Step] = []
+    while remaining:
+        if reweight is not None:
+            obs = reweight(current, obs)
+            current = fit_model(setup, current.active, obs, current.state)
+        trials = []
+        for c in remaining:
+            active = current.active | {c}
+            fit = fit_model(setup, active, obs, current.state)
+            new_p = max(1, len(free_parameters(active, setup)) - len(current.names))
+            trials.append(Step(c, current.rms_pct, fit.rms_pct,
+                               chi2_drop(current, fit, obs.sigma_f, True),
+                               chi2_drop(current, fit, obs.sigma_f, False), new_p, role, fit))
+        best = max(trials, key=key)
+        if not accept(best):
+            return steps, current, sorted(trials, key=key, reverse=True), obs
+        steps.append(best)
+        current = best.fit
+        remaining.remove(best.name)
+    return steps, current, [], obs
+
+
+def backward_check(
+    setup: Setup, obs: Observations, path: list[Step], final: Fit, nameable, facts,
+) -> tuple[list[Step], Fit, list[Step]]:
+    """Re-test each named cause, smallest gain first, by removing it from the final model
+    (what was measured, ``facts``, stays in the model)."""
+    dropped: list[Step] = []
+    for step in sorted((s for s in path if s.named), key=lambda s: s.gain_pct):
+        without = fit_model(setup, final.active - {step.name}, obs, final.state)
+        back = Step(step.name, without.rms_pct, final.rms_pct,
+                    chi2_drop(without, final, obs.sigma_f, True),
+                    chi2_drop(without, final, obs.sigma_f, False), step.new_params, "", final)
+        if nameable(back):
+            continue
+        if step.name in facts or back.chi2_drop >= 2 * back.new_params:
+            path = [replace(s, role="calibration") if s is step else s for s in path]
+        else:
+            path = [s for s in path if s is not step]
+            dropped.append(step)
+            final = without
+    return path, final, dropped
+
+
+def diagnose(
+    profile: Profile, meta: BatMeta, measured: MeasuredModes, suspension_hz=None,
+    min_gain_pct: float = MIN_GAIN_PCT, min_mac: float = 0.5,
+    fine_element_m: float = FINE_ELEMENT_IN * IN_TO_M, shape_sigma_floor: float = 0.002,
+) -> Diagnosis:
+    """Diagnose a baseline test against the nominal model and calibrate the bat's reference.
+
+    Args:
+        profile: the caliper profile; meta: meta.json (handbook wood, scale weight).
+        measured: the baseline's elastic modes (mass-normalised shapes at the test points).
+        suspension_hz: measured rigid-body (suspension) frequencies below 20 Hz, or None.
+        min_gain_pct: an extension must lower the RMS frequency error by this much (pp) to be
+            named a cause.
+        min_mac: pairing threshold.
+        fine_element_m: element length of the 'geometry' extension.
+        shape_sigma_floor: least relative uncertainty of a measured shape entry.
+    """
+    if measured.shapes.shape[0] != measured.x_m.size:
+        raise ValueError("measured shapes do not match the number of test points")
+    if np.any(measured.x_m < -1e-9) or np.any(measured.x_m > profile.length_m + 1e-9):
+        raise ValueError("a test point lies outside the bat's profile")
+    setup = Setup(profile, meta.material, meta.weight_kg, np.asarray(measured.x_m, dtype=float),
+                  float(measured.sensor_x_m), fine_element_m)
+    obs, meas_idx, unpaired = observations(setup, measured, suspension_hz, min_mac)
+    nominal = fit_model(setup, frozenset(), obs, start_state(setup, suspension_hz))
+    crit = scipy.stats.chi2.ppf(CONFIDENCE, np.arange(8))
+
+    def nameable(s: Step) -> bool:
+        return s.gain_pct >= min_gain_pct and s.chi2_drop_freq >= crit[s.new_params]
+
+    remaining = [c for c in CAUSES if not (c == "density" and meta.weight_kg is None
+                                           and not np.any(measured.shapes))]
+    # 1. causes: extensions that lower the frequency error measurably and significantly
+    named, current, _, _ = forward_select(setup, obs, nominal, remaining, "cause",
+                                          accept=nameable, key=lambda s: s.gain_pct)
+    # 2. what was measured rather than fitted: the scale weight, the suspension modes
+    facts = ["density"] if meta.weight_kg is not None else []
+    if obs.suspension_hz.size:
+        facts.append("suspension")
+    measured_steps = []
+    for c in (c for c in facts if c in remaining):
+        fit = fit_model(setup, current.active | {c}, obs, current.state)
+        new_p = max(1, len(fit.names) - len(current.names))
+        measured_steps.append(Step(c, current.rms_pct, fit.rms_pct,
+                                   chi2_drop(current, fit, obs.sigma_f, True),
+                                   chi2_drop(current, fit, obs.sigma_f, False), new_p,
+                                   "calibration", fit))
+        current = fit
+        remaining.remove(c)
+    # 3. calibration: further extensions that improve the fit of frequencies and shapes by
+    # more than they cost (Akaike: chi-square drop above 2 per parameter); the shape-noise
+    # level is re-estimated from the current model before each round
+    support, final, rejected, obs = forward_select(
+        setup, obs, current, remaining, "calibration",
+        accept=lambda s: s.chi2_drop >= 2 * s.new_params, key=lambda s: s.chi2_drop,
+        reweight=lambda fit, o: replace(o, sigma_s=shape_sigma(fit, o, shape_sigma_floor)))
+    # an extension in the calibrated model is named whenever its measured gain qualifies
+    path = named + [replace(s, role="cause") if nameable(s) else s
+                    for s in measured_steps + support]
+    # 5. backward check: a cause the calibrated model does not need (removing it costs less
+    # than the naming threshold, an artefact of the greedy order) is not named; it leaves the
+    # model too unless the shapes and frequencies still support it (Akaike)
+    path, final, dropped = backward_check(setup, obs, path, final, nameable, facts)
+    rejected = [replace(s, role="rejected") for s in dropped + rejected]
+    reference = reference_of(setup, final.active, final.state)
+    return Diagnosis(obs.freq_hz, meas_idx, obs.model_index, nominal, final,
+                     tuple(path + rejected), unpaired, min_gain_pct, reference,
+                     fine_element_m)

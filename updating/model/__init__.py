@@ -1,0 +1,4 @@
+"""The bat's finite-element reference.
+
+Profile, wood, sections, elements, assembly, modes, mass properties, calibrated reference.
+"""

@@ -1,0 +1,280 @@
+"""The bat's finite-element reference model: mesh, section quadrature, element parts, assembly.
+
+Planar beam along x, two DOFs per node (transverse displacement w, rotation theta), node i
+owns DOFs (2i, 2i+1); element i joins nodes i and i+1, so its connectivity c_i is the DOF
+slice 2i..2i+3 and its global matrices are the 4x4 parts placed there (METHOD.md eq. 1-2).
+Section properties are integrated over each element by Gauss quadrature on every linear
+piece of the profile that the element overlaps (steps included exactly).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+
+from updating.model.element import ElementParts, element_parts
+from updating.model.material import Material
+from updating.model.profile import Profile
+from updating.model.sections import Core, SectionProps, section_props
+from updating.model.units import IN_TO_M
+
+GAUSS_POINTS = 6  # exact for the degree-10 integrands of a linearly tapered section
+
+
+@dataclass(frozen=True)
+class Attachment:
+    """Something attached at x: a point mass (accelerometer) and/or a spring to ground (bungee)."""
+
+    x_m: float
+    mass_kg: float = 0.0
+    k_n_per_m: float = 0.0
+
+
+@dataclass(frozen=True)
+class Samples:
+    """Quadrature samples along the bat: where, with which weight, and the section there."""
+
+    elem: np.ndarray  # (P,) element index
+    xi: np.ndarray  # (P,) local coordinate 0..1
+    weight_m: np.ndarray  # (P,) Gauss weight, m
+    x_m: np.ndarray  # (P,) position from the knob end, m
+    props: SectionProps
+
+
+@dataclass(frozen=True)
+class BatModel:
+    """A meshed bat with its element matrices kept in separate physical parts.
+
+    ``parts`` hold each element's 4x4 matrices (e, 4, 4); ``dofs`` (e, 4) their global DOFs.
+    """
+
+    node_x_m: np.ndarray
+    beam: str
+    rotary_inertia: bool
+    samples: Samples
+    phi: np.ndarray
+    parts: ElementParts
+    attachments: tuple[Attachment, ...] = ()
+    profile: Profile | None = None
+    material: Material | None = None
+    core: Core | None = None
+    meta: dict = field(default_factory=dict)
+
+    @property
+    def n_nodes(self) -> int:
+        return self.node_x_m.size
+
+    @property
+    def n_dof(self) -> int:
+        return 2 * self.node_x_m.size
+
+    @property
+    def n_elements(self) -> int:
+        return self.node_x_m.size - 1
+
+    @property
+    def element_length_m(self) -> np.ndarray:
+        return np.diff(self.node_x_m)
+
+    @property
+    def dofs(self) -> np.ndarray:
+        """(e, 4) global DOF indices of each element."""
+        return 2 * np.arange(self.n_elements)[:, None] + np.arange(4)[None, :]
+
+    @property
+    def translational_dofs(self) -> np.ndarray:
+        return 2 * np.arange(self.n_nodes)
+
+    def element_average(self, values: np.ndarray) -> np.ndarray:
+        """Element mean of a sampled quantity: int v dx / L, (e,)."""
+        s = self.samples
+        return np.bincount(s.elem, s.weight_m * values, self.n_elements) / self.element_length_m
+
+    def node_at(self, x_m: float) -> int:
+        """Index of the node nearest to x_m."""
+        return int(np.argmin(np.abs(self.node_x_m - x_m)))
+
+
+def mesh_nodes(
+    length_m: float, n_elements: int | None = None, element_length_m: float | None = None,
+    stations_m=(),
+) -> np.ndarray:
+    """Node positions: a uniform grid (default ~1 in elements) with nodes at the stations.
+
+    Grid nodes closer than 0.3 element to a station are dropped so no sliver element appears.
+    """
+    if n_elements is None:
+        h = element_length_m if element_length_m else IN_TO_M
+        n_elements = max(1, int(round(length_m / h)))
+    if n_elements < 1:
+        raise ValueError("the mesh needs at least one element")
+    grid = np.linspace(0.0, length_m, n_elements + 1)
+    st = np.asarray(stations_m, dtype=float).ravel()
+    if np.any((st < -1e-12) | (st > length_m + 1e-12)):
+        raise ValueError("a requested node lies outside the bat")
+    if st.size == 0:
+        return grid
+    h = length_m / n_elements
+    near = np.min(np.abs(grid[:, None] - st[None, :]), axis=1) < 0.3 * h
+    near[[0, -1]] = False
+    nodes = np.unique(np.concatenate([grid[~near], np.clip(st, 0.0, length_m)]))
+    return nodes[np.concatenate([[True], np.diff(nodes) > 1e-9 * length_m])]
+
+
+def sample_sections(
+    node_x_m: np.ndarray, profile: Profile, material: Material, core: Core | None,
+    n_gauss: int = GAUSS_POINTS,
+) -> Samples:
+    """Gauss samples on every (element x profile piece x core zone) interval."""
+    cuts = [profile.segments()[:, 0], profile.segments()[:, 1], node_x_m]
+    if core is not None:
+        cuts.append(np.array(core.interval_m(profile.length_m)))
+    breaks = np.unique(np.concatenate(cuts))
+    breaks = breaks[(breaks >= node_x_m[0]) & (breaks <= node_x_m[-1])]
+    a, b = breaks[:-1], breaks[1:]
+    keep = b - a > 1e-12 * profile.length_m
+    a, b = a[keep], b[keep]
+    g, gw = np.polynomial.legendre.leggauss(n_gauss)
+    x = (0.5 * (a + b))[:, None] + (0.5 * (b - a))[:, None] * g[None, :]
+    w = (0.5 * (b - a))[:, None] * gw[None, :]
+    x, w = x.ravel(), w.ravel()
+    elem = np.clip(np.searchsorted(node_x_m, x, side="right") - 1, 0, node_x_m.size - 2)
+    xi = (x - node_x_m[elem]) / np.diff(node_x_m)[elem]
+    D = profile.diameter_at(x)
+    d_core = np.zeros_like(x)
+    ratio_rho, ratio_e = 0.0, 0.0
+    if core is not None:
+        x0, x1 = core.interval_m(profile.length_m)
+        d_core[(x > x0) & (x < x1)] = core.diameter_m
+        ratio_rho, ratio_e = core.fill_density_ratio, core.fill_modulus_ratio
+    props = section_props(D, material, d_core, ratio_rho, ratio_e)
+    return Samples(elem, xi, w, x, props)
+
+
+def parts_from_samples(
+    node_x_m: np.ndarray, samples: Samples, beam: str, rotary_inertia: bool,
+) -> tuple[np.ndarray, ElementParts]:
+    """Shear parameter per element and the integrated element parts."""
+    if beam not in ("euler", "timoshenko"):
+        raise ValueError(f"unknown beam theory {beam!r} (euler or timoshenko)")
+    L = np.diff(node_x_m)
+    p = samples.props
+    n_el = L.size
+    if beam == "timoshenko":
+        ei_avg = np.bincount(samples.elem, samples.weight_m * p.ei, n_el) / L
+        kga_avg = np.bincount(samples.elem, samples.weight_m * p.kga, n_el) / L
+        phi = 12 * ei_avg / (kga_avg * L**2)
+    else:
+        phi = np.zeros(n_el)
+    rhoi = p.rhoi if rotary_inertia else np.zeros_like(p.rhoi)
+    parts = element_parts(samples.elem, samples.xi, samples.weight_m, p.ei, p.kga, p.rhoa, rhoi,
+                          L, phi)
+    return phi, parts
+
+
+def build_model(
+    profile: Profile, material: Material, *, beam: str = "euler",
+    rotary_inertia: bool | None = None, n_elements: int | None = None,
+    element_length_m: float | None = None, stations_m=(), core: Core | None = None,
+    attachments: tuple[Attachment, ...] = (),
+) -> BatModel:
+    """Mesh and integrate a bat. Rotary inertia defaults to on for Timoshenko, off for Euler."""
+    if rotary_inertia is None:
+        rotary_inertia = beam == "timoshenko"
+    if core is not None and not 0 < core.plug_m < core.depth_m <= profile.length_m:
+        raise ValueError("core: need 0 < plug < depth <= bat length")
+    nodes = mesh_nodes(profile.length_m, n_elements, element_length_m, stations_m)
+    samples = sample_sections(nodes, profile, material, core)
+    phi, parts = parts_from_samples(nodes, samples, beam, rotary_inertia)
+    return BatModel(nodes, beam, rotary_inertia, samples, phi, parts, tuple(attachments),
+                    profile, material, core)
+
+
+def scale_sections(
+    model: BatModel, ei=1.0, kga=1.0, rhoa=1.0, rhoi=1.0,
+) -> BatModel:
+    """The model with per-element (e,) or uniform factors on EI, kGA, rhoA, rhoI, rebuilt exactly.
+
+    Unlike adding beta_i k_i (first order), this recomputes phi, so it is the exact model of
+    changed section properties; the nonlinear refinement and the virtual rig use it.
+    """
+    s = model.samples
+    f = [np.broadcast_to(np.asarray(v, dtype=float), (model.n_elements,))[s.elem]
+         for v in (ei, kga, rhoa, rhoi)]
+    props = SectionProps(s.props.ei * f[0], s.props.kga * f[1], s.props.rhoa * f[2],
+                         s.props.rhoi * f[3])
+    samples = replace(s, props=props)
+    phi, parts = parts_from_samples(model.node_x_m, samples, model.beam, model.rotary_inertia)
+    return replace(model, samples=samples, phi=phi, parts=parts)
+
+
+def point_vector(model: BatModel, x_m: float) -> tuple[np.ndarray, np.ndarray]:
+    """(dofs, N_w) of the element containing x: a point load's consistent distribution."""
+    from updating.model.element import shape_functions
+
+    if not model.node_x_m[0] - 1e-9 <= x_m <= model.node_x_m[-1] + 1e-9:
+        raise ValueError(f"attachment at x = {x_m:.4f} m lies outside the bat")
+    e = int(np.clip(np.searchsorted(model.node_x_m, x_m, side="right") - 1, 0,
+                    model.n_elements - 1))
+    L = model.element_length_m[e]
+    sf = shape_functions(np.array([(x_m - model.node_x_m[e]) / L]), np.array([L]),
+                         np.array([model.phi[e]]))
+    return model.dofs[e], sf.n_w[0]
+
+
+def attachment_matrices(model: BatModel) -> tuple[np.ndarray, np.ndarray]:
+    """(K_a, M_a), n x n: springs to ground and point masses, distributed by N_w."""
+    Ka = np.zeros((model.n_dof, model.n_dof))
+    Ma = np.zeros_like(Ka)
+    for a in model.attachments:
+        dofs, n = point_vector(model, a.x_m)
+        Ka[np.ix_(dofs, dofs)] += a.k_n_per_m * np.outer(n, n)
+        Ma[np.ix_(dofs, dofs)] += a.mass_kg * np.outer(n, n)
+    return Ka, Ma
+
+
+def displacement_at(model: BatModel, shapes: np.ndarray, x_m) -> np.ndarray:
+    """Transverse displacement of DOF vectors ``shapes`` (n, m) at positions x_m, (len(x), m)."""
+    rows = []
+    for x in np.atleast_1d(np.asarray(x_m, dtype=float)):
+        dofs, n = point_vector(model, float(x))
+        rows.append(n @ shapes[dofs])
+    return np.array(rows)
+
+
+def place(model: BatModel, element_mats: np.ndarray, factors=None) -> np.ndarray:
+    """Assemble sum_i f_i c_i^T m_i c_i, n x n dense; factors (e,) or None for all ones."""
+    out = np.zeros((model.n_dof, model.n_dof))
+    mats = element_mats if factors is None else element_mats * np.asarray(factors)[:, None, None]
+    d = model.dofs
+    np.add.at(out, (d[:, :, None], d[:, None, :]), mats)
+    return out
+
+
+def assemble(
+    model: BatModel, beta_bend=None, beta_shear=None, alpha_trans=None, alpha_rot=None,
+    with_attachments: bool = True,
+) -> tuple[np.ndarray, np.ndarray]:
+    """K and M with element changes: K = sum (1+beta_b) k_b + (1+beta_s) k_s (+ springs), M alike.
+
+    Changes are (e,) arrays or None (no change); METHOD.md: K_I = K_S + sum beta_i k_i.
+    """
+    def one_plus(v):
+        return None if v is None else 1.0 + np.asarray(v, dtype=float)
+
+    p = model.parts
+    K = place(model, p.k_bend, one_plus(beta_bend)) + place(model, p.k_shear, one_plus(beta_shear))
+    M = place(model, p.m_trans, one_plus(alpha_trans)) + place(model, p.m_rot, one_plus(alpha_rot))
+    if with_attachments and model.attachments:
+        Ka, Ma = attachment_matrices(model)
+        K, M = K + Ka, M + Ma
+    return K, M
+
+
+def skyline_mask(model: BatModel) -> np.ndarray:
+    """Boolean n x n sparsity pattern of the assembly (entries any element touches)."""
+    mask = np.zeros((model.n_dof, model.n_dof), dtype=bool)
+    d = model.dofs
+    mask[d[:, :, None], d[:, None, :]] = True
+    return mask

@@ -1,0 +1,77 @@
+"""A bat's lab inputs (meta.json) turned into model inputs, and alteration specs.
+
+meta.json (../shared/CONTRACT.md): serial, species, nominal_E_psi,
+nominal_weight_density_lbf_in3, weight_lb, points_in; extra keys are ignored.
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from updating.model.material import ISOTROPIC_E_OVER_G, Material, material_from_imperial
+from updating.model.sections import Core
+from updating.model.units import IN_TO_M, LB_TO_KG
+
+
+@dataclass(frozen=True)
+class BatMeta:
+    serial: str
+    species: str
+    material: Material
+    weight_kg: float | None
+    points_m: np.ndarray
+    extra: dict = field(default_factory=dict)
+
+
+def read_meta(path: str | Path, e_over_g: float = ISOTROPIC_E_OVER_G) -> BatMeta:
+    """Read meta.json; raise ValueError naming the file and the missing/bad key."""
+    path = Path(path)
+    try:
+        raw = json.loads(path.read_text())
+    except json.JSONDecodeError as exc:
+        raise ValueError(f"{path}: not valid JSON ({exc.msg}, line {exc.lineno})") from None
+    if not isinstance(raw, dict):
+        raise ValueError(f"{path}: expected a JSON object")
+    for key in ("serial", "nominal_E_psi", "nominal_weight_density_lbf_in3"):
+        if key not in raw:
+            raise ValueError(f"{path}: missing key {key!r}")
+    try:
+        E = float(raw["nominal_E_psi"])
+        wd = float(raw["nominal_weight_density_lbf_in3"])
+        weight = raw.get("weight_lb")
+        weight_kg = None if weight is None else float(weight) * LB_TO_KG
+        points = np.asarray(raw.get("points_in", []), dtype=float) * IN_TO_M
+    except (TypeError, ValueError):
+        raise ValueError(f"{path}: a numeric key holds a non-number") from None
+    if E <= 0 or wd <= 0 or (weight_kg is not None and weight_kg <= 0):
+        raise ValueError(f"{path}: modulus, density and weight must be positive")
+    return BatMeta(str(raw["serial"]), str(raw.get("species", "")),
+                   material_from_imperial(E, wd, e_over_g), weight_kg, points, raw)
+
+
+FILL_DEFAULTS = {"cork": 1 / 3, "heavy": 1.8, "neutral": 1.0, "core": 1 / 3}
+
+
+def parse_core_spec(spec: str) -> Core:
+    """Parse ``cork:depth=10,d=1.0,ratio=0.33[,plug=1][,modulus=0]`` (inches) into a Core (SI).
+
+    Kinds: cork (ratio 1/3), heavy (1.8), neutral (density-neutral soft fill, 1.0), core.
+    """
+    kind, _, rest = spec.partition(":")
+    if kind not in FILL_DEFAULTS:
+        raise ValueError(f"alteration {spec!r}: kind must be one of {', '.join(FILL_DEFAULTS)}")
+    values = {"depth": 10.0, "d": 1.0, "ratio": FILL_DEFAULTS[kind], "plug": 1.0, "modulus": 0.0}
+    for item in filter(None, rest.split(",")):
+        key, eq, val = item.partition("=")
+        if not eq or key.strip() not in values:
+            raise ValueError(f"alteration {spec!r}: bad item {item!r}")
+        try:
+            values[key.strip()] = float(val)
+        except ValueError:
+            raise ValueError(f"alteration {spec!r}: {key} is not a number") from None
+    return Core(values["d"] * IN_TO_M, values["depth"] * IN_TO_M, values["ratio"],
+                values["modulus"], values["plug"] * IN_TO_M)

@@ -1,0 +1,75 @@
+"""Mass properties of the bat model, from the same section quadrature as the mass matrix.
+
+    m = int rhoA dx,  x_cg = int rhoA x dx / m,  I_knob = int (rhoA x^2 + rhoI) dx,
+    I_cg = I_knob - m x_cg^2   (about a transverse axis; point masses added).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from updating.model.assembly import BatModel
+
+
+@dataclass(frozen=True)
+class MassProperties:
+    mass_kg: float
+    cg_m: float
+    i_knob_kg_m2: float
+    i_cg_kg_m2: float
+
+
+def mass_properties(model: BatModel, with_attachments: bool = False) -> MassProperties:
+    """Mass, centre of mass and transverse moments of inertia (rotary inertia always counted)."""
+    s = model.samples
+    w, x = s.weight_m, s.x_m
+    m = float(np.sum(w * s.props.rhoa))
+    mx = float(np.sum(w * s.props.rhoa * x))
+    i0 = float(np.sum(w * (s.props.rhoa * x**2 + s.props.rhoi)))
+    if with_attachments:
+        for a in model.attachments:
+            m, mx, i0 = m + a.mass_kg, mx + a.mass_kg * a.x_m, i0 + a.mass_kg * a.x_m**2
+    cg = mx / m
+    return MassProperties(m, cg, i0, i0 - m * cg**2)
+
+
+@dataclass(frozen=True)
+class CoreFromMass:
+    """An axial core inferred from the change of mass properties alone."""
+
+    length_m: float  # filled length (depth - plug)
+    start_m: float  # start of the filled part from the knob end
+    diameter_m: float
+    fill_density_ratio: float
+
+
+def core_from_mass_change(
+    before: MassProperties, after: MassProperties, bat_length_m: float, plug_m: float,
+    rho_kg_m3: float,
+) -> CoreFromMass:
+    """Recover a core (filled length, diameter, fill ratio) from mass properties.
+
+    A filled core of length l ending ``plug_m`` from the barrel end, centred at
+    x_c = L - plug - l/2, with area A_c = pi d^2 / 4 and fill ratio r changes
+
+        dm = rho (r - 1) A_c l,   d(m x_cg) = dm x_c,
+        dI_knob = dm (x_c^2 + l^2/12) + rho (r - 1) (pi d^4 / 64) l,
+
+    so the weight and centre-of-mass shift give l and d^2 (r - 1); the section's own rotary
+    inertia in dI_knob separates d from r (d^2 = 16 dI_rot / dm). On a scale and a
+    pendulum only the first two are measurable (the last term is ~1e-4 of I_knob), so in
+    practice the weight and balance point give the depth and d^2 (r - 1).
+    """
+    dm = after.mass_kg - before.mass_kg
+    if abs(dm) < 1e-12 * before.mass_kg:
+        raise ValueError("no mass change: a density-neutral fill is invisible to the scale")
+    x_c = (after.mass_kg * after.cg_m - before.mass_kg * before.cg_m) / dm
+    length = 2.0 * (bat_length_m - plug_m - x_c)
+    di_rot = after.i_knob_kg_m2 - before.i_knob_kg_m2 - dm * (x_c**2 + length**2 / 12)
+    d2 = 16.0 * di_rot / dm
+    if length <= 0 or d2 <= 0:
+        raise ValueError("mass change is not that of an axial core at the barrel end")
+    r = 1.0 + dm / (rho_kg_m3 * np.pi / 4 * d2 * length)
+    return CoreFromMass(length, x_c - length / 2, float(np.sqrt(d2)), float(r))

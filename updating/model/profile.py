@@ -1,0 +1,106 @@
+"""The bat's outer profile: diameter along the axis, from a caliper CSV.
+
+`profile.csv` has the header ``x_in,diameter_in`` with x from the knob end, non-decreasing;
+a step in diameter is two rows at the same x (../shared/CONTRACT.md). Between stations the
+diameter varies linearly.
+"""
+
+from __future__ import annotations
+
+import csv
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from ema.io.atomic_write import atomic_write
+from updating.model.units import IN_TO_M
+
+
+@dataclass(frozen=True)
+class Profile:
+    """Outer diameter along the bat, SI.
+
+    Attributes:
+        x_m: (S,) stations from the knob end, m, non-decreasing (a repeated x is a step).
+        diameter_m: (S,) outer diameter at each station, m.
+    """
+
+    x_m: np.ndarray
+    diameter_m: np.ndarray
+
+    @property
+    def length_m(self) -> float:
+        return float(self.x_m[-1] - self.x_m[0])
+
+    def segments(self) -> np.ndarray:
+        """(k, 4) rows (x0, x1, d0, d1) of the linear pieces of positive length."""
+        x, d = self.x_m, self.diameter_m
+        keep = np.diff(x) > 0
+        return np.column_stack([x[:-1][keep], x[1:][keep], d[:-1][keep], d[1:][keep]])
+
+    def diameter_at(self, x_m: np.ndarray) -> np.ndarray:
+        """Outer diameter (m) at positions x_m; at a step, the value on the barrel side."""
+        seg = self.segments()
+        x = np.asarray(x_m, dtype=float)
+        i = np.clip(np.searchsorted(seg[:, 0], x, side="right") - 1, 0, len(seg) - 1)
+        t = np.clip((x - seg[i, 0]) / (seg[i, 1] - seg[i, 0]), 0.0, 1.0)
+        return seg[i, 2] + t * (seg[i, 3] - seg[i, 2])
+
+
+def make_profile(x_m, diameter_m, source: str = "profile") -> Profile:
+    """Validate stations and diameters; raise ValueError naming ``source`` on bad input."""
+    x = np.asarray(x_m, dtype=float)
+    d = np.asarray(diameter_m, dtype=float)
+    if x.ndim != 1 or x.shape != d.shape:
+        raise ValueError(f"{source}: x and diameter columns differ in length")
+    if x.size < 2:
+        raise ValueError(f"{source}: at least two stations are needed, found {x.size}")
+    if not (np.all(np.isfinite(x)) and np.all(np.isfinite(d))):
+        raise ValueError(f"{source}: non-numeric or missing values")
+    bad = np.flatnonzero(np.diff(x) < 0)
+    if bad.size:
+        raise ValueError(f"{source}: x decreases at row {bad[0] + 3} (x must be non-decreasing)")
+    if np.any(d <= 0):
+        raise ValueError(f"{source}: diameter must be positive (row {np.argmax(d <= 0) + 2})")
+    if x[-1] <= x[0]:
+        raise ValueError(f"{source}: profile has zero length")
+    if np.any((np.diff(x[:-1]) == 0) & (np.diff(x[1:]) == 0)):
+        raise ValueError(f"{source}: more than two rows at the same x")
+    return Profile(x - x[0], d)
+
+
+def read_profile_csv(path: str | Path) -> Profile:
+    """Read a caliper profile CSV (``x_in,diameter_in``, inches) into SI."""
+    path = Path(path)
+    with path.open(newline="") as fh:
+        reader = csv.reader(fh)
+        try:
+            header = [h.strip() for h in next(reader)]
+        except StopIteration:
+            raise ValueError(f"{path}: empty file") from None
+        rows = [r for r in reader if any(c.strip() for c in r)]
+    for col in ("x_in", "diameter_in"):
+        if col not in header:
+            raise ValueError(f"{path}: missing column {col!r} (header must be x_in,diameter_in)")
+    ix, idia = header.index("x_in"), header.index("diameter_in")
+    try:
+        x = [float(r[ix]) for r in rows]
+        d = [float(r[idia]) for r in rows]
+    except (ValueError, IndexError):
+        raise ValueError(f"{path}: a row is not two numbers") from None
+    return make_profile(np.array(x) * IN_TO_M, np.array(d) * IN_TO_M, str(path))
+
+
+def write_profile_csv(path: str | Path, profile: Profile) -> None:
+    """Write a profile as ``x_in,diameter_in`` (temporary file, then rename)."""
+    rows = np.column_stack([profile.x_m, profile.diameter_m]) / IN_TO_M
+    lines = ["x_in,diameter_in"] + [f"{x:.4f},{d:.4f}" for x, d in rows]
+    atomic_write(path, lambda tmp: tmp.write_text("\n".join(lines) + "\n"))
+
+
+def paper_profile() -> Profile:
+    """The paper's stepped bat: nub 1x1.25, handle 10x0.75, taper 10x1.725, barrel 12x2.7 in."""
+    x_in = [0, 1, 1, 11, 11, 21, 21, 33]
+    d_in = [1.25, 1.25, 0.75, 0.75, 1.725, 1.725, 2.7, 2.7]
+    return make_profile(np.array(x_in) * IN_TO_M, np.array(d_in) * IN_TO_M, "paper bat")

@@ -1,0 +1,74 @@
+"""A bat's calibrated reference: the model parameters that reproduce its baseline test.
+
+Produced by diagnose (from the baseline test), stored in the registry, used by inspect as
+the reference for MSSO and for the physical-change fit.
+"""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass
+
+import numpy as np
+
+from updating.model.assembly import Attachment, BatModel, build_model
+from updating.model.material import Material
+from updating.model.profile import Profile
+from updating.model.sections import Core
+from updating.model.units import IN_TO_M
+
+
+@dataclass(frozen=True)
+class BatReference:
+    """Calibrated model parameters, SI.
+
+    Attributes:
+        E_pa, rho_kg_m3, e_over_g, nu: the wood.
+        beam: "euler" or "timoshenko"; rotary_inertia: include rhoI.
+        sensor_mass_kg, sensor_x_m: accelerometer at the driving point.
+        bungee_k_n_per_m: each of two bungees 1 in from either end (0: free-free).
+        element_length_m: the mesh the parameters were calibrated on (nodes also at the test
+            points); None: the default ~1 in grid.
+    """
+
+    E_pa: float
+    rho_kg_m3: float
+    e_over_g: float = 2.6
+    nu: float = 0.3
+    beam: str = "euler"
+    rotary_inertia: bool = False
+    sensor_mass_kg: float = 0.0
+    sensor_x_m: float = 0.0
+    bungee_k_n_per_m: float = 0.0
+    element_length_m: float | None = None
+
+    def material(self) -> Material:
+        return Material(self.E_pa, self.rho_kg_m3, self.e_over_g, self.nu)
+
+    def attachments(self, length_m: float) -> tuple[Attachment, ...]:
+        out = []
+        if self.sensor_mass_kg:
+            out.append(Attachment(self.sensor_x_m, mass_kg=self.sensor_mass_kg))
+        if self.bungee_k_n_per_m:
+            out += [Attachment(x, k_n_per_m=self.bungee_k_n_per_m)
+                    for x in (IN_TO_M, length_m - IN_TO_M)]
+        return tuple(out)
+
+    def build(
+        self, profile: Profile, stations_m=(), core: Core | None = None,
+        n_elements: int | None = None, element_length_m: float | None = None,
+    ) -> BatModel:
+        """The reference FE model with nodes at ``stations_m`` (the test points), on the
+        calibrated mesh unless ``n_elements`` or ``element_length_m`` says otherwise."""
+        if n_elements is None and element_length_m is None:
+            element_length_m = self.element_length_m
+        return build_model(profile, self.material(), beam=self.beam,
+                           rotary_inertia=self.rotary_inertia, n_elements=n_elements,
+                           element_length_m=element_length_m, stations_m=np.asarray(stations_m),
+                           core=core, attachments=self.attachments(profile.length_m))
+
+    def to_dict(self) -> dict:
+        return asdict(self)
+
+    @staticmethod
+    def from_dict(d: dict) -> BatReference:
+        return BatReference(**{k: d[k] for k in BatReference.__dataclass_fields__ if k in d})

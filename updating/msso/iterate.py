@@ -1,0 +1,334 @@
+"""Beyond one MSSO pass: iterated SEREP expansion and a nonlinear least-squares refinement.
+
+Iterated expansion: expand the test shapes with the *updated* model's modes, solve MSSO again
+relative to the updated model, compose the factors (1+y) <- (1+y)(1+dy); repeat.
+
+Refinement: Levenberg-Marquardt fit of the exact model (sections rebuilt with the factors,
+``fe_model.scale_sections``) to the measured data directly, with residuals
+
+    r_f = (lam_r(y) / lam_r^test - 1) / (2 sigma_f)
+    r_s = (c_r phi_r(y)[a] - psi_r) / (sigma_s rms(psi_r))      (c_r = 1 if mass-normalised)
+    r_p = (D y, y / 10) / sigma_prior   (prior: differences between neighbouring elements
+                                         and, weakly, the change itself; see prior_matrix)
+
+and analytic eigen-sensitivities (Fox & Kapoor 1968; complete modal expansion):
+
+    dlam_r/dp = phi_r^T (dK/dp - lam_r dM/dp) phi_r
+    dphi_r/dp = sum_{s != r} phi_s phi_s^T (dK/dp - lam_r dM/dp) phi_r / (lam_r - lam_s)
+                - 1/2 phi_r (phi_r^T dM/dp phi_r).
+
+dK/dp, dM/dp of element i depend only on element i's section, so one rebuild of all elements
+with every factor of a group moved by +-h gives all of that group's element derivatives
+(central difference, exact for the linear Euler-Bernoulli parts).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+
+import numpy as np
+import scipy.linalg
+
+from updating.correlate.pairing import align_signs, pair_modes
+from updating.correlate.serep import serep
+from updating.model.assembly import BatModel, assemble
+from updating.msso.factors import (
+    GROUP_PARTS,
+    ElementFactors,
+    apply_factors,
+    factors_from_vector,
+    zero_factors,
+)
+from updating.msso.skyline import MssoResult, msso_elements
+
+FD_STEP = 1e-5
+
+
+@dataclass(frozen=True)
+class ModalData:
+    """Measured modes: natural frequencies (m,), real shapes (a, m) at translational DOFs."""
+
+    freq_hz: np.ndarray
+    shapes_a: np.ndarray
+    dofs_a: np.ndarray
+
+    @property
+    def omega2(self) -> np.ndarray:
+        return (2 * np.pi * np.asarray(self.freq_hz)) ** 2
+
+
+def full_modes(model: BatModel) -> tuple[np.ndarray, np.ndarray]:
+    """All eigenpairs (lam ascending, Phi mass-normalised) of the assembled model."""
+    K, M = assemble(model)
+    lam, Phi = scipy.linalg.eigh(K, M)
+    return lam, Phi
+
+
+def paired_elastic(lam: np.ndarray, Phi: np.ndarray, test: ModalData, n_rigid: int
+                   ) -> np.ndarray:
+    """Model mode index paired (by MAC at the measured DOFs) with each test mode."""
+    m = test.shapes_a.shape[1]
+    cand = np.arange(n_rigid, min(lam.size, n_rigid + m + 6))
+    pairing = pair_modes(Phi[np.ix_(test.dofs_a, cand)], test.shapes_a)
+    return cand[pairing.model_index]
+
+
+def expansion_pass(
+    model: BatModel, test: ModalData, factors: ElementFactors, n_rigid: int = 2, **msso_kw,
+) -> tuple[ElementFactors, MssoResult, float]:
+    """One SEREP + MSSO pass relative to the model updated by ``factors``.
+
+    Returns the composed factors, the MSSO result and the SEREP condition number.
+    """
+    updated = apply_factors(model, factors)
+    lam, Phi = full_modes(updated)
+    idx = paired_elastic(lam, Phi, test, n_rigid)
+    basis = np.column_stack([Phi[:, :n_rigid], Phi[:, idx]])
+    T = serep(basis, test.dofs_a)
+    shapes = align_signs(Phi[np.ix_(test.dofs_a, idx)], test.shapes_a)
+    res = msso_elements(updated, T.expand(shapes), test.omega2, **msso_kw)
+    return factors.compose(res.factors), res, T.cond
+
+
+def iterate_expansion(
+    model: BatModel, test: ModalData, n_iter: int = 5, tol: float = 1e-6, **msso_kw,
+) -> tuple[ElementFactors, list[MssoResult]]:
+    """Repeated expansion passes until the largest factor increment is below ``tol``."""
+    f = zero_factors(model.n_elements)
+    results = []
+    for _ in range(n_iter):
+        f_new, res, _ = expansion_pass(model, test, f, **msso_kw)
+        results.append(res)
+        step = max(np.max(np.abs(a - b)) for a, b in zip(f_new.as_tuple(), f.as_tuple(),
+                                                          strict=True))
+        f = f_new
+        if step < tol:
+            break
+    return f, results
+
+
+@dataclass(frozen=True)
+class RefineResult:
+    """Refined factors, fit quality and the linearised standard deviation of each factor."""
+
+    factors: ElementFactors
+    std: ElementFactors
+    n_iter: int
+    converged: bool
+    cost: float
+    freq_error_rel: np.ndarray  # (m,) f_model / f_test - 1
+    shape_error_rel: np.ndarray  # (m,) ||c phi_a - psi|| / ||psi||
+    mac: np.ndarray
+    jac_rank: int
+    scales: np.ndarray  # (m,) per-mode shape scale c_r (ones if mass-normalised)
+    chi2_data: float  # weighted data misfit sum r^2 (frequencies and shapes)
+    n_data: int
+    prior_sigma: float | None
+
+
+def _element_derivatives(model: BatModel, f: ElementFactors, group: str):
+    """(dK, dM) of every element w.r.t. its own factor of ``group`` (e, 4, 4) each."""
+    out = []
+    for sgn in (1.0, -1.0):
+        parts = {p: v.copy() for p, v in zip(("bend", "shear", "trans", "rot"), f.as_tuple(),
+                                               strict=True)}
+        for p in GROUP_PARTS[group]:
+            parts[p] = parts[p] + sgn * FD_STEP
+        pm = apply_factors(model, ElementFactors(parts["bend"], parts["shear"], parts["trans"],
+                                                 parts["rot"])).parts
+        out.append((pm.k_bend + pm.k_shear, pm.m_trans + pm.m_rot))
+    return ((out[0][0] - out[1][0]) / (2 * FD_STEP), (out[0][1] - out[1][1]) / (2 * FD_STEP))
+
+
+def _evaluate(model, test, y, groups, n_rigid, scales, want_jac, w):
+    e = model.n_elements
+    f = factors_from_vector(y, groups, e)
+    mdl = apply_factors(model, f)
+    lam_all, Phi = full_modes(mdl)
+    idx = paired_elastic(lam_all, Phi, test, n_rigid)
+    lam = lam_all[idx]
+    phi_a = align_signs(test.shapes_a, Phi[np.ix_(test.dofs_a, idx)])
+    Phi[:, idx] = Phi[:, idx] * np.sign(np.sum(phi_a * Phi[np.ix_(test.dofs_a, idx)], axis=0))
+    lam_t = test.omega2
+    psi = test.shapes_a
+    rms = np.sqrt(np.mean(psi**2, axis=0))
+    r_f = (lam / lam_t - 1) * w["f"]
+    r_s = ((scales * phi_a - psi) / rms * w["s"]).ravel(order="F")
+    r = np.concatenate([r_f, r_s, w["G"] @ y + w["g0"], w["L"] @ y])
+    if not want_jac:
+        return r, (lam, phi_a, f)
+    m, a = idx.size, test.dofs_a.size
+    np_ = len(groups) * e
+    J_f = np.zeros((m, np_))
+    J_s = np.zeros((a * m, np_))
+    dofs = mdl.dofs
+    Phi_a = Phi[test.dofs_a]
+    for k, g in enumerate(groups):
+        dK, dM = _element_derivatives(model, f, g)
+        cols = slice(k * e, (k + 1) * e)
+        for j, mode in enumerate(idx):
+            P = Phi[dofs, mode]  # (e, 4)
+            G = dK - lam[j] * dM
+            J_f[j, cols] = np.einsum("ea,eab,eb->e", P, G, P) / lam_t[j] * w["f"]
+            v = np.einsum("eab,eb->ea", G, P)
+            coef = np.einsum("eas,ea->se", Phi[dofs], v)  # (n, e)
+            gap = lam[j] - lam_all
+            gap[mode] = np.inf
+            coef /= gap[:, None]
+            coef[mode] = -0.5 * np.einsum("ea,eab,eb->e", P, dM, P)
+            dphi = Phi_a @ coef  # (a, e)
+            J_s[j * a:(j + 1) * a, cols] = dphi * scales[j] / rms[j] * w["s"]
+    J = np.vstack([J_f, J_s, w["G"], w["L"]])
+    return r, J, (lam, phi_a, f)
+
+
+def mass_rows(model: BatModel, groups: tuple[str, ...], weighed_mass_kg: float | None,
+              mass_sigma: float) -> tuple[np.ndarray, np.ndarray]:
+    """The weighed-mass residual (m0 + sum_i alpha_i m_i - m_w) / (sigma m_w) as (G, g0)."""
+    p = model.n_elements * len(groups)
+    if weighed_mass_kg is None:
+        return np.zeros((0, p)), np.zeros(0)
+    s = model.samples
+    m_el = np.bincount(s.elem, s.weight_m * s.props.rhoa, model.n_elements)
+    G = np.concatenate([m_el if g in ("m", "trans") else np.zeros_like(m_el) for g in groups])
+    scale = 1.0 / (mass_sigma * weighed_mass_kg)
+    return G[None, :] * scale, np.array([(m_el.sum() - weighed_mass_kg) * scale])
+
+
+def prior_matrix(n_elements: int, n_groups: int, prior_sigma: float | None) -> np.ndarray:
+    """Rows of the prior: first differences of each group's factors along the bat over
+    sigma (a smooth or piecewise-uniform change is cheap, a lone spike is not) and the factors
+    themselves over 10 sigma; no rows without a prior."""
+    p = n_elements * n_groups
+    if prior_sigma is None:
+        return np.zeros((0, p))
+    D = np.diff(np.eye(n_elements), axis=0)
+    L = np.vstack([np.kron(np.eye(n_groups), D), 0.1 * np.eye(p)])
+    return L / prior_sigma
+
+
+def _scale_jacobian(phi_a, psi):
+    """Columns d r_s / d c_r for per-mode scales (block structure)."""
+    a, m = phi_a.shape
+    rms = np.sqrt(np.mean(psi**2, axis=0))
+    J = np.zeros((a * m, m))
+    for j in range(m):
+        J[j * a:(j + 1) * a, j] = phi_a[:, j] / rms[j]
+    return J
+
+
+AUTO_PRIORS = (0.01, 0.1, 1.0, None)
+
+
+def refine(
+    model: BatModel, test: ModalData, seed: ElementFactors, groups: tuple[str, ...], *,
+    mass_normalised: bool = True, freq_sigma: float = 5e-4, shape_sigma: float = 1e-2,
+    prior_sigma: float | str | None = "auto", weighed_mass_kg: float | None = None,
+    mass_sigma: float = 1e-3, n_rigid: int = 2, max_iter: int = 60, tol: float = 1e-12,
+    lower: float = -0.95,
+) -> RefineResult:
+    """Levenberg-Marquardt fit of the element factors of ``groups`` to frequencies and shapes.
+
+    freq_sigma: relative standard deviation of the measured frequencies; shape_sigma: of a
+    shape entry relative to the mode's RMS; they weight the residuals. With
+    ``mass_normalised=False`` each mode gets a free scale c_r; then a uniform factor on all
+    of K and M is unobservable and ``weighed_mass_kg`` (relative sigma ``mass_sigma``) should
+    be given: it adds the residual (m(y) - m_w) / (sigma m_w).
+
+    prior_sigma: standard deviation of the prior (prior_matrix), None for none, or "auto":
+    Morozov's discrepancy principle by continuation -- fits with the prior loosened step by
+    step (AUTO_PRIORS, each warm-started) until the data chi^2 falls to the number of data
+    (what the noise alone leaves); exact data run through to no prior and fit exactly.
+    """
+    kw = {"mass_normalised": mass_normalised, "freq_sigma": freq_sigma,
+          "shape_sigma": shape_sigma, "n_rigid": n_rigid, "max_iter": max_iter, "tol": tol,
+          "lower": lower, "weighed_mass_kg": weighed_mass_kg, "mass_sigma": mass_sigma}
+    if prior_sigma != "auto":
+        return _levenberg_marquardt(model, test, seed, groups, prior_sigma=prior_sigma, **kw)
+    f = seed
+    for ps in AUTO_PRIORS:
+        rr = _levenberg_marquardt(model, test, f, groups, prior_sigma=ps, **kw)
+        if rr.chi2_data <= rr.n_data:
+            break
+        f = rr.factors
+    return rr
+
+
+def _levenberg_marquardt(
+    model: BatModel, test: ModalData, seed: ElementFactors, groups: tuple[str, ...], *,
+    mass_normalised: bool, freq_sigma: float, shape_sigma: float, prior_sigma: float | None,
+    weighed_mass_kg: float | None, mass_sigma: float, n_rigid: int, max_iter: int, tol: float,
+    lower: float,
+) -> RefineResult:
+    e = model.n_elements
+    w = {"f": 1.0 / (2 * freq_sigma), "s": 1.0 / shape_sigma,
+         "L": prior_matrix(e, len(groups), prior_sigma)}
+    w["G"], w["g0"] = mass_rows(model, groups, weighed_mass_kg, mass_sigma)
+    y = seed.vector(groups).copy()
+    m = test.shapes_a.shape[1]
+    scales = np.ones(m)
+    if not mass_normalised:
+        _, (_, phi_a, _) = _evaluate(model, test, y, groups, n_rigid, scales, False, w)
+        scales = np.sum(phi_a * test.shapes_a, axis=0) / np.sum(phi_a**2, axis=0)
+    mu, converged, it = 1e-3, False, 0
+    r, J, (lam, phi_a, f) = _evaluate(model, test, y, groups, n_rigid, scales, True, w)
+    if not mass_normalised:
+        J = np.hstack([J, np.vstack([np.zeros((m, m)),
+                                     _scale_jacobian(phi_a, test.shapes_a) * w["s"],
+                                     np.zeros((w["G"].shape[0] + w["L"].shape[0], m))])])
+    cost = 0.5 * float(r @ r)
+    for it in range(1, max_iter + 1):  # noqa: B007
+        A = J.T @ J
+        g = J.T @ r
+        D = np.maximum(np.diag(A), 1e-12 * np.max(np.diag(A)))
+        accepted = False
+        while mu < 1e12:
+            step = -np.linalg.solve(A + mu * np.diag(D), g)
+            dy = step[:y.size]
+            limit = np.where(dy < 0, (y - lower) / np.maximum(-dy, 1e-300), np.inf)
+            t = min(1.0, 0.9 * float(np.min(limit)))
+            y_new = y + t * dy
+            s_new = scales + t * step[y.size:] if not mass_normalised else scales
+            r_new, _ = _evaluate(model, test, y_new, groups, n_rigid, s_new, False, w)
+            c_new = 0.5 * float(r_new @ r_new)
+            if c_new <= cost:
+                accepted = True
+                break
+            mu *= 4.0
+        if not accepted:
+            converged = True
+            break
+        rel = (cost - c_new) / max(cost, 1e-300)
+        small = np.max(np.abs(t * step)) < 1e-10
+        y, scales, cost = y_new, s_new, c_new
+        mu = max(mu / 3.0, 1e-9)
+        r, J, (lam, phi_a, f) = _evaluate(model, test, y, groups, n_rigid, scales, True, w)
+        if not mass_normalised:
+            J = np.hstack([J, np.vstack([np.zeros((m, m)),
+                                         _scale_jacobian(phi_a, test.shapes_a) * w["s"],
+                                         np.zeros((w["G"].shape[0] + w["L"].shape[0], m))])])
+        if rel < tol or small:
+            converged = True
+            break
+    sv = np.linalg.svd(J[:J.shape[0] - w["L"].shape[0]], compute_uv=False)
+    rank = int(np.sum(sv > 1e-8 * sv[0]))
+    cov_diag = np.diag(np.linalg.pinv(J.T @ J, rcond=1e-12))[:y.size]
+    std = factors_from_vector(np.sqrt(np.clip(cov_diag, 0, None)), groups, e)
+    psi = test.shapes_a
+    shape_err = np.linalg.norm(scales * phi_a - psi, axis=0) / np.linalg.norm(psi, axis=0)
+    from updating.correlate.pairing import mac
+
+    macs = np.diag(mac(phi_a, psi))
+    chi2 = 2 * cost - float(np.sum((w["L"] @ y) ** 2))
+    n_data = m + test.shapes_a.size - (0 if mass_normalised else m) + w["G"].shape[0]
+    return RefineResult(f, std, it, converged, cost, np.sqrt(lam / test.omega2) - 1, shape_err,
+                        macs, rank, scales, chi2, n_data, prior_sigma)
+
+
+def with_noise(test: ModalData, shape_sigma: float, freq_sigma: float,
+               rng: np.random.Generator) -> ModalData:
+    """Test modes with Gaussian noise: shapes + N(0, (shape_sigma rms_r)^2), f (1 + N(0, s^2))."""
+    rms = np.sqrt(np.mean(test.shapes_a**2, axis=0))
+    shapes = test.shapes_a + rng.standard_normal(test.shapes_a.shape) * shape_sigma * rms
+    freq = np.asarray(test.freq_hz) * (1 + freq_sigma * rng.standard_normal(len(test.freq_hz)))
+    return replace(test, freq_hz=freq, shapes_a=shapes)

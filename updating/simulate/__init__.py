@@ -1,0 +1,1 @@
+"""Virtual bats and fleets: the truth behind simulated tests."""

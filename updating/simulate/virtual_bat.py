@@ -1,0 +1,174 @@
+"""A bat on the virtual rig: the 'truth' model behind a simulated roving-hammer test.
+
+The truth is deliberately richer than batlab's default reference: Timoshenko beam with the
+wood's E/G and rotary inertia, a finer mesh, an accelerometer's mass (possibly off its
+labelled point), two bungees, modal damping rising with frequency, moisture drift and noise.
+Moisture: one percentage point of moisture content changes E by about -2 % and mass by about
++1 % (../shared/BAT_PHYSICS.md).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from ema.io.frf_data import FrfTest
+from rigs.modal_model import ModalModel
+from rigs.virtual_test import simulate_frf
+from updating.model.assembly import Attachment, build_model, displacement_at
+from updating.model.material import Material
+from updating.model.modes import model_modes
+from updating.model.profile import Profile
+from updating.model.sections import Core
+from updating.model.units import IN_TO_M
+
+DEFAULT_FREQ_HZ = np.arange(0.0, 3200.0 + 0.25, 0.5)
+
+
+def moisture_scales(moisture_pct: float) -> tuple[float, float]:
+    """(stiffness, density) factors for a change of moisture content in percentage points."""
+    return 1.0 - 0.02 * moisture_pct, 1.0 + 0.01 * moisture_pct
+
+
+@dataclass(frozen=True)
+class VirtualBat:
+    """A physical bat and its test set-up.
+
+    Attributes:
+        profile, material: the real bat (true E, density, E/G).
+        points_m: impact points from the knob end, m (node numbers 1..n in this order).
+        sensor_index: which point carries the accelerometer (driving point); -1: nearest to
+            1 in from the barrel end.
+        sensor_offset_m: the accelerometer sits this far from its labelled point (re-mounting).
+        sensor_mass_kg: accelerometer (and cable) mass.
+        bungee_k_n_per_m: stiffness of each of the two bungees, 1 in from either end.
+        beam: beam theory of the truth model.
+        core: an alteration, or None.
+        moisture_pct: moisture-content change since registration, percentage points.
+        zeta1, zeta_exponent: damping ratio of mode r is zeta1 (f_r / f_1) ** zeta_exponent.
+        rel_noise, floor_noise: measurement noise (see rigs.virtual_test.simulate_frf).
+        element_length_m: mesh of the truth model.
+    """
+
+    profile: Profile
+    material: Material
+    points_m: np.ndarray
+    sensor_index: int = -1
+    sensor_offset_m: float = 0.0
+    sensor_mass_kg: float = 0.0
+    bungee_k_n_per_m: float = 0.0
+    beam: str = "timoshenko"
+    core: Core | None = None
+    moisture_pct: float = 0.0
+    zeta1: float = 0.005
+    zeta_exponent: float = 0.3
+    rel_noise: float = 0.005
+    floor_noise: float = 1e-3
+    element_length_m: float = 0.5 * IN_TO_M
+
+    def sensor_point(self) -> int:
+        if self.sensor_index >= 0:
+            return self.sensor_index
+        target = self.profile.length_m - IN_TO_M
+        return int(np.argmin(np.abs(np.asarray(self.points_m) - target)))
+
+    def truth_model(self):
+        """The FE model that generates the data (attachments included)."""
+        stiff, dens = moisture_scales(self.moisture_pct)
+        material = self.material.scaled(stiff, dens)
+        points = np.asarray(self.points_m, dtype=float)
+        sensor_x = points[self.sensor_point()] + self.sensor_offset_m
+        attach = []
+        if self.sensor_mass_kg:
+            attach.append(Attachment(sensor_x, mass_kg=self.sensor_mass_kg))
+        if self.bungee_k_n_per_m:
+            for x in (IN_TO_M, self.profile.length_m - IN_TO_M):
+                attach.append(Attachment(x, k_n_per_m=self.bungee_k_n_per_m))
+        return build_model(self.profile, material, beam=self.beam,
+                           element_length_m=self.element_length_m, stations_m=points,
+                           core=self.core, attachments=tuple(attach))
+
+
+def damping_ratios(freq_hz: np.ndarray, zeta1: float, exponent: float) -> np.ndarray:
+    """Modal damping rising with frequency; suspension/rigid modes (< 20 Hz) get 3 %."""
+    f = np.asarray(freq_hz, dtype=float)
+    elastic = f >= 20.0
+    z = np.full(f.shape, 0.03)
+    if elastic.any():
+        f1 = f[elastic][0]
+        z[elastic] = zeta1 * (f[elastic] / f1) ** exponent
+    return z
+
+
+def modal_model(bat: VirtualBat, max_mode_hz: float = 12000.0) -> tuple[ModalModel, np.ndarray]:
+    """The truth's modes below ``max_mode_hz`` at the impact points, and the accelerometer's
+    own shape row (1, m) at its true position (which may be off its labelled point)."""
+    model = bat.truth_model()
+    modes = model_modes(model, n_modes=min(model.n_dof, 60))
+    keep = modes.freq_hz <= max_mode_hz
+    shapes = modes.shapes[:, keep]
+    f_modes = modes.freq_hz[keep]
+    points = np.asarray(bat.points_m, dtype=float)
+    sensor_x = points[bat.sensor_point()] + bat.sensor_offset_m
+    modal = ModalModel(f_modes, damping_ratios(f_modes, bat.zeta1, bat.zeta_exponent),
+                       displacement_at(model, shapes, points), points)
+    return modal, displacement_at(model, shapes, [sensor_x])
+
+
+def simulate_test(
+    bat: VirtualBat, freq_hz: np.ndarray = DEFAULT_FREQ_HZ, seed: int | None = None,
+    max_mode_hz: float = 12000.0,
+) -> FrfTest:
+    """Simulate the roving-hammer, fixed-accelerometer test of ``bat``: one FRF per point."""
+    modal, sensor_shape = modal_model(bat, max_mode_hz)
+    points = modal.x_m
+    s = bat.sensor_point()
+    h = simulate_frf(modal, freq_hz, np.array([s]), np.arange(points.size), bat.rel_noise,
+                     bat.floor_noise, seed, resp_shapes=sensor_shape)
+    nodes = np.arange(1, points.size + 1)
+    return FrfTest(
+        freq_hz=np.asarray(freq_hz, dtype=float), frf=h, response_nodes=nodes[[s]],
+        reference_nodes=nodes, node_x_m={int(n): float(x) for n, x in zip(nodes, points,
+                                                                         strict=True)},
+        meta={"source": "batlab virtual rig", "seed": seed},
+    )
+
+
+def with_changes(bat: VirtualBat, **changes) -> VirtualBat:
+    """A copy of the set-up with some fields changed (a re-test weeks later, say)."""
+    return replace(bat, **changes)
+
+
+def simulate_modes(
+    bat: VirtualBat, n_modes: int = 6, freq_noise: float = 5e-4, shape_noise: float = 0.01,
+    seed: int | None = None,
+):
+    """Modes as a good modal fit of ``bat``'s test would give them, without the FRF stage.
+
+    The truth model's elastic modes at the impact points (the accelerometer's own mass and
+    position included), mass-normalised, with relative Gaussian noise on frequencies and
+    shape entries (``shape_noise`` times each shape's RMS). Scaled as the fitter scales them,
+    through the driving-point FRF: an accelerometer off its labelled point multiplies each
+    shape by sqrt(phi(sensor) / phi(driving point)) (``change_model.driving_point_scale``).
+    For fast tests of the updating stage; the full path (simulate_test + ema fit) is the real
+    thing.
+    """
+    from updating.correlate.measured import MeasuredModes
+    from updating.inspect.model import driving_point_scale
+
+    model = bat.truth_model()
+    modes = model_modes(model, n_modes=min(model.n_dof, n_modes + 4))
+    elastic = np.flatnonzero(modes.freq_hz >= 20.0)[:n_modes]
+    points = np.asarray(bat.points_m, dtype=float)
+    shapes = displacement_at(model, modes.shapes[:, elastic], points)
+    s = bat.sensor_point()
+    at_sensor = displacement_at(model, modes.shapes[:, elastic], [points[s] + bat.sensor_offset_m])
+    shapes = shapes * driving_point_scale(at_sensor[0], shapes[s])
+    rng = np.random.default_rng(seed)
+    f = modes.freq_hz[elastic] * (1 + freq_noise * rng.standard_normal(elastic.size))
+    rms = np.sqrt(np.mean(shapes**2, axis=0))
+    shapes = shapes + shape_noise * rms * rng.standard_normal(shapes.shape)
+    zeta = damping_ratios(modes.freq_hz[elastic], bat.zeta1, bat.zeta_exponent)
+    return MeasuredModes(f, shapes, points, zeta, float(points[s]),
+                         freq_noise * f)
