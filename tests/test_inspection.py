@@ -8,8 +8,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from ema.shapes.mac import mac
-from updating.correlate.mode_pairing import pair_modes
-from updating.correlate.pairing import align_signs
+from updating.correlate.pairing import align_signs, pair_modes
 from updating.diagnose.run import diagnose
 from updating.inspect.model import ChangeParams, make_predictor
 from updating.inspect.run import inspect_retest
@@ -35,7 +34,8 @@ def test_pairing_recovers_a_permutation_and_signs():
     perm = np.array([2, 0, 4, 1, 3])
     other = -shapes[:, perm] + 0.02 * rng.standard_normal((15, 5))
     freq = np.array([150.0, 500.0, 950.0, 1500.0, 2100.0])
-    ia, ib, mac_values = pair_modes(freq, shapes, freq[perm] * 1.01, other)
+    ia, ib, mac_values = pair_modes(shapes, other, freq_a_hz=freq, freq_b_hz=freq[perm] * 1.01,
+                                    min_mac=0.8, max_rel_df=0.15)
     assert np.array_equal(ib[np.argsort(ia)], np.argsort(perm))
     assert np.all(mac_values > 0.99)
     assert np.allclose(np.diag(mac(shapes, shapes)), 1.0)

@@ -35,21 +35,6 @@ from updating.diagnose.model import (
 )
 
 
-def pair_modes(
-    measured: np.ndarray, model: np.ndarray, min_mac: float = 0.5,
-) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Pair measured and model shapes one-to-one by maximum total MAC (assignment problem).
-
-    Returns (measured index, model index, MAC) of the pairs whose MAC is at least min_mac.
-    """
-    from scipy.optimize import linear_sum_assignment
-
-    m = mac(measured, model)
-    rows, cols = linear_sum_assignment(-m)
-    keep = m[rows, cols] >= min_mac
-    return rows[keep], cols[keep], m[rows, cols][keep]
-
-
 @dataclass(frozen=True)
 class Observations:
     """The measured data a fit matches.

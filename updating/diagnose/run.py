@@ -30,7 +30,8 @@ import numpy as np
 import scipy.stats
 
 from updating.correlate.measured import MeasuredModes
-from updating.diagnose.fit import Fit, Observations, fit_model, pair_modes, shape_sigma
+from updating.correlate.pairing import pair_modes
+from updating.diagnose.fit import Fit, Observations, fit_model, shape_sigma
 from updating.diagnose.model import (
     CAUSES,
     Setup,
@@ -174,7 +175,7 @@ def observations(
     """Pair measured modes with the nominal model's; (observations, measured index, unpaired)."""
     m = measured.freq_hz.size
     nominal = solve(setup, frozenset(), start_state(setup, suspension_hz), m + 4)
-    meas_idx, model_idx, _ = pair_modes(measured.shapes, nominal.shapes, min_mac)
+    meas_idx, model_idx, _ = pair_modes(measured.shapes, nominal.shapes, min_mac=min_mac)
     order = np.argsort(measured.freq_hz[meas_idx])
     meas_idx, model_idx = meas_idx[order], model_idx[order]
     if meas_idx.size == 0:

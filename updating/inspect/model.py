@@ -127,13 +127,12 @@ def baseline_sensor_offset(
     """
     from scipy.optimize import minimize_scalar
 
-    from updating.correlate.mode_pairing import pair_modes
-    from updating.correlate.pairing import align_signs
+    from updating.correlate.pairing import align_signs, pair_modes
 
     f0, phi0 = predict(ChangeParams())
     elastic = np.flatnonzero(f0 >= 20.0)
-    jb, jm, _ = pair_modes(freq_hz, shapes, f0[elastic], phi0[:, elastic], min_mac=min_mac,
-                           max_rel_df=0.3)
+    jb, jm, _ = pair_modes(shapes, phi0[:, elastic], freq_a_hz=freq_hz, freq_b_hz=f0[elastic],
+                           min_mac=min_mac, max_rel_df=0.3)
     if jb.size == 0:
         return 0.0
     psi = shapes[:, jb]

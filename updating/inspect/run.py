@@ -27,8 +27,7 @@ import numpy as np
 from scipy.stats import f as f_dist
 
 from updating.correlate.measured import MeasuredModes
-from updating.correlate.mode_pairing import pair_modes
-from updating.correlate.pairing import align_signs
+from updating.correlate.pairing import align_signs, pair_modes
 from updating.inspect.fit import (
     MAX_NFEV_CORE,
     Differences,
@@ -81,12 +80,13 @@ def differences(
     predict, baseline: MeasuredModes, retest: MeasuredModes, min_mac: float,
 ) -> tuple[Differences, list[dict]]:
     """Pair modes (retest-baseline, baseline-reference) and form the measured changes."""
-    ib, ir, mac_br = pair_modes(baseline.freq_hz, baseline.shapes, retest.freq_hz,
-                                retest.shapes, min_mac=min_mac)
+    ib, ir, mac_br = pair_modes(baseline.shapes, retest.shapes, freq_a_hz=baseline.freq_hz,
+                                freq_b_hz=retest.freq_hz, min_mac=min_mac, max_rel_df=0.15)
     f_mod, phi_mod = predict(ChangeParams())
     elastic = np.flatnonzero(f_mod >= ELASTIC_MIN_HZ)
-    jb, jm, mac_bm = pair_modes(baseline.freq_hz, baseline.shapes, f_mod[elastic],
-                                phi_mod[:, elastic], min_mac=min_mac, max_rel_df=0.3)
+    jb, jm, mac_bm = pair_modes(baseline.shapes, phi_mod[:, elastic],
+                                freq_a_hz=baseline.freq_hz, freq_b_hz=f_mod[elastic],
+                                min_mac=min_mac, max_rel_df=0.3)
     to_model = dict(zip(jb.tolist(), elastic[jm].tolist(), strict=True))
     mac_model = dict(zip(jb.tolist(), mac_bm.tolist(), strict=True))
     keep = [k for k, b in enumerate(ib) if b in to_model]

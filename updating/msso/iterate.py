@@ -69,8 +69,8 @@ def paired_elastic(lam: np.ndarray, Phi: np.ndarray, test: ModalData, n_rigid: i
     """Model mode index paired (by MAC at the measured DOFs) with each test mode."""
     m = test.shapes_a.shape[1]
     cand = np.arange(n_rigid, min(lam.size, n_rigid + m + 6))
-    pairing = pair_modes(Phi[np.ix_(test.dofs_a, cand)], test.shapes_a)
-    return cand[pairing.model_index]
+    pairs = pair_modes(test.shapes_a, Phi[np.ix_(test.dofs_a, cand)], weak="raise")
+    return cand[pairs.index_b]
 
 
 def expansion_pass(
