@@ -28,7 +28,7 @@ from updating.model.profile import paper_profile  # noqa: E402
 from updating.model.sections import Core  # noqa: E402
 from updating.model.units import IN_TO_M  # noqa: E402
 from updating.msso.factors import zero_factors  # noqa: E402
-from updating.msso.iterate import ModalData, expansion_pass, full_modes, paired_elastic, refine  # noqa: E402
+from updating.msso.iterate import ModalData, expansion_pass, paired_elastic, refine  # noqa: E402
 from updating.msso.skyline import msso_elements  # noqa: E402
 
 
@@ -56,7 +56,8 @@ def main() -> None:
         t = model_modes(cork, 8).elastic()
         a = 2 * np.array([ref.node_at(x) for x in points])
         test = ModalData(t.freq_hz, t.shapes[a], a)
-        lam, Phi = full_modes(ref)
+        full = model_modes(ref)
+        lam, Phi = full.omega2, full.shapes
         idx = paired_elastic(lam, Phi, test, 2)
         E = serep(np.column_stack([Phi[:, :2], Phi[:, idx]]), a).expand(test.shapes_a)
         _, t_msso, m_msso = measure(lambda: msso_elements(ref, E, test.omega2))  # noqa: B023

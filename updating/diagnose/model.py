@@ -32,7 +32,6 @@ from dataclasses import dataclass, replace
 from functools import cached_property
 
 import numpy as np
-import scipy.linalg
 
 from updating.model.assembly import (
     BatModel,
@@ -43,6 +42,7 @@ from updating.model.assembly import (
 )
 from updating.model.mass_properties import mass_properties
 from updating.model.material import ISOTROPIC_E_OVER_G, Material
+from updating.model.modes import solve_modes
 from updating.model.profile import Profile
 from updating.model.reference import BatReference
 from updating.model.units import IN_TO_M
@@ -243,13 +243,12 @@ def solve(
     """Lowest ``n_elastic`` elastic modes of the model, with sensitivities to ``names``."""
     model = build(setup, active, state)
     K, M = assemble(model)
-    _, phi = scipy.linalg.eigh(K, M)
-    # Rayleigh quotients: accurate to round-off squared (phi is M-normalised by eigh)
-    lam = np.clip(np.einsum("ij,ij->j", phi, K @ phi), 0.0, None)
+    modes = solve_modes(K, M)
+    phi, lam = modes.shapes, modes.omega2
     k = min(n_elastic, model.n_dof - 2)
     sel = np.arange(2, 2 + k)
     low = np.arange(2)
-    f = np.sqrt(lam) / (2 * np.pi)
+    f = modes.freq_hz
     n_pts = interpolation_matrix(model, setup.points_m)
     p = len(names)
     dlnf = np.zeros((p, k))

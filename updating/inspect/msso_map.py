@@ -37,11 +37,12 @@ import numpy as np
 from updating.correlate.measured import MeasuredModes
 from updating.inspect.model import driving_point_scale
 from updating.model.assembly import BatModel, displacement_at
+from updating.model.modes import model_modes
 from updating.model.profile import Profile
 from updating.model.reference import BatReference
 from updating.msso.core_reading import changed_region
 from updating.msso.factors import apply_factors, choose_groups, zero_factors
-from updating.msso.iterate import ModalData, full_modes, paired_elastic, refine
+from updating.msso.iterate import ModalData, paired_elastic, refine
 from updating.msso.update import ElementUpdate, dofs_at, update_elements
 
 PRIOR_SIGMA = 0.03
@@ -97,7 +98,8 @@ def _without_driving_point_factor(
     """``modes`` with each shape divided by sqrt(phi(x_s) / phi(x_d))
     (``driving_point_scale``): phi the model's modes paired with them, x_s = ``sensor_x_m``
     where the accelerometer sat, x_d = ``modes.sensor_x_m`` the labelled driving point."""
-    lam, Phi = full_modes(model)
+    modes_m = model_modes(model)
+    lam, Phi = modes_m.omega2, modes_m.shapes
     idx = paired_elastic(lam, Phi, ModalData(modes.freq_hz, modes.shapes, dofs), 2)
     phi_s, phi_d = displacement_at(model, Phi[:, idx], [sensor_x_m, modes.sensor_x_m])
     return replace(modes, shapes=modes.shapes / driving_point_scale(phi_s, phi_d))

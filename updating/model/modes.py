@@ -46,7 +46,8 @@ def rigid_body_shapes(node_x_m: np.ndarray, M: np.ndarray) -> np.ndarray:
 def solve_modes(
     K: np.ndarray, M: np.ndarray, node_x_m: np.ndarray | None = None, n_modes: int | None = None,
 ) -> Modes:
-    """Lowest ``n_modes`` modes of (K, M) (all by default).
+    """Lowest ``n_modes`` modes of (K, M) (all by default): the one eigen-solution of the
+    project (model, diagnosis, inspection predictor and MSSO all call it).
 
     When ``node_x_m`` is given the structure is taken as free-free: its two lowest modes are
     returned as the exact rigid-body shapes at 0 Hz and the elastic modes follow.
@@ -54,7 +55,10 @@ def solve_modes(
     free = node_x_m is not None
     n = K.shape[0]
     m = n if n_modes is None else min(n, n_modes)
-    _, vec = scipy.linalg.eigh(K, M, subset_by_index=[0, m - 1])
+    # all modes: the divide-and-conquer driver (its vectors are M-orthonormal to round-off,
+    # which complete-expansion sensitivities need); a subset: the selective driver
+    subset = None if n_modes is None else [0, m - 1]
+    _, vec = scipy.linalg.eigh(K, M, subset_by_index=subset)
     # Rayleigh quotients of the vectors: the solver's eigenvalues carry an absolute error of
     # order eps * lambda_max, large for fine meshes; the quotient's error is quadratic.
     lam = np.einsum("ij,ij->j", vec, K @ vec) / np.einsum("ij,ij->j", vec, M @ vec)

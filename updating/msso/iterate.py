@@ -27,11 +27,12 @@ from __future__ import annotations
 from dataclasses import dataclass, replace
 
 import numpy as np
-import scipy.linalg
 
+from ema.shapes.mac import mac
 from updating.correlate.pairing import align_signs, pair_modes
 from updating.correlate.serep import serep
-from updating.model.assembly import BatModel, assemble
+from updating.model.assembly import BatModel
+from updating.model.modes import model_modes
 from updating.msso.factors import (
     GROUP_PARTS,
     ElementFactors,
@@ -57,13 +58,6 @@ class ModalData:
         return (2 * np.pi * np.asarray(self.freq_hz)) ** 2
 
 
-def full_modes(model: BatModel) -> tuple[np.ndarray, np.ndarray]:
-    """All eigenpairs (lam ascending, Phi mass-normalised) of the assembled model."""
-    K, M = assemble(model)
-    lam, Phi = scipy.linalg.eigh(K, M)
-    return lam, Phi
-
-
 def paired_elastic(lam: np.ndarray, Phi: np.ndarray, test: ModalData, n_rigid: int
                    ) -> np.ndarray:
     """Model mode index paired (by MAC at the measured DOFs) with each test mode."""
@@ -81,7 +75,8 @@ def expansion_pass(
     Returns the composed factors, the MSSO result and the SEREP condition number.
     """
     updated = apply_factors(model, factors)
-    lam, Phi = full_modes(updated)
+    modes = model_modes(updated)
+    lam, Phi = modes.omega2, modes.shapes
     idx = paired_elastic(lam, Phi, test, n_rigid)
     basis = np.column_stack([Phi[:, :n_rigid], Phi[:, idx]])
     T = serep(basis, test.dofs_a)
@@ -144,7 +139,8 @@ def _evaluate(model, test, y, groups, n_rigid, scales, want_jac, w):
     e = model.n_elements
     f = factors_from_vector(y, groups, e)
     mdl = apply_factors(model, f)
-    lam_all, Phi = full_modes(mdl)
+    modes = model_modes(mdl)
+    lam_all, Phi = modes.omega2, modes.shapes
     idx = paired_elastic(lam_all, Phi, test, n_rigid)
     lam = lam_all[idx]
     phi_a = align_signs(test.shapes_a, Phi[np.ix_(test.dofs_a, idx)])
@@ -316,8 +312,6 @@ def _levenberg_marquardt(
     std = factors_from_vector(np.sqrt(np.clip(cov_diag, 0, None)), groups, e)
     psi = test.shapes_a
     shape_err = np.linalg.norm(scales * phi_a - psi, axis=0) / np.linalg.norm(psi, axis=0)
-    from updating.correlate.pairing import mac
-
     macs = np.diag(mac(phi_a, psi))
     chi2 = 2 * cost - float(np.sum((w["L"] @ y) ** 2))
     n_data = m + test.shapes_a.size - (0 if mass_normalised else m) + w["G"].shape[0]

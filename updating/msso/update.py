@@ -14,12 +14,12 @@ import numpy as np
 from updating.correlate.pairing import align_signs, pseudo_orthogonality
 from updating.correlate.serep import serep
 from updating.model.assembly import BatModel
+from updating.model.modes import model_modes
 from updating.msso.factors import ElementFactors, choose_groups, zero_factors
 from updating.msso.iterate import (
     ModalData,
     RefineResult,
     expansion_pass,
-    full_modes,
     paired_elastic,
     refine,
     with_noise,
@@ -84,7 +84,8 @@ def mass_normalise(model: BatModel, test: ModalData, n_rigid: int = 2) -> ModalD
     """Scale unscaled test shapes to unit modal mass with the SEREP-reduced reference mass."""
     from updating.model.assembly import assemble
 
-    lam, Phi = full_modes(model)
+    modes = model_modes(model)
+    lam, Phi = modes.omega2, modes.shapes
     idx = paired_elastic(lam, Phi, test, n_rigid)
     T = serep(np.column_stack([Phi[:, :n_rigid], Phi[:, idx]]), test.dofs_a)
     Ma = T.reduce(assemble(model)[1])
@@ -163,7 +164,8 @@ def update_elements(
     # scaling check: POC of the (scaled) test shapes with the SEREP-reduced reference mass
     from updating.model.assembly import assemble
 
-    lam, Phi = full_modes(model)
+    modes = model_modes(model)
+    lam, Phi = modes.omega2, modes.shapes
     idx = paired_elastic(lam, Phi, test, 2)
     T = serep(np.column_stack([Phi[:, :2], Phi[:, idx]]), test.dofs_a)
     sa = align_signs(Phi[np.ix_(test.dofs_a, idx)], test.shapes_a)
