@@ -12,7 +12,8 @@ accelerometer shows in the amplitude and curvature near the driving point). sigm
 relative frequency uncertainty, sigma_s that of a shape entry relative to its mode's RMS,
 sigma_b that of a (heavily damped) suspension frequency.
 Solved by scipy's trust-region reflective least squares with the analytic Jacobian
-(updating.diagnose.model); parameter covariance s^2 (J^T J)^-1 with s^2 = SSR / (N - p).
+(updating.diagnose.model), through updating.lsq; parameter covariance s^2 (J^T J)^+ with
+s^2 = SSR / (N - p) (updating.lsq.covariance).
 """
 
 from __future__ import annotations
@@ -20,7 +21,6 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
-import scipy.optimize
 
 from ema.shapes.mac import mac
 from updating.diagnose.model import (
@@ -33,6 +33,7 @@ from updating.diagnose.model import (
     solve,
     to_vector,
 )
+from updating.lsq import covariance, solve_bounded
 
 
 @dataclass(frozen=True)
@@ -146,19 +147,16 @@ def fit_model(
     if names:
         lo = np.array([BOUNDS[n][0] for n in names])
         hi = np.array([BOUNDS[n][1] for n in names])
-        x0 = np.clip(to_vector(start, names), lo + 1e-9 * (hi - lo), hi - 1e-9 * (hi - lo))
-        out = scipy.optimize.least_squares(
-            lambda x: evaluate(x)[0], x0, jac=lambda x: evaluate(x)[1], bounds=(lo, hi),
-            x_scale="jac", method="trf", xtol=1e-10, ftol=1e-12, gtol=1e-12, max_nfev=60)
-        x = out.x
+        x = solve_bounded(
+            lambda x: evaluate(x)[0], to_vector(start, names), lo, hi,
+            jac=lambda x: evaluate(x)[1], margin=1e-9 * (hi - lo), x_scale="jac", xtol=1e-10,
+            ftol=1e-12, gtol=1e-12, max_nfev=60).x
     else:
         x = np.zeros(0)
     res, jac, sol = evaluate(x)
-    n, p, m = res.size, len(names), obs.freq_hz.size
+    m = obs.freq_hz.size
     k = m + obs.shapes.size
-    ssr = float(res @ res)
-    s2 = ssr / (n - p) if n > p else obs.sigma_f**2
-    cov = s2 * np.linalg.pinv(jac.T @ jac) if p else np.zeros((0, 0))
+    cov = covariance(jac, res, s2_default=obs.sigma_f**2)
     model_hz = sol.elastic_hz[obs.model_index]
     shapes = sol.shapes[:, obs.model_index]
     mac_values = np.diag(mac(obs.shapes, shapes))

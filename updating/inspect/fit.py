@@ -31,9 +31,10 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.optimize import least_squares
 
 from updating.inspect.model import ChangeParams
+from updating.lsq import covariance as lsq_covariance
+from updating.lsq import solve_bounded
 from updating.model.profile import Profile
 from updating.model.sections import Core
 from updating.model.units import IN_TO_M
@@ -173,10 +174,9 @@ def residual_function(
 def solve(fun: Callable, x0: np.ndarray, lower: np.ndarray, upper: np.ndarray,
           space: ParamSpace, n_freq: int, max_nfev: int | None = None) -> Fit:
     """Bounded Gauss-Newton (trust-region reflective) from x0."""
-    x0 = np.clip(x0, lower + 1e-9, upper - 1e-9)
-    res = least_squares(fun, x0, bounds=(lower, upper), method="trf", diff_step=1e-6,
-                        x_scale=1.0, ftol=1e-6, xtol=1e-6, max_nfev=max_nfev)
-    return Fit(res.x, space.params(res.x), res.fun, res.jac, n_freq)
+    res = solve_bounded(fun, x0, lower, upper, diff_step=1e-6, x_scale=1.0, ftol=1e-6,
+                        xtol=1e-6, max_nfev=max_nfev)
+    return Fit(res.x, space.params(res.x), res.residual, res.jac, n_freq)
 
 
 def fit_null(predict, diff: Differences, space: ParamSpace, sigma_rel: float,
@@ -263,5 +263,4 @@ def shape_noise(fit: Fit, diff: Differences, sigma_rel: float, n_params: int) ->
 
 def covariance(fit: Fit, dof: int) -> np.ndarray:
     """s^2 (J^T J)^-1 with s^2 = RSS / dof (parameters in x units)."""
-    s2 = fit.rss / dof
-    return s2 * np.linalg.pinv(fit.jac.T @ fit.jac)
+    return lsq_covariance(fit.jac, fit.residual, dof)

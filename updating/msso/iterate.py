@@ -31,6 +31,7 @@ import numpy as np
 from ema.shapes.mac import mac
 from updating.correlate.pairing import align_signs, pair_modes
 from updating.correlate.serep import serep
+from updating.lsq import covariance
 from updating.model.assembly import BatModel
 from updating.model.modes import model_modes
 from updating.msso.factors import (
@@ -308,7 +309,7 @@ def _levenberg_marquardt(
             break
     sv = np.linalg.svd(J[:J.shape[0] - w["L"].shape[0]], compute_uv=False)
     rank = int(np.sum(sv > 1e-8 * sv[0]))
-    cov_diag = np.diag(np.linalg.pinv(J.T @ J, rcond=1e-12))[:y.size]
+    cov_diag = np.diag(covariance(J, rcond=1e-12))[:y.size]
     std = factors_from_vector(np.sqrt(np.clip(cov_diag, 0, None)), groups, e)
     psi = test.shapes_a
     shape_err = np.linalg.norm(scales * phi_a - psi, axis=0) / np.linalg.norm(psi, axis=0)
