@@ -12,6 +12,7 @@ from pathlib import Path
 import numpy as np
 
 from ema.io.atomic_write import atomic_write
+from updating.correlate.measured import sampled_modes, with_noise
 from updating.model.assembly import BatModel, build_model
 from updating.model.material import paper_material
 from updating.model.modes import model_modes
@@ -20,7 +21,6 @@ from updating.model.sections import Core
 from updating.model.units import IN_TO_M
 from updating.msso.core_reading import CoreReading, read_core
 from updating.msso.factors import ElementFactors
-from updating.msso.iterate import ModalData, with_noise
 from updating.msso.update import ElementUpdate, update_elements
 
 PAPER = {"alpha_mean": -0.0918, "beta_mean": -0.0167, "core_diameter_in": 0.971,
@@ -57,13 +57,13 @@ def run_paper_case(n_modes: int = 6, noise_pct: float = 0.0, seed: int = 0) -> P
                        core=Core(IN_TO_M, 10 * IN_TO_M, 1 / 3, 0.0, IN_TO_M))
     t = model_modes(cork, n_modes + 2).elastic()
     a = cork.translational_dofs
-    test = ModalData(t.freq_hz, t.shapes[a], a)
+    test = sampled_modes(t, a, cork.node_x_m)
     if noise_pct > 0:
         test = with_noise(test, noise_pct / 100, 5e-4, np.random.default_rng(seed))
         sig = {"shape_sigma": noise_pct / 100, "freq_sigma": 5e-4}
     else:
         sig = {"shape_sigma": 1e-6, "freq_sigma": 1e-7, "prior_sigma": None}
-    u = update_elements(ref, test.freq_hz, test.shapes_a, a, **sig)
+    u = update_elements(ref, test.freq_hz, test.shapes, a, **sig)
     from dataclasses import replace
 
     one = replace(u, factors=u.one_pass, std=None, draws=None)

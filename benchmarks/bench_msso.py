@@ -20,6 +20,8 @@ import numpy as np  # noqa: E402
 
 sys.path.insert(0, ".")
 
+from updating.correlate.measured import sampled_modes  # noqa: E402
+from updating.correlate.pairing import paired_elastic  # noqa: E402
 from updating.correlate.serep import serep  # noqa: E402
 from updating.model.assembly import build_model  # noqa: E402
 from updating.model.material import paper_material  # noqa: E402
@@ -27,8 +29,9 @@ from updating.model.modes import model_modes  # noqa: E402
 from updating.model.profile import paper_profile  # noqa: E402
 from updating.model.sections import Core  # noqa: E402
 from updating.model.units import IN_TO_M  # noqa: E402
+from updating.msso.expansion import expansion_pass  # noqa: E402
 from updating.msso.factors import zero_factors  # noqa: E402
-from updating.msso.iterate import ModalData, expansion_pass, paired_elastic, refine  # noqa: E402
+from updating.msso.iterate import refine  # noqa: E402
 from updating.msso.skyline import msso_elements  # noqa: E402
 
 
@@ -55,11 +58,10 @@ def main() -> None:
                            core=Core(IN_TO_M, 10 * IN_TO_M, 1 / 3, 0.0, IN_TO_M))
         t = model_modes(cork, 8).elastic()
         a = 2 * np.array([ref.node_at(x) for x in points])
-        test = ModalData(t.freq_hz, t.shapes[a], a)
-        full = model_modes(ref)
-        lam, Phi = full.omega2, full.shapes
-        idx = paired_elastic(lam, Phi, test, 2)
-        E = serep(np.column_stack([Phi[:, :2], Phi[:, idx]]), a).expand(test.shapes_a)
+        test = sampled_modes(t, a, ref.node_x_m)
+        Phi = model_modes(ref).shapes
+        idx = paired_elastic(Phi, test.shapes, a, 2)
+        E = serep(np.column_stack([Phi[:, :2], Phi[:, idx]]), a).expand(test.shapes)
         _, t_msso, m_msso = measure(lambda: msso_elements(ref, E, test.omega2))  # noqa: B023
         (f1, _, _), t_pass, m_pass = measure(
             lambda: expansion_pass(ref, test, zero_factors(ref.n_elements)))  # noqa: B023

@@ -20,6 +20,7 @@ import numpy as np  # noqa: E402
 
 sys.path.insert(0, ".")
 
+from updating.correlate.measured import sampled_modes, with_noise  # noqa: E402
 from updating.model.assembly import build_model  # noqa: E402
 from updating.model.material import paper_material  # noqa: E402
 from updating.model.modes import model_modes  # noqa: E402
@@ -27,7 +28,6 @@ from updating.model.profile import paper_profile  # noqa: E402
 from updating.model.sections import Core  # noqa: E402
 from updating.model.units import IN_TO_M  # noqa: E402
 from updating.msso.core_reading import changed_region, core_from_factors  # noqa: E402
-from updating.msso.iterate import ModalData, with_noise  # noqa: E402
 from updating.msso.update import update_elements  # noqa: E402
 
 TRUE = {"alpha": -(2 / 3) / 2.7**2, "beta": -(1 / 2.7) ** 4, "d": 1.0, "r": 1 / 3}
@@ -41,9 +41,9 @@ def one(args):
                        core=Core(IN_TO_M, 10 * IN_TO_M, 1 / 3, 0.0, IN_TO_M))
     t = model_modes(cork, m + 2).elastic()
     a = cork.translational_dofs
-    test = with_noise(ModalData(t.freq_hz, t.shapes[a], a), noise, 5e-4,
+    test = with_noise(sampled_modes(t, a, cork.node_x_m), noise, 5e-4,
                       np.random.default_rng(seed))
-    u = update_elements(ref, test.freq_hz, test.shapes_a, a, freq_sigma=5e-4, shape_sigma=noise)
+    u = update_elements(ref, test.freq_hz, test.shapes, a, freq_sigma=5e-4, shape_sigma=noise)
     out = {}
     for name, f in (("one_pass", u.one_pass), ("refined", u.factors)):
         el, _ = changed_region(f.beta_bend, f.alpha_trans)

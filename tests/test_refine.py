@@ -5,6 +5,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from updating.correlate.measured import dofs_at, sampled_modes, with_noise
 from updating.model.assembly import build_model
 from updating.model.mass_properties import mass_properties
 from updating.model.material import Material, paper_material
@@ -13,9 +14,9 @@ from updating.model.profile import paper_profile
 from updating.model.sections import Core, cowper_k
 from updating.model.units import IN_TO_M
 from updating.msso.core_reading import read_core
+from updating.msso.expansion import expansion_pass, iterate_expansion
 from updating.msso.factors import zero_factors
-from updating.msso.iterate import ModalData, expansion_pass, iterate_expansion, with_noise
-from updating.msso.update import dofs_at, update_elements
+from updating.msso.update import update_elements
 
 ALPHA = -(2 / 3) / 2.7**2
 BETA = -(1 / 2.7) ** 4
@@ -57,7 +58,7 @@ def test_true_factors_are_a_fixed_point_of_iterated_expansion(paper):
     from zero the passes move the factors (the one-pass expansion error)."""
     ref, corked, t = paper
     a = ref.translational_dofs
-    test = ModalData(t.freq_hz[:6], t.shapes[a, :6], a)
+    test = sampled_modes(t, a, ref.node_x_m).select(np.arange(6))
     truth = zero_factors(33)
     truth.alpha_trans[CORE] = ALPHA
     truth.alpha_rot[CORE] = ALPHA
@@ -122,9 +123,9 @@ def test_timoshenko_bending_factor():
 def test_noisy_data_find_the_core(paper):
     ref, _, t = paper
     a = ref.translational_dofs
-    test = with_noise(ModalData(t.freq_hz[:6], t.shapes[a, :6], a), 1e-3, 5e-4,
+    test = with_noise(sampled_modes(t, a, ref.node_x_m).select(np.arange(6)), 1e-3, 5e-4,
                       np.random.default_rng(7))
-    u = update_elements(ref, test.freq_hz, test.shapes_a, a, shape_sigma=1e-3)
+    u = update_elements(ref, test.freq_hz, test.shapes, a, shape_sigma=1e-3)
     c = read_core(ref, u)
     assert c.found
     assert abs(c.start_m / IN_TO_M - 23) <= 1 and abs(c.end_m / IN_TO_M - 32) <= 1
@@ -135,9 +136,9 @@ def test_unaltered_bat_gives_factors_within_the_noise(paper):
     ref, _, _ = paper
     t = model_modes(ref, 8).elastic()
     a = ref.translational_dofs
-    test = with_noise(ModalData(t.freq_hz[:5], t.shapes[a, :5], a), 1e-3, 5e-4,
+    test = with_noise(sampled_modes(t, a, ref.node_x_m).select(np.arange(5)), 1e-3, 5e-4,
                       np.random.default_rng(2))
-    u = update_elements(ref, test.freq_hz, test.shapes_a, a, shape_sigma=1e-3, n_resample=3,
+    u = update_elements(ref, test.freq_hz, test.shapes, a, shape_sigma=1e-3, n_resample=3,
                         rng=np.random.default_rng(5))
     assert np.max(np.abs(u.beta_bend)) < 0.01 and np.max(np.abs(u.alpha_trans)) < 0.01
     assert np.all(np.abs(u.beta_bend) < 4 * u.std.beta_bend + 1e-3)

@@ -1,10 +1,20 @@
-"""Measured modes as the updating stage consumes them (from any fitter)."""
+"""Measured modes as the updating stage consumes them (from any fitter), and where their
+points sit on a model's mesh.
+
+``MeasuredModes`` is the one measured mode-set type of ``updating``: ``from_fit`` converts an
+``ema`` modal fit (``ema.fit.ModalFit``) into it, ``sampled_modes`` turns a model's modes at
+chosen DOFs into a noise-free "test" (the paper's case), ``with_noise`` perturbs one.
+The model side is ``updating.model.modes.Modes`` (the FE eigen-solution).
+"""
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
+
+from updating.model.assembly import BatModel
+from updating.model.modes import Modes
 
 
 @dataclass(frozen=True)
@@ -16,7 +26,8 @@ class MeasuredModes:
         shapes: (n_points, m) real mass-normalised shapes at the impact points, 1/sqrt(kg).
         x_m: (n_points,) positions of the points from the knob end, m.
         damping_ratio: (m,) modal damping ratios.
-        sensor_x_m: position of the accelerometer (the driving point), m.
+        sensor_x_m: position of the accelerometer (the driving point), m (NaN: none, as for
+            modes sampled from a model).
         freq_std_hz: (m,) standard uncertainty of the frequencies, or None.
     """
 
@@ -26,6 +37,11 @@ class MeasuredModes:
     damping_ratio: np.ndarray
     sensor_x_m: float
     freq_std_hz: np.ndarray | None = None
+
+    @property
+    def omega2(self) -> np.ndarray:
+        """(2 pi f)^2, rad^2/s^2: the eigenvalues the test measured."""
+        return (2 * np.pi * np.asarray(self.freq_hz)) ** 2
 
     def select(self, idx) -> MeasuredModes:
         """A subset of the modes."""
@@ -45,3 +61,32 @@ def from_fit(fit, sensor_x_m: float, min_hz: float = 20.0) -> MeasuredModes:
         np.asarray(fit.freq_hz)[keep], np.asarray(fit.real_shapes)[:, keep],
         np.asarray(fit.x_m), np.asarray(fit.damping_ratio)[keep], float(sensor_x_m),
         None if std is None else np.asarray(std)[keep])
+
+
+def sampled_modes(modes: Modes, dofs: np.ndarray, node_x_m: np.ndarray) -> MeasuredModes:
+    """A model's modes read at translational ``dofs`` (2 x node index) as a noise-free test:
+    shapes ``modes.shapes[dofs]`` at x = ``node_x_m[dofs // 2]``, no damping, no sensor."""
+    dofs = np.asarray(dofs, dtype=int)
+    f = np.asarray(modes.freq_hz, dtype=float)
+    return MeasuredModes(f, np.asarray(modes.shapes)[dofs], np.asarray(node_x_m)[dofs // 2],
+                         np.zeros(f.size), float("nan"))
+
+
+def with_noise(test: MeasuredModes, shape_sigma: float, freq_sigma: float,
+               rng: np.random.Generator) -> MeasuredModes:
+    """Test modes with Gaussian noise: shapes + N(0, (shape_sigma rms_r)^2), f (1 + N(0, s^2))."""
+    rms = np.sqrt(np.mean(test.shapes**2, axis=0))
+    shapes = test.shapes + rng.standard_normal(test.shapes.shape) * shape_sigma * rms
+    freq = np.asarray(test.freq_hz) * (1 + freq_sigma * rng.standard_normal(len(test.freq_hz)))
+    return replace(test, freq_hz=freq, shapes=shapes)
+
+
+def dofs_at(model: BatModel, x_m, tol_m: float = 1e-6) -> np.ndarray:
+    """Translational DOFs of the nodes at x_m (each must be a mesh node within tol_m)."""
+    x = np.atleast_1d(np.asarray(x_m, dtype=float))
+    node = np.abs(model.node_x_m[None, :] - x[:, None]).argmin(axis=1)
+    bad = np.flatnonzero(np.abs(model.node_x_m[node] - x) > tol_m)
+    if bad.size:
+        raise ValueError(f"measured point x = {x[bad[0]]:.4f} m is not a mesh node (build the "
+                         "model with stations_m at the measured points)")
+    return 2 * node

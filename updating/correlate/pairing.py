@@ -125,3 +125,30 @@ def pseudo_orthogonality(shapes_a: np.ndarray, reduced_mass: np.ndarray) -> Orth
     off = poc - np.diag(np.diag(poc))
     return Orthogonality(poc, float(np.max(np.abs(off), initial=0.0)),
                          float(np.max(np.abs(np.diag(poc) - 1.0))))
+
+
+def paired_elastic(model_shapes: np.ndarray, test_shapes: np.ndarray, dofs: np.ndarray,
+                   n_rigid: int, spare: int = 6) -> np.ndarray:
+    """Index of the model mode paired (by MAC at ``dofs``) with each test mode.
+
+    Parameters
+    ----------
+    model_shapes : (n_dof, k) array
+        The model's modes, ascending, the first ``n_rigid`` rigid (or suspension) ones.
+    test_shapes : (a, m) array
+        Measured shapes at the translational DOFs ``dofs`` (a,).
+    n_rigid : int
+        Leading model modes that are never candidates.
+    spare : int
+        Candidates beyond the m lowest elastic model modes (a mode pushed up the order).
+
+    Returns
+    -------
+    (m,) int array
+        Column of ``model_shapes`` for each test mode; ValueError if one pairs with none
+        (``pair_modes`` with weak="raise").
+    """
+    m = test_shapes.shape[1]
+    cand = np.arange(n_rigid, min(model_shapes.shape[1], n_rigid + m + spare))
+    pairs = pair_modes(test_shapes, model_shapes[np.ix_(dofs, cand)], weak="raise")
+    return cand[pairs.index_b]

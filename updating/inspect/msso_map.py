@@ -34,7 +34,8 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from updating.correlate.measured import MeasuredModes
+from updating.correlate.measured import MeasuredModes, dofs_at
+from updating.correlate.pairing import paired_elastic
 from updating.inspect.model import driving_point_scale
 from updating.model.assembly import BatModel, displacement_at
 from updating.model.modes import model_modes
@@ -42,8 +43,8 @@ from updating.model.profile import Profile
 from updating.model.reference import BatReference
 from updating.msso.core_reading import changed_region
 from updating.msso.factors import apply_factors, choose_groups, zero_factors
-from updating.msso.iterate import ModalData, paired_elastic, refine
-from updating.msso.update import ElementUpdate, dofs_at, update_elements
+from updating.msso.iterate import refine
+from updating.msso.update import ElementUpdate, update_elements
 
 PRIOR_SIGMA = 0.03
 """Smoothness prior of the map's refinement (first differences of neighbouring factors):
@@ -98,9 +99,8 @@ def _without_driving_point_factor(
     """``modes`` with each shape divided by sqrt(phi(x_s) / phi(x_d))
     (``driving_point_scale``): phi the model's modes paired with them, x_s = ``sensor_x_m``
     where the accelerometer sat, x_d = ``modes.sensor_x_m`` the labelled driving point."""
-    modes_m = model_modes(model)
-    lam, Phi = modes_m.omega2, modes_m.shapes
-    idx = paired_elastic(lam, Phi, ModalData(modes.freq_hz, modes.shapes, dofs), 2)
+    Phi = model_modes(model).shapes
+    idx = paired_elastic(Phi, modes.shapes, dofs, 2)
     phi_s, phi_d = displacement_at(model, Phi[:, idx], [sensor_x_m, modes.sensor_x_m])
     return replace(modes, shapes=modes.shapes / driving_point_scale(phi_s, phi_d))
 
@@ -112,9 +112,8 @@ def _update(model, modes: MeasuredModes, dofs, kw) -> ElementUpdate:
     if rr.chi2_data <= RESTART_CHI2 * rr.n_data:
         return u
     groups = choose_groups(model, kw["stiffness"], kw["mass"])
-    test = ModalData(np.asarray(modes.freq_hz, float), np.asarray(modes.shapes, float), dofs)
     try:
-        r0 = refine(model, test, zero_factors(model.n_elements), groups,
+        r0 = refine(model, modes, zero_factors(model.n_elements), groups,
                     freq_sigma=kw["freq_sigma"], shape_sigma=kw["shape_sigma"],
                     prior_sigma=kw["prior_sigma"], mass_normalised=kw["mass_normalised"])
     except ValueError:  # modes no longer pair from that start either

@@ -1,10 +1,9 @@
-"""Beyond one MSSO pass: iterated SEREP expansion and a nonlinear least-squares refinement.
+"""Beyond one MSSO pass: the nonlinear least-squares refinement of the element factors.
 
-Iterated expansion: expand the test shapes with the *updated* model's modes, solve MSSO again
-relative to the updated model, compose the factors (1+y) <- (1+y)(1+dy); repeat.
+(The SEREP + MSSO passes it starts from are in updating.msso.expansion.)
 
 Refinement: Levenberg-Marquardt fit of the exact model (sections rebuilt with the factors,
-``fe_model.scale_sections``) to the measured data directly, with residuals
+``updating.model.assembly.scale_sections``) to the measured data directly, with residuals
 
     r_f = (lam_r(y) / lam_r^test - 1) / (2 sigma_f)
     r_s = (c_r phi_r(y)[a] - psi_r) / (sigma_s rms(psi_r))      (c_r = 1 if mass-normalised)
@@ -24,13 +23,13 @@ with every factor of a group moved by +-h gives all of that group's element deri
 
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 
 import numpy as np
 
 from ema.shapes.mac import mac
-from updating.correlate.pairing import align_signs, pair_modes
-from updating.correlate.serep import serep
+from updating.correlate.measured import MeasuredModes, dofs_at
+from updating.correlate.pairing import align_signs, paired_elastic
 from updating.lsq import covariance
 from updating.model.assembly import BatModel
 from updating.model.modes import model_modes
@@ -39,68 +38,9 @@ from updating.msso.factors import (
     ElementFactors,
     apply_factors,
     factors_from_vector,
-    zero_factors,
 )
-from updating.msso.skyline import MssoResult, msso_elements
 
 FD_STEP = 1e-5
-
-
-@dataclass(frozen=True)
-class ModalData:
-    """Measured modes: natural frequencies (m,), real shapes (a, m) at translational DOFs."""
-
-    freq_hz: np.ndarray
-    shapes_a: np.ndarray
-    dofs_a: np.ndarray
-
-    @property
-    def omega2(self) -> np.ndarray:
-        return (2 * np.pi * np.asarray(self.freq_hz)) ** 2
-
-
-def paired_elastic(lam: np.ndarray, Phi: np.ndarray, test: ModalData, n_rigid: int
-                   ) -> np.ndarray:
-    """Model mode index paired (by MAC at the measured DOFs) with each test mode."""
-    m = test.shapes_a.shape[1]
-    cand = np.arange(n_rigid, min(lam.size, n_rigid + m + 6))
-    pairs = pair_modes(test.shapes_a, Phi[np.ix_(test.dofs_a, cand)], weak="raise")
-    return cand[pairs.index_b]
-
-
-def expansion_pass(
-    model: BatModel, test: ModalData, factors: ElementFactors, n_rigid: int = 2, **msso_kw,
-) -> tuple[ElementFactors, MssoResult, float]:
-    """One SEREP + MSSO pass relative to the model updated by ``factors``.
-
-    Returns the composed factors, the MSSO result and the SEREP condition number.
-    """
-    updated = apply_factors(model, factors)
-    modes = model_modes(updated)
-    lam, Phi = modes.omega2, modes.shapes
-    idx = paired_elastic(lam, Phi, test, n_rigid)
-    basis = np.column_stack([Phi[:, :n_rigid], Phi[:, idx]])
-    T = serep(basis, test.dofs_a)
-    shapes = align_signs(Phi[np.ix_(test.dofs_a, idx)], test.shapes_a)
-    res = msso_elements(updated, T.expand(shapes), test.omega2, **msso_kw)
-    return factors.compose(res.factors), res, T.cond
-
-
-def iterate_expansion(
-    model: BatModel, test: ModalData, n_iter: int = 5, tol: float = 1e-6, **msso_kw,
-) -> tuple[ElementFactors, list[MssoResult]]:
-    """Repeated expansion passes until the largest factor increment is below ``tol``."""
-    f = zero_factors(model.n_elements)
-    results = []
-    for _ in range(n_iter):
-        f_new, res, _ = expansion_pass(model, test, f, **msso_kw)
-        results.append(res)
-        step = max(np.max(np.abs(a - b)) for a, b in zip(f_new.as_tuple(), f.as_tuple(),
-                                                          strict=True))
-        f = f_new
-        if step < tol:
-            break
-    return f, results
 
 
 @dataclass(frozen=True)
@@ -142,24 +82,25 @@ def _evaluate(model, test, y, groups, n_rigid, scales, want_jac, w):
     mdl = apply_factors(model, f)
     modes = model_modes(mdl)
     lam_all, Phi = modes.omega2, modes.shapes
-    idx = paired_elastic(lam_all, Phi, test, n_rigid)
+    dofs_a = dofs_at(model, test.x_m)
+    idx = paired_elastic(Phi, test.shapes, dofs_a, n_rigid)
     lam = lam_all[idx]
-    phi_a = align_signs(test.shapes_a, Phi[np.ix_(test.dofs_a, idx)])
-    Phi[:, idx] = Phi[:, idx] * np.sign(np.sum(phi_a * Phi[np.ix_(test.dofs_a, idx)], axis=0))
+    phi_a = align_signs(test.shapes, Phi[np.ix_(dofs_a, idx)])
+    Phi[:, idx] = Phi[:, idx] * np.sign(np.sum(phi_a * Phi[np.ix_(dofs_a, idx)], axis=0))
     lam_t = test.omega2
-    psi = test.shapes_a
+    psi = test.shapes
     rms = np.sqrt(np.mean(psi**2, axis=0))
     r_f = (lam / lam_t - 1) * w["f"]
     r_s = ((scales * phi_a - psi) / rms * w["s"]).ravel(order="F")
     r = np.concatenate([r_f, r_s, w["G"] @ y + w["g0"], w["L"] @ y])
     if not want_jac:
         return r, (lam, phi_a, f)
-    m, a = idx.size, test.dofs_a.size
+    m, a = idx.size, dofs_a.size
     np_ = len(groups) * e
     J_f = np.zeros((m, np_))
     J_s = np.zeros((a * m, np_))
     dofs = mdl.dofs
-    Phi_a = Phi[test.dofs_a]
+    Phi_a = Phi[dofs_a]
     for k, g in enumerate(groups):
         dK, dM = _element_derivatives(model, f, g)
         cols = slice(k * e, (k + 1) * e)
@@ -218,7 +159,7 @@ AUTO_PRIORS = (0.01, 0.1, 1.0, None)
 
 
 def refine(
-    model: BatModel, test: ModalData, seed: ElementFactors, groups: tuple[str, ...], *,
+    model: BatModel, test: MeasuredModes, seed: ElementFactors, groups: tuple[str, ...], *,
     mass_normalised: bool = True, freq_sigma: float = 5e-4, shape_sigma: float = 1e-2,
     prior_sigma: float | str | None = "auto", weighed_mass_kg: float | None = None,
     mass_sigma: float = 1e-3, n_rigid: int = 2, max_iter: int = 60, tol: float = 1e-12,
@@ -252,7 +193,7 @@ def refine(
 
 
 def _levenberg_marquardt(
-    model: BatModel, test: ModalData, seed: ElementFactors, groups: tuple[str, ...], *,
+    model: BatModel, test: MeasuredModes, seed: ElementFactors, groups: tuple[str, ...], *,
     mass_normalised: bool, freq_sigma: float, shape_sigma: float, prior_sigma: float | None,
     weighed_mass_kg: float | None, mass_sigma: float, n_rigid: int, max_iter: int, tol: float,
     lower: float,
@@ -262,16 +203,16 @@ def _levenberg_marquardt(
          "L": prior_matrix(e, len(groups), prior_sigma)}
     w["G"], w["g0"] = mass_rows(model, groups, weighed_mass_kg, mass_sigma)
     y = seed.vector(groups).copy()
-    m = test.shapes_a.shape[1]
+    m = test.shapes.shape[1]
     scales = np.ones(m)
     if not mass_normalised:
         _, (_, phi_a, _) = _evaluate(model, test, y, groups, n_rigid, scales, False, w)
-        scales = np.sum(phi_a * test.shapes_a, axis=0) / np.sum(phi_a**2, axis=0)
+        scales = np.sum(phi_a * test.shapes, axis=0) / np.sum(phi_a**2, axis=0)
     mu, converged, it = 1e-3, False, 0
     r, J, (lam, phi_a, f) = _evaluate(model, test, y, groups, n_rigid, scales, True, w)
     if not mass_normalised:
         J = np.hstack([J, np.vstack([np.zeros((m, m)),
-                                     _scale_jacobian(phi_a, test.shapes_a) * w["s"],
+                                     _scale_jacobian(phi_a, test.shapes) * w["s"],
                                      np.zeros((w["G"].shape[0] + w["L"].shape[0], m))])])
     cost = 0.5 * float(r @ r)
     for it in range(1, max_iter + 1):  # noqa: B007
@@ -302,7 +243,7 @@ def _levenberg_marquardt(
         r, J, (lam, phi_a, f) = _evaluate(model, test, y, groups, n_rigid, scales, True, w)
         if not mass_normalised:
             J = np.hstack([J, np.vstack([np.zeros((m, m)),
-                                         _scale_jacobian(phi_a, test.shapes_a) * w["s"],
+                                         _scale_jacobian(phi_a, test.shapes) * w["s"],
                                          np.zeros((w["G"].shape[0] + w["L"].shape[0], m))])])
         if rel < tol or small:
             converged = True
@@ -311,19 +252,10 @@ def _levenberg_marquardt(
     rank = int(np.sum(sv > 1e-8 * sv[0]))
     cov_diag = np.diag(covariance(J, rcond=1e-12))[:y.size]
     std = factors_from_vector(np.sqrt(np.clip(cov_diag, 0, None)), groups, e)
-    psi = test.shapes_a
+    psi = test.shapes
     shape_err = np.linalg.norm(scales * phi_a - psi, axis=0) / np.linalg.norm(psi, axis=0)
     macs = np.diag(mac(phi_a, psi))
     chi2 = 2 * cost - float(np.sum((w["L"] @ y) ** 2))
-    n_data = m + test.shapes_a.size - (0 if mass_normalised else m) + w["G"].shape[0]
+    n_data = m + test.shapes.size - (0 if mass_normalised else m) + w["G"].shape[0]
     return RefineResult(f, std, it, converged, cost, np.sqrt(lam / test.omega2) - 1, shape_err,
                         macs, rank, scales, chi2, n_data, prior_sigma)
-
-
-def with_noise(test: ModalData, shape_sigma: float, freq_sigma: float,
-               rng: np.random.Generator) -> ModalData:
-    """Test modes with Gaussian noise: shapes + N(0, (shape_sigma rms_r)^2), f (1 + N(0, s^2))."""
-    rms = np.sqrt(np.mean(test.shapes_a**2, axis=0))
-    shapes = test.shapes_a + rng.standard_normal(test.shapes_a.shape) * shape_sigma * rms
-    freq = np.asarray(test.freq_hz) * (1 + freq_sigma * rng.standard_normal(len(test.freq_hz)))
-    return replace(test, freq_hz=freq, shapes_a=shapes)

@@ -7,23 +7,18 @@ their scatter when the test modes are resampled with their noise).
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
-from updating.correlate.pairing import align_signs, pseudo_orthogonality
+from updating.correlate.measured import MeasuredModes, dofs_at, with_noise
+from updating.correlate.pairing import align_signs, paired_elastic, pseudo_orthogonality
 from updating.correlate.serep import serep
-from updating.model.assembly import BatModel
+from updating.model.assembly import BatModel, assemble
 from updating.model.modes import model_modes
+from updating.msso.expansion import expansion_pass
 from updating.msso.factors import ElementFactors, choose_groups, zero_factors
-from updating.msso.iterate import (
-    ModalData,
-    RefineResult,
-    expansion_pass,
-    paired_elastic,
-    refine,
-    with_noise,
-)
+from updating.msso.iterate import RefineResult, refine
 from updating.msso.skyline import MssoResult
 
 
@@ -69,28 +64,16 @@ class ElementUpdate:
         return self.msso.rank
 
 
-def dofs_at(model: BatModel, x_m, tol_m: float = 1e-6) -> np.ndarray:
-    """Translational DOFs of the nodes at x_m (each must be a mesh node within tol_m)."""
-    x = np.atleast_1d(np.asarray(x_m, dtype=float))
-    node = np.abs(model.node_x_m[None, :] - x[:, None]).argmin(axis=1)
-    bad = np.flatnonzero(np.abs(model.node_x_m[node] - x) > tol_m)
-    if bad.size:
-        raise ValueError(f"measured point x = {x[bad[0]]:.4f} m is not a mesh node (build the "
-                         "model with stations_m at the measured points)")
-    return 2 * node
-
-
-def mass_normalise(model: BatModel, test: ModalData, n_rigid: int = 2) -> ModalData:
-    """Scale unscaled test shapes to unit modal mass with the SEREP-reduced reference mass."""
-    from updating.model.assembly import assemble
-
-    modes = model_modes(model)
-    lam, Phi = modes.omega2, modes.shapes
-    idx = paired_elastic(lam, Phi, test, n_rigid)
-    T = serep(np.column_stack([Phi[:, :n_rigid], Phi[:, idx]]), test.dofs_a)
+def mass_normalise(model: BatModel, test: MeasuredModes, n_rigid: int = 2) -> MeasuredModes:
+    """Scale unscaled test shapes to unit modal mass with the SEREP-reduced reference mass:
+    psi_r / sqrt(psi_r^T M_a psi_r), M_a = T^T M T."""
+    Phi = model_modes(model).shapes
+    dofs = dofs_at(model, test.x_m)
+    idx = paired_elastic(Phi, test.shapes, dofs, n_rigid)
+    T = serep(np.column_stack([Phi[:, :n_rigid], Phi[:, idx]]), dofs)
     Ma = T.reduce(assemble(model)[1])
-    mm = np.einsum("ar,ab,br->r", test.shapes_a, Ma, test.shapes_a)
-    return ModalData(test.freq_hz, test.shapes_a / np.sqrt(mm), test.dofs_a)
+    mm = np.einsum("ar,ab,br->r", test.shapes, Ma, test.shapes)
+    return replace(test, shapes=test.shapes / np.sqrt(mm))
 
 
 def _run(model, test, groups_kw, msso_kw, expansions, do_refine, mass_normalised, sigmas,
@@ -142,13 +125,16 @@ def update_elements(
         msso_parts: (stiffness, mass) of the MSSO seed if it should differ from the refined
             parameterisation (e.g. ("element", "element") to seed a separable refinement).
     """
-    test = ModalData(np.asarray(freq_hz, dtype=float), np.asarray(shapes_a, dtype=float),
-                     np.asarray(dofs_a, dtype=int))
-    m = test.freq_hz.size
-    if test.shapes_a.ndim != 2 or test.shapes_a.shape != (test.dofs_a.size, m):
-        raise ValueError(f"shapes_a must be (a={test.dofs_a.size}, m={m})")
-    if np.any(test.dofs_a % 2) or np.any(test.dofs_a >= model.n_dof):
+    freq_hz = np.asarray(freq_hz, dtype=float)
+    shapes_a = np.asarray(shapes_a, dtype=float)
+    dofs_a = np.asarray(dofs_a, dtype=int)
+    m = freq_hz.size
+    if shapes_a.ndim != 2 or shapes_a.shape != (dofs_a.size, m):
+        raise ValueError(f"shapes_a must be (a={dofs_a.size}, m={m})")
+    if np.any(dofs_a % 2) or np.any(dofs_a >= model.n_dof):
         raise ValueError("dofs_a must be translational DOFs of the model")
+    test = MeasuredModes(freq_hz, shapes_a, model.node_x_m[dofs_a // 2], np.zeros(m),
+                         float("nan"))
     choose_groups(model, stiffness, mass)
     seed_s, seed_m = (stiffness, mass) if msso_parts is None else msso_parts
     choose_groups(model, seed_s, seed_m)
@@ -162,15 +148,12 @@ def update_elements(
     f, first, res, rr, cond = _run(model, test, groups_kw(), msso_kw, expansions, refine_fit,
                                    mass_normalised, sig, prior_sigma)
     # scaling check: POC of the (scaled) test shapes with the SEREP-reduced reference mass
-    from updating.model.assembly import assemble
-
-    modes = model_modes(model)
-    lam, Phi = modes.omega2, modes.shapes
-    idx = paired_elastic(lam, Phi, test, 2)
-    T = serep(np.column_stack([Phi[:, :2], Phi[:, idx]]), test.dofs_a)
-    sa = align_signs(Phi[np.ix_(test.dofs_a, idx)], test.shapes_a)
+    Phi = model_modes(model).shapes
+    idx = paired_elastic(Phi, shapes_a, dofs_a, 2)
+    T = serep(np.column_stack([Phi[:, :2], Phi[:, idx]]), dofs_a)
+    sa = align_signs(Phi[np.ix_(dofs_a, idx)], shapes_a)
     if not mass_normalised:
-        sa = mass_normalise(model, test).shapes_a
+        sa = mass_normalise(model, test).shapes
     poc = pseudo_orthogonality(sa, T.reduce(assemble(model)[1]))
     std, draws = None, None
     if n_resample > 0:
