@@ -25,12 +25,12 @@ import numpy as np
 from ema.shapes.mac import mac
 from updating.diagnose.model import (
     BOUNDS,
-    ModalSolution,
+    ModalSensitivities,
     Setup,
     State,
     free_parameters,
     from_vector,
-    solve,
+    modal_sensitivities,
     to_vector,
 )
 from updating.lsq import covariance, solve_bounded
@@ -64,7 +64,7 @@ class Observations:
 
 
 @dataclass(frozen=True)
-class Fit:
+class DiagnosisFit:
     """One fitted model: its extensions, parameters, modes and residuals.
 
     Attributes:
@@ -101,7 +101,7 @@ class Fit:
         return float(np.sqrt(max(self.cov[i, i], 0.0)))
 
 
-def residuals(sol: ModalSolution, obs: Observations, with_suspension: bool):
+def residuals(sol: ModalSensitivities, obs: Observations, with_suspension: bool):
     """(residual vector, Jacobian (N, p)) of one modal solution."""
     f_ratio = sol.elastic_hz[obs.model_index] / obs.freq_hz
     res = [f_ratio - 1.0]
@@ -129,18 +129,19 @@ def residuals(sol: ModalSolution, obs: Observations, with_suspension: bool):
 
 def fit_model(
     setup: Setup, active: frozenset[str], obs: Observations, start: State,
-) -> Fit:
+) -> DiagnosisFit:
     """Fit the free parameters of the extensions ``active`` to ``obs`` from ``start``."""
     names = free_parameters(active, setup)
     n_modes = obs.n_model_modes
     with_susp = "suspension" in active
-    cache: dict[bytes, tuple[np.ndarray, np.ndarray, ModalSolution]] = {}
+    cache: dict[bytes, tuple[np.ndarray, np.ndarray, ModalSensitivities]] = {}
 
     def evaluate(x):
         key = np.asarray(x, dtype=float).tobytes()
         if key not in cache:
             cache.clear()
-            sol = solve(setup, active, from_vector(start, names, x), n_modes, names)
+            sol = modal_sensitivities(setup, active, from_vector(start, names, x), n_modes,
+                                      names)
             cache[key] = (*residuals(sol, obs, with_susp), sol)
         return cache[key]
 
@@ -161,11 +162,12 @@ def fit_model(
     shapes = sol.shapes[:, obs.model_index]
     mac_values = np.diag(mac(obs.shapes, shapes))
     rms = float(100 * np.sqrt(np.mean((model_hz / obs.freq_hz - 1) ** 2)))
-    return Fit(frozenset(active), from_vector(start, names, x), names, x, cov, model_hz, mac_values,
-               shapes, rms, float(res[:m] @ res[:m]), float(res[m:k] @ res[m:k]))
+    return DiagnosisFit(frozenset(active), from_vector(start, names, x), names, x, cov, model_hz,
+                        mac_values, shapes, rms, float(res[:m] @ res[:m]),
+                        float(res[m:k] @ res[m:k]))
 
 
-def shape_sigma(fit: Fit, obs: Observations, floor: float) -> float:
+def shape_sigma(fit: DiagnosisFit, obs: Observations, floor: float) -> float:
     """Random scatter of the measured shape entries about a fitted model's, relative to each
     mode's RMS, once each mode's own scale q is taken out (so a wrong mass scale does not
     pass for noise): median over modes of |y - q u| / |y| sqrt(n / (n - 1)), at least

@@ -174,7 +174,7 @@ def build(setup: Setup, active: frozenset[str], state: State) -> BatModel:
 
 
 @dataclass(frozen=True)
-class ModalSolution:
+class ModalSensitivities:
     """Modes of one model and their sensitivities to the free parameters.
 
     Attributes:
@@ -236,10 +236,10 @@ def derivative_matrices(
     return out
 
 
-def solve(
+def modal_sensitivities(
     setup: Setup, active: frozenset[str], state: State, n_elastic: int,
     names: tuple[str, ...] = (),
-) -> ModalSolution:
+) -> ModalSensitivities:
     """Lowest ``n_elastic`` elastic modes of the model, with sensitivities to ``names``."""
     model = build(setup, active, state)
     K, M = assemble(model)
@@ -265,4 +265,4 @@ def solve(
             coef = (A[:, sel] - lam[sel][None, :] * B[:, sel]) / gap
         coef[sel, np.arange(k)] = -0.5 * np.diag(B)[sel]
         dshapes[j] = n_pts @ (phi @ coef)
-    return ModalSolution(f[sel], f[low], n_pts @ phi[:, sel], dlnf, dlnf_low, dshapes)
+    return ModalSensitivities(f[sel], f[low], n_pts @ phi[:, sel], dlnf, dlnf_low, dshapes)

@@ -31,14 +31,14 @@ import scipy.stats
 
 from updating.correlate.measured import MeasuredModes
 from updating.correlate.pairing import pair_modes
-from updating.diagnose.fit import Fit, Observations, fit_model, shape_sigma
+from updating.diagnose.fit import DiagnosisFit, Observations, fit_model, shape_sigma
 from updating.diagnose.model import (
     CAUSES,
     Setup,
     State,
     free_parameters,
+    modal_sensitivities,
     reference_of,
-    solve,
 )
 from updating.model.lab_input import BatMeta
 from updating.model.profile import Profile
@@ -66,7 +66,7 @@ class Step:
     chi2_drop: float
     new_params: int
     role: str
-    fit: Fit
+    fit: DiagnosisFit
 
     @property
     def named(self) -> bool:
@@ -99,8 +99,8 @@ class Diagnosis:
     measured_hz: np.ndarray
     measured_index: np.ndarray
     model_index: np.ndarray
-    nominal: Fit
-    extended: Fit
+    nominal: DiagnosisFit
+    extended: DiagnosisFit
     steps: tuple[Step, ...]
     unpaired_hz: np.ndarray
     min_gain_pct: float
@@ -174,7 +174,7 @@ def observations(
 ) -> tuple[Observations, np.ndarray, np.ndarray]:
     """Pair measured modes with the nominal model's; (observations, measured index, unpaired)."""
     m = measured.freq_hz.size
-    nominal = solve(setup, frozenset(), start_state(setup, suspension_hz), m + 4)
+    nominal = modal_sensitivities(setup, frozenset(), start_state(setup, suspension_hz), m + 4)
     meas_idx, model_idx, _ = pair_modes(measured.shapes, nominal.shapes, min_mac=min_mac)
     order = np.argsort(measured.freq_hz[meas_idx])
     meas_idx, model_idx = meas_idx[order], model_idx[order]
@@ -202,7 +202,8 @@ def start_state(setup: Setup, suspension_hz=None) -> State:
     return State(setup.handbook.E_pa, rho, 10.0, 1e-3, k)
 
 
-def chi2_drop(before: Fit, after: Fit, sigma_f: float, frequencies_only: bool) -> float:
+def chi2_drop(before: DiagnosisFit, after: DiagnosisFit, sigma_f: float,
+              frequencies_only: bool) -> float:
     """Drop of the chi-square: frequencies only, or frequencies and shapes."""
     if frequencies_only:
         return (before.ssr_freq - after.ssr_freq) / sigma_f**2
@@ -210,9 +211,9 @@ def chi2_drop(before: Fit, after: Fit, sigma_f: float, frequencies_only: bool) -
 
 
 def forward_select(
-    setup: Setup, obs: Observations, current: Fit, remaining: list[str], role: str,
+    setup: Setup, obs: Observations, current: DiagnosisFit, remaining: list[str], role: str,
     accept, key, reweight=None,
-) -> tuple[list[Step], Fit, list[Step], Observations]:
+) -> tuple[list[Step], DiagnosisFit, list[Step], Observations]:
     """Greedy forward selection: add the extension with the largest ``key`` while ``accept``.
 
     ``reweight(fit, obs) -> obs`` (optional) re-estimates the residual weights from the fit
@@ -242,8 +243,8 @@ def forward_select(
 
 
 def backward_check(
-    setup: Setup, obs: Observations, path: list[Step], final: Fit, nameable, facts,
-) -> tuple[list[Step], Fit, list[Step]]:
+    setup: Setup, obs: Observations, path: list[Step], final: DiagnosisFit, nameable, facts,
+) -> tuple[list[Step], DiagnosisFit, list[Step]]:
     """Re-test each named cause, smallest gain first, by removing it from the final model
     (what was measured, ``facts``, stays in the model)."""
     dropped: list[Step] = []

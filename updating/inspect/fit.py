@@ -33,7 +33,6 @@ from dataclasses import dataclass
 import numpy as np
 
 from updating.inspect.model import ChangeParams
-from updating.lsq import covariance as lsq_covariance
 from updating.lsq import solve_bounded
 from updating.model.profile import Profile
 from updating.model.sections import Core
@@ -81,7 +80,7 @@ class Differences:
 
 
 @dataclass(frozen=True)
-class Fit:
+class ChangeFit:
     """A least-squares solution: parameters, weighted residual, Jacobian (in x units)."""
 
     x: np.ndarray
@@ -171,24 +170,24 @@ def residual_function(
     return fun
 
 
-def solve(fun: Callable, x0: np.ndarray, lower: np.ndarray, upper: np.ndarray,
-          space: ParamSpace, n_freq: int, max_nfev: int | None = None) -> Fit:
-    """Bounded Gauss-Newton (trust-region reflective) from x0."""
+def fit_bounded(fun: Callable, x0: np.ndarray, lower: np.ndarray, upper: np.ndarray,
+                space: ParamSpace, n_freq: int, max_nfev: int | None = None) -> ChangeFit:
+    """Bounded Gauss-Newton (trust-region reflective, updating.lsq.solve_bounded) from x0."""
     res = solve_bounded(fun, x0, lower, upper, diff_step=1e-6, x_scale=1.0, ftol=1e-6,
                         xtol=1e-6, max_nfev=max_nfev)
-    return Fit(res.x, space.params(res.x), res.residual, res.jac, n_freq)
+    return ChangeFit(res.x, space.params(res.x), res.residual, res.jac, n_freq)
 
 
 def fit_null(predict, diff: Differences, space: ParamSpace, sigma_rel: float,
-             x0: np.ndarray | None = None) -> Fit:
+             x0: np.ndarray | None = None) -> ChangeFit:
     """Moisture and sensor shift only."""
     fun = residual_function(predict, diff, space, sigma_rel)
     x0 = np.zeros(3) if x0 is None else x0
-    return solve(fun, x0, NULL_LOWER, NULL_UPPER, space, diff.n_freq)
+    return fit_bounded(fun, x0, NULL_LOWER, NULL_UPPER, space, diff.n_freq)
 
 
 def depth_scan(
-    predict, diff: Differences, space: ParamSpace, sigma_rel: float, null: Fit,
+    predict, diff: Differences, space: ParamSpace, sigma_rel: float, null: ChangeFit,
     depths_in: np.ndarray,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Linearised scan: for each depth, residual norm and seed x (6,) for the core fit.
@@ -215,15 +214,15 @@ def depth_scan(
 
 
 def fit_core(
-    predict, diff: Differences, space: ParamSpace, sigma_rel: float, null: Fit,
+    predict, diff: Differences, space: ParamSpace, sigma_rel: float, null: ChangeFit,
     depths_in: np.ndarray, n_starts: int = 2, min_separation_in: float = 2.0,
     x0: np.ndarray | None = None,
-) -> tuple[Fit, dict]:
+) -> tuple[ChangeFit, dict]:
     """Moisture, sensor shift and a core; multi-start from the depth scan (or from x0)."""
     fun = residual_function(predict, diff, space, sigma_rel)
     lo, hi = space.lower(), space.upper()
     if x0 is not None:
-        return (solve(fun, x0, lo, hi, space, diff.n_freq, MAX_NFEV_CORE),
+        return (fit_bounded(fun, x0, lo, hi, space, diff.n_freq, MAX_NFEV_CORE),
                 {"starts_in": [float(x0[3])]})
     norms, seeds = depth_scan(predict, diff, space, sigma_rel, null, depths_in)
     starts: list[np.ndarray] = []
@@ -232,7 +231,7 @@ def fit_core(
             starts.append(seeds[i])
         if len(starts) == n_starts:
             break
-    fits = [solve(fun, s, lo, hi, space, diff.n_freq, MAX_NFEV_START) for s in starts]
+    fits = [fit_bounded(fun, s, lo, hi, space, diff.n_freq, MAX_NFEV_START) for s in starts]
     best = min(fits, key=lambda f: f.rss)
     info = {"scan_depth_in": [float(d) for d in depths_in],
             "scan_norm": [float(n) for n in norms],
@@ -249,7 +248,7 @@ with a diagnose-calibrated reference gave F = 14 without the floor), and two ide
 would have zero residual."""
 
 
-def shape_noise(fit: Fit, diff: Differences, sigma_rel: float, n_params: int) -> float:
+def shape_noise(fit: ChangeFit, diff: Differences, sigma_rel: float, n_params: int) -> float:
     """Relative shape noise re-estimated from a fit's shape residual:
 
         sigma_rel^2 = sum(r_psi^2) sigma_old^2 / (n_psi - p n_psi / n)
@@ -259,8 +258,3 @@ def shape_noise(fit: Fit, diff: Differences, sigma_rel: float, n_params: int) ->
     n_psi = diff.dpsi.size
     dof = n_psi - n_params * n_psi / diff.n_data
     return max(float(sigma_rel * np.sqrt(fit.rss_shapes / dof)), SHAPE_NOISE_FLOOR)
-
-
-def covariance(fit: Fit, dof: int) -> np.ndarray:
-    """s^2 (J^T J)^-1 with s^2 = RSS / dof (parameters in x units)."""
-    return lsq_covariance(fit.jac, fit.residual, dof)

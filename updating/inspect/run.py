@@ -32,12 +32,11 @@ from updating.inspect.fit import (
     MAX_NFEV_CORE,
     Differences,
     ParamSpace,
-    covariance,
+    fit_bounded,
     fit_core,
     fit_null,
     residual_function,
     shape_noise,
-    solve,
 )
 from updating.inspect.model import (
     ChangeParams,
@@ -47,6 +46,7 @@ from updating.inspect.model import (
 )
 from updating.inspect.msso_map import msso_map
 from updating.inspect.verdict import Verdict
+from updating.lsq import covariance
 from updating.model.profile import Profile
 from updating.model.reference import BatReference
 from updating.model.units import IN_TO_M
@@ -175,8 +175,8 @@ def inspect_retest(
     full, _ = fit_core(predict, diff, space, sigma, null, depths, x0=full.x)
     if null.rss < full.rss:  # H1 contains H0 (p = q = 0): restart H1 from there
         x0 = np.concatenate([null.x, [full.x[3], 0.0, 0.0]])
-        full = solve(residual_function(predict, diff, space, sigma), x0, space.lower(),
-                     space.upper(), space, diff.n_freq, MAX_NFEV_CORE)
+        full = fit_bounded(residual_function(predict, diff, space, sigma), x0, space.lower(),
+                           space.upper(), space, diff.n_freq, MAX_NFEV_CORE)
 
     n, p1, q = diff.n_data, 6, 3
     dof = n - p1
@@ -187,8 +187,8 @@ def inspect_retest(
     p_value = float(f_dist.sf(F, q, dof))
     altered = p_value < false_alarm
 
-    cov1 = covariance(full, dof)
-    cov0 = covariance(null, n - 3)
+    cov1 = covariance(full.jac, full.residual, dof)
+    cov0 = covariance(null.jac, null.residual, n - 3)
     accepted, cov = (full, cov1) if altered else (null, cov0)
     sd = np.sqrt(np.clip(np.diag(cov), 0.0, None))
     ps = accepted.params

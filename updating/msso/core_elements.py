@@ -21,8 +21,10 @@ from updating.model.sections import Core
 
 
 @dataclass(frozen=True)
-class ElementFactors:
-    """Per-element factors on the reference mesh, (e,) each; x0_m, x1_m element ends."""
+class CoreFactors:
+    """The element factors a physical core implies on the reference mesh, (e,) each, with the
+    element ends x0_m, x1_m: the truth that an MSSO result (``msso.factors.ElementFactors``,
+    the unknowns) is compared with."""
 
     x0_m: np.ndarray
     x1_m: np.ndarray
@@ -31,20 +33,20 @@ class ElementFactors:
     beta_shear: np.ndarray
 
 
-def core_element_factors(model: BatModel, core: Core | None) -> ElementFactors:
+def core_element_factors(model: BatModel, core: Core | None) -> CoreFactors:
     """Factors of ``core`` on the mesh of ``model`` (built from a profile and material)."""
     x = model.node_x_m
     n = model.n_elements
     if core is None:
         z = np.zeros(n)
-        return ElementFactors(x[:-1], x[1:], z, z.copy(), z.copy())
+        return CoreFactors(x[:-1], x[1:], z, z.copy(), z.copy())
     ref = sample_sections(x, model.profile, model.material, None)
     cored = sample_sections(x, model.profile, model.material, core)
 
     def avg(s, v):
         return np.bincount(s.elem, s.weight_m * v, n)
 
-    return ElementFactors(
+    return CoreFactors(
         x[:-1], x[1:],
         alpha=avg(cored, cored.props.rhoa) / avg(ref, ref.props.rhoa) - 1,
         beta=avg(cored, cored.props.ei) / avg(ref, ref.props.ei) - 1,

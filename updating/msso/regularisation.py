@@ -109,7 +109,7 @@ def lcurve_lambda(sp_: Spectrum) -> float:
     return float(lams[int(np.argmax(kappa))])
 
 
-def solve(C, d: np.ndarray, regularisation: str | float | None = "gcv",
+def solve_regularised(C, d: np.ndarray, regularisation: str | float | None = "gcv",
           lower: float | None = None) -> LsqSolution:
     """Regularised least squares; regularisation 'gcv', 'lcurve', a lam >= 0, or None (pinv)."""
     sp_ = spectrum(C, d)

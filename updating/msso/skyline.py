@@ -38,7 +38,7 @@ from updating.msso.factors import (
     group_matrices,
     is_stiffness,
 )
-from updating.msso.regularisation import RANK_TOL, solve
+from updating.msso.regularisation import RANK_TOL, solve_regularised
 
 BLOCKS = ("eigen", "mass_norm", "stiffness_norm", "weighed_mass")
 
@@ -188,7 +188,7 @@ def msso_elements(
     groups = choose_groups(model, stiffness, mass)
     blocks = _element_blocks(model, E, omega2, groups, weighed_mass_kg)
     C, d, w = _stack(blocks, weights)
-    sol = solve(C, d, regularisation, lower=lower)
+    sol = solve_regularised(C, d, regularisation, lower=lower)
     ranks = {name: _block_rank(Cb) for name, (Cb, _) in blocks.items()}
     return MssoResult(factors_from_vector(sol.y, groups, model.n_elements), groups, sol.y,
                       sol.rank, ranks, w, sol.lam, float(np.linalg.norm(d)),
@@ -267,7 +267,7 @@ def msso_skyline(
     C, d, w = _stack(blocks, weights)
     col = np.sqrt(np.asarray(C.multiply(C).sum(axis=0))).ravel()
     col = np.where(col > 0, col, 1.0)
-    sol = solve(C @ sp.diags(1.0 / col), d, regularisation)
+    sol = solve_regularised(C @ sp.diags(1.0 / col), d, regularisation)
     x = sol.y / col
     out = []
     for k, A in enumerate((K, M)):
