@@ -145,14 +145,16 @@ def prior_matrix(n_elements: int, n_groups: int, prior_sigma: float | None) -> n
     return L / prior_sigma
 
 
-def _scale_jacobian(phi_a, psi):
-    """Columns d r_s / d c_r for per-mode scales (block structure)."""
+def _with_scale_columns(J, phi_a, psi, w):
+    """J with the columns d r / d c_r of the per-mode scales appended: non-zero only in the
+    shape rows (block structure), zero in the frequency, mass and prior rows."""
     a, m = phi_a.shape
     rms = np.sqrt(np.mean(psi**2, axis=0))
-    J = np.zeros((a * m, m))
+    J_c = np.zeros((a * m, m))
     for j in range(m):
-        J[j * a:(j + 1) * a, j] = phi_a[:, j] / rms[j]
-    return J
+        J_c[j * a:(j + 1) * a, j] = phi_a[:, j] / rms[j] * w["s"]
+    n_after = w["G"].shape[0] + w["L"].shape[0]
+    return np.hstack([J, np.vstack([np.zeros((m, m)), J_c, np.zeros((n_after, m))])])
 
 
 AUTO_PRIORS = (0.01, 0.1, 1.0, None)
@@ -211,9 +213,7 @@ def _levenberg_marquardt(
     mu, converged, it = 1e-3, False, 0
     r, J, (lam, phi_a, f) = _evaluate(model, test, y, groups, n_rigid, scales, True, w)
     if not mass_normalised:
-        J = np.hstack([J, np.vstack([np.zeros((m, m)),
-                                     _scale_jacobian(phi_a, test.shapes) * w["s"],
-                                     np.zeros((w["G"].shape[0] + w["L"].shape[0], m))])])
+        J = _with_scale_columns(J, phi_a, test.shapes, w)
     cost = 0.5 * float(r @ r)
     for it in range(1, max_iter + 1):  # noqa: B007
         A = J.T @ J
@@ -242,9 +242,7 @@ def _levenberg_marquardt(
         mu = max(mu / 3.0, 1e-9)
         r, J, (lam, phi_a, f) = _evaluate(model, test, y, groups, n_rigid, scales, True, w)
         if not mass_normalised:
-            J = np.hstack([J, np.vstack([np.zeros((m, m)),
-                                         _scale_jacobian(phi_a, test.shapes) * w["s"],
-                                         np.zeros((w["G"].shape[0] + w["L"].shape[0], m))])])
+            J = _with_scale_columns(J, phi_a, test.shapes, w)
         if rel < tol or small:
             converged = True
             break
