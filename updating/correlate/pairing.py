@@ -120,7 +120,20 @@ class Orthogonality:
 
 
 def pseudo_orthogonality(shapes_a: np.ndarray, reduced_mass: np.ndarray) -> Orthogonality:
-    """E_a^T M_a E_a for mass-normalised test shapes and the reduced mass M_a = T^T M T."""
+    """Pseudo-orthogonality check POC = E_a^T M_a E_a of the test shapes' scaling.
+
+    Parameters
+    ----------
+    shapes_a : (a, m) array
+        Measured shapes at the SEREP DOFs, scaled to unit modal mass.
+    reduced_mass : (a, a) array
+        The SEREP-reduced reference mass M_a = T^T M T (``Serep.reduce``).
+
+    Returns
+    -------
+    Orthogonality
+        POC (m, m), its largest off-diagonal magnitude and largest |diag - 1|.
+    """
     poc = shapes_a.T @ reduced_mass @ shapes_a
     off = poc - np.diag(np.diag(poc))
     return Orthogonality(poc, float(np.max(np.abs(off), initial=0.0)),

@@ -35,9 +35,28 @@ class Serep:
 
 
 def serep(basis_n: np.ndarray, dofs_a: np.ndarray) -> Serep:
-    """SEREP from reference shapes ``basis_n`` (n, k) and the measured DOF indices (a,).
+    """SEREP transformation T = U_n pinv(U_a).
+
+    Parameters
+    ----------
+    basis_n : (n, k) array
+        Reference mode shapes at all DOFs (rigid-body modes and the modes paired with the
+        test), mass-normalised.
+    dofs_a : (a,) int array
+        Measured DOFs (a >= k).
+
+    Returns
+    -------
+    Serep
+        T (n, a), the DOFs, the basis and cond(U_a); ``expand`` gives E_n = T E_a and
+        ``reduce`` the reduced matrix T^T A T.
 
     Raises ValueError if the basis has more modes than sensors or the sensors cannot see it.
+
+    References
+    ----------
+    O'Callahan, J., Avitabile, P., Riemer, R. (1989), System Equivalent Reduction Expansion
+    Process (SEREP), Proc. 7th International Modal Analysis Conference.
     """
     dofs_a = np.asarray(dofs_a, dtype=int)
     U_a = basis_n[dofs_a]

@@ -1,4 +1,4 @@
-"""Reading element factors as a drilled and filled core (METHOD.md).
+"""Reading element factors as a drilled and filled core (docs/method.md).
 
 The changed region is the contiguous run of elements around the most significant one whose
 change is significant: z_i = sqrt((beta_i / s_beta_i)^2 + (alpha_i / s_alpha_i)^2) > z_min
@@ -50,7 +50,28 @@ def _noise(v: np.ndarray, std: np.ndarray | None) -> np.ndarray:
 
 def changed_region(beta: np.ndarray, alpha: np.ndarray, s_beta=None, s_alpha=None,
                    z_min: float = 3.0, min_change: float = 0.005) -> tuple[np.ndarray, float]:
-    """Element indices of the contiguous significant run around the peak, and the peak z."""
+    """The changed region of an element map: the contiguous significant run around its peak.
+
+    An element is significant when z = hypot(beta / s_beta, alpha / s_alpha) > ``z_min``
+    and |beta| or |alpha| exceeds ``min_change``.
+
+    Parameters
+    ----------
+    beta, alpha : (e,) arrays
+        Stiffness and mass factors per element.
+    s_beta, s_alpha : (e,) arrays, optional
+        Their standard deviations; when missing (or not all positive) a robust noise level
+        1.4826 median|factor| is used.
+    z_min : float
+        Significance threshold of z.
+    min_change : float
+        Smallest factor magnitude counted as a change.
+
+    Returns
+    -------
+    (int array, float)
+        Element indices of the run (empty when nothing is significant) and the peak z.
+    """
     zb = beta / _noise(beta, s_beta)
     za = alpha / _noise(alpha, s_alpha)
     z = np.hypot(zb, za)
@@ -69,7 +90,9 @@ def changed_region(beta: np.ndarray, alpha: np.ndarray, s_beta=None, s_alpha=Non
 
 def core_from_factors(model: BatModel, elements: np.ndarray, beta: np.ndarray,
                       alpha: np.ndarray) -> tuple[float, float]:
-    """(d, r) of a core from the factors over ``elements``."""
+    """Core diameter d (m) and fill density ratio r from the factors over ``elements``:
+    d^4 = mean(-beta_i <D^4>_i), r = 1 + mean(alpha_i <D^2>_i) / d^2 (element-averaged
+    outer diameters D); (nan, nan) when the mean stiffness change is not a loss."""
     D = model.profile.diameter_at(model.samples.x_m)
     D4 = model.element_average(D**4)[elements]
     D2 = model.element_average(D**2)[elements]

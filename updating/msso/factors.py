@@ -87,7 +87,21 @@ def zero_factors(n_elements: int) -> ElementFactors:
 
 def factors_from_vector(y: np.ndarray, groups: tuple[str, ...], n_elements: int
                         ) -> ElementFactors:
-    """Spread a stacked parameter vector onto the parts (unused parts stay 0)."""
+    """Spread a stacked parameter vector onto the parts (unused parts stay 0).
+
+    Parameters
+    ----------
+    y : (len(groups) * n_elements,) array
+        One block of ``n_elements`` factors per group, in the order of ``groups``.
+    groups : tuple of str
+        Parameter groups (``GROUP_PARTS`` keys); a group's block goes to each of its parts.
+    n_elements : int
+        Number of elements e.
+
+    Returns
+    -------
+    ElementFactors
+    """
     parts = {p: np.zeros(n_elements) for p in PART_ATTR}
     for k, g in enumerate(groups):
         for p in GROUP_PARTS[g]:

@@ -169,16 +169,49 @@ def refine(
 ) -> RefineResult:
     """Levenberg-Marquardt fit of the element factors of ``groups`` to frequencies and shapes.
 
-    freq_sigma: relative standard deviation of the measured frequencies; shape_sigma: of a
-    shape entry relative to the mode's RMS; they weight the residuals. With
-    ``mass_normalised=False`` each mode gets a free scale c_r; then a uniform factor on all
-    of K and M is unobservable and ``weighed_mass_kg`` (relative sigma ``mass_sigma``) should
-    be given: it adds the residual (m(y) - m_w) / (sigma m_w).
+    Parameters
+    ----------
+    model : BatModel
+        Reference model; its nodes include the test points ``test.x_m``.
+    test : MeasuredModes
+        Measured elastic modes at mesh nodes.
+    seed : ElementFactors
+        Start (usually the MSSO pass's factors).
+    groups : tuple of str
+        Parameter groups fitted (``factors.choose_groups``).
+    mass_normalised : bool
+        Whether the test shapes are scaled to unit modal mass. If not, each mode gets a free
+        scale c_r; a uniform factor on all of K and M is then unobservable and
+        ``weighed_mass_kg`` should be given.
+    freq_sigma, shape_sigma : float
+        Relative standard deviation of the measured frequencies, and of a shape entry
+        relative to its mode's RMS: the residuals' weights.
+    prior_sigma : float, "auto" or None
+        Standard deviation of the smoothness prior (``prior_matrix``); None for none;
+        "auto": Morozov's discrepancy principle by continuation, fits with the prior loosened
+        step by step (``AUTO_PRIORS``, each warm-started) until the data chi^2 falls to the
+        number of data (what the noise alone leaves); exact data run through to no prior.
+    weighed_mass_kg, mass_sigma : float
+        The bat's weighed mass and its relative standard deviation: adds the residual
+        (m(y) - m_w) / (sigma m_w).
+    n_rigid : int
+        Lowest model modes never paired (rigid-body or suspension modes).
+    max_iter, tol : int, float
+        Iteration cap and relative cost decrease that stops the iteration.
+    lower : float
+        No factor goes below this (steps are shortened to stay above it).
 
-    prior_sigma: standard deviation of the prior (prior_matrix), None for none, or "auto":
-    Morozov's discrepancy principle by continuation -- fits with the prior loosened step by
-    step (AUTO_PRIORS, each warm-started) until the data chi^2 falls to the number of data
-    (what the noise alone leaves); exact data run through to no prior and fit exactly.
+    Returns
+    -------
+    RefineResult
+        Factors, their linearised standard deviations (``updating.lsq.covariance``),
+        iterations, fit quality, MACs, Jacobian rank, per-mode scales, data chi^2.
+
+    References
+    ----------
+    Fox, R. L., Kapoor, M. P. (1968), Rates of change of eigenvalues and eigenvectors, AIAA J.
+    6(12). Morozov, V. A. (1966), On the solution of functional equations by the method of
+    regularization, Soviet Math. Dokl. 7.
     """
     kw = {"mass_normalised": mass_normalised, "freq_sigma": freq_sigma,
           "shape_sigma": shape_sigma, "n_rigid": n_rigid, "max_iter": max_iter, "tol": tol,

@@ -39,7 +39,7 @@ class Spectrum:
 
 
 @dataclass(frozen=True)
-class LsqSolution:
+class RegularisedSolution:
     y: np.ndarray
     lam: float
     rank: int
@@ -110,8 +110,32 @@ def lcurve_lambda(sp_: Spectrum) -> float:
 
 
 def solve_regularised(C, d: np.ndarray, regularisation: str | float | None = "gcv",
-          lower: float | None = None) -> LsqSolution:
-    """Regularised least squares; regularisation 'gcv', 'lcurve', a lam >= 0, or None (pinv)."""
+                      lower: float | None = None) -> RegularisedSolution:
+    """Regularised least squares min ||C y - d||^2 + lam^2 ||y||^2 (Tikhonov, SVD filters).
+
+    Parameters
+    ----------
+    C : (N, p) array or sparse matrix
+        The stacked MSSO equations.
+    d : (N,) array
+        Their right-hand side.
+    regularisation : {"gcv", "lcurve"}, float or None
+        How lam is chosen: generalised cross-validation, the L-curve's corner, a given
+        lam >= 0, or None for the minimum-norm pseudo-inverse (singular values below
+        ``RANK_TOL`` times the largest dropped).
+    lower : float, optional
+        Lower bound of every unknown; only if the unbounded solution violates it, the same
+        regularised problem is re-solved with the bound (``scipy.optimize.lsq_linear``).
+
+    Returns
+    -------
+    RegularisedSolution
+        y, lam, numerical rank, residual norm, singular values, whether the bound was active.
+
+    References
+    ----------
+    Hansen, P. C. (1998), Rank-Deficient and Discrete Ill-Posed Problems, SIAM (GCV, L-curve).
+    """
     sp_ = spectrum(C, d)
     if regularisation is None:
         f = (sp_.s > RANK_TOL * sp_.s[0]).astype(float)
@@ -136,4 +160,4 @@ def solve_regularised(C, d: np.ndarray, regularisation: str | float | None = "gc
         res = scipy.optimize.lsq_linear(A, b, bounds=(lower, np.inf), lsmr_tol="auto")
         y, bounded = res.x, True
     r = C @ y - d
-    return LsqSolution(y, lam, sp_.rank, float(np.linalg.norm(r)), sp_.s, bounded)
+    return RegularisedSolution(y, lam, sp_.rank, float(np.linalg.norm(r)), sp_.s, bounded)

@@ -1,4 +1,4 @@
-"""Mass and Stiffness Skyline Optimization (O'Callahan; METHOD.md).
+"""Mass and Stiffness Skyline Optimization (O'Callahan; docs/method.md).
 
 With expanded, mass-normalised test shapes E (n, m) and Omega^2 = diag(w_r^2):
 
@@ -174,15 +174,37 @@ def msso_elements(
 ) -> MssoResult:
     """Element-factor MSSO: solve the stacked equations for per-element factors.
 
-    Args:
-        model: reference model (its parts are k_i, m_i; factors are relative to it).
-        shapes_n: (n_dof, m) expanded mass-normalised test shapes; omega2: (m,) rad^2/s^2
-            (0 for rigid-body modes, which enter only the mass normalisation).
-        stiffness, mass: parameterisation (factors.choose_groups).
-        regularisation: 'gcv', 'lcurve', a lam, or None (minimum-norm pseudo-inverse).
-        weights: user weights per block name (BLOCKS), default 1.
-        weighed_mass_kg: the bat's weighed mass, adds equation (4).
-        lower: lower bound of every factor (> -1: no part may vanish).
+    Parameters
+    ----------
+    model : BatModel
+        Reference model (its parts are k_i, m_i; factors are relative to it).
+    shapes_n : (n_dof, m) array
+        Expanded mass-normalised test shapes E.
+    omega2 : (m,) array
+        Test eigenvalues, rad^2/s^2 (0 for rigid-body modes, which enter only the mass
+        normalisation).
+    stiffness, mass : str or None
+        Parameterisation (``factors.choose_groups``): "element" (the paper's one beta and
+        one alpha per element), "separate", "bend" / "trans", or None.
+    regularisation : {"gcv", "lcurve"}, float or None
+        How the stacked system is solved (``regularisation.solve_regularised``).
+    weights : dict, optional
+        User weight per block name (``BLOCKS``), default 1.
+    weighed_mass_kg : float, optional
+        The bat's weighed mass; adds equation (4).
+    lower : float
+        Lower bound of every factor (> -1: no part may vanish).
+
+    Returns
+    -------
+    MssoResult
+        Factors, groups, ranks of the whole system and of each block, weights, lam,
+        residual norms before and after.
+
+    References
+    ----------
+    O'Callahan, J., Detection of Baseball Bat Alterations Using Mass and Stiffness Skyline
+    Optimization Procedures, UMass Lowell (docs/method.md).
     """
     E, omega2 = _check_modes(shapes_n, omega2, model.n_dof)
     groups = choose_groups(model, stiffness, mass)
@@ -218,6 +240,24 @@ def msso_skyline(
     Unknown x_ij (i <= j) changes A_ij = A_ji by s_ij x_ij, s_ij = sqrt(|A_ii A_jj|) of the
     reference; the columns of the stacked system are then equilibrated to unit norm and the
     minimum-norm (or regularised) solution in those variables is returned as dK, dM.
+
+    Parameters
+    ----------
+    model : BatModel
+        Reference model; its assembly pattern is the skyline.
+    shapes_n : (n_dof, m) array
+        Expanded mass-normalised test shapes.
+    omega2 : (m,) array
+        Test eigenvalues, rad^2/s^2 (0 for rigid-body modes).
+    regularisation : {"gcv", "lcurve"}, float or None
+        As in ``msso_elements``; None: minimum norm.
+    weights : dict, optional
+        User weight per block name.
+
+    Returns
+    -------
+    SkylineResult
+        Sparse symmetric dK, dM, rank, number of unknowns, weights, lam, residual norms.
     """
     E, omega2 = _check_modes(shapes_n, omega2, model.n_dof)
     n, m = E.shape

@@ -107,23 +107,52 @@ def update_elements(
 ) -> ElementUpdate:
     """Per-element mass and stiffness changes of a re-tested bat against its reference.
 
-    Args:
-        model: reference (calibrated) model whose nodes include the measured points.
-        freq_hz: (m,) measured natural frequencies of elastic modes.
-        shapes_a: (a, m) real shapes at ``dofs_a`` (translational DOFs, e.g. ``dofs_at``),
-            mass-normalised unless ``mass_normalised=False`` (then scaled by the reference
-            mass for MSSO and fitted with a free scale per mode in the refinement).
-        stiffness, mass: parameterisation ("element" = the paper's one beta / one alpha per
-            element; "separate" = bending/shear and translational/rotary; "bend"; "trans";
-            None).
-        expansions: SEREP+MSSO passes (1 = the paper's single pass).
-        refine_fit: run the Levenberg-Marquardt refinement seeded by MSSO.
-        regularisation: MSSO's ('gcv', 'lcurve', a lam, or None).
-        freq_sigma, shape_sigma: noise of the frequencies (relative) and shape entries
-            (relative to each mode's RMS); weights of the refinement and the resampling noise.
-        n_resample: re-runs with the test modes perturbed by that noise, giving ``std``.
-        msso_parts: (stiffness, mass) of the MSSO seed if it should differ from the refined
-            parameterisation (e.g. ("element", "element") to seed a separable refinement).
+    Pairing, SEREP, MSSO (``expansions`` passes), then the Levenberg-Marquardt refinement
+    seeded by MSSO, and optionally the scatter of the result under the test's noise.
+
+    Parameters
+    ----------
+    model : BatModel
+        Reference (calibrated) model whose nodes include the measured points.
+    freq_hz : (m,) array
+        Measured natural frequencies of elastic modes.
+    shapes_a : (a, m) array
+        Real shapes at ``dofs_a`` (translational DOFs, e.g. ``correlate.measured.dofs_at``),
+        mass-normalised unless ``mass_normalised=False`` (then scaled by the reference mass
+        for MSSO and fitted with a free scale per mode in the refinement).
+    dofs_a : (a,) int array
+        The measured translational DOFs.
+    stiffness, mass : str or None
+        Parameterisation: "element" (the paper's one beta and one alpha per element),
+        "separate" (bending / shear and translational / rotary), "bend", "trans", or None.
+    expansions : int
+        SEREP + MSSO passes (1: the paper's single pass).
+    refine_fit : bool
+        Run the Levenberg-Marquardt refinement seeded by MSSO.
+    regularisation : {"gcv", "lcurve"}, float or None
+        MSSO's (``msso.regularisation.solve_regularised``).
+    weights : dict, optional
+        MSSO block weights.
+    weighed_mass_kg : float, optional
+        The bat's weighed mass (MSSO equation (4) and a refinement residual).
+    freq_sigma, shape_sigma : float
+        Noise of the frequencies (relative) and of the shape entries (relative to each
+        mode's RMS): the refinement's weights and the resampling noise.
+    prior_sigma : float, "auto" or None
+        The refinement's smoothness prior (``msso.iterate.refine``).
+    n_resample : int
+        Re-runs with the test modes perturbed by that noise, giving ``std`` and ``draws``.
+    rng : numpy Generator, optional
+        Random numbers of the resampling.
+    msso_parts : (str or None, str or None), optional
+        (stiffness, mass) of the MSSO seed if it should differ from the refined
+        parameterisation (e.g. ("element", "element") to seed a separable refinement).
+
+    Returns
+    -------
+    ElementUpdate
+        Final and one-pass factors, the MSSO and refinement results, SEREP condition,
+        pseudo-orthogonality, resampled scatter.
     """
     freq_hz = np.asarray(freq_hz, dtype=float)
     shapes_a = np.asarray(shapes_a, dtype=float)
