@@ -4,7 +4,7 @@
     baseline modes + profile + meta -> diagnose -> calibrated BatReference
     reference + baseline modes + re-test modes -> inspect_retest -> Verdict -> contract JSON
 
-Positions are SI inside; the contract dict (../shared/CONTRACT.md) is in inches from the knob
+Positions are SI inside; the contract dict (docs/contract.md) is in inches from the knob
 end. ``progress`` callables receive one-line messages (the commands print them on stderr).
 """
 
@@ -221,7 +221,7 @@ def _num(v) -> float | None:
 
 
 def contract_dict(serial: str, verdict: Verdict) -> dict:
-    """The verdict as ../shared/CONTRACT.md fixes it (inches from the knob end; region, core
+    """The verdict as docs/contract.md fixes it (inches from the knob end; region, core
     and fill null when not altered), plus the decision's confidence and significance level."""
     altered = bool(verdict.altered)
     region = verdict.region_m if altered else None

@@ -44,7 +44,7 @@ def test_pairing_recovers_a_permutation_and_signs():
 
 
 def test_element_factors_of_a_core_follow_the_method_formulas():
-    """Fully cored elements: alpha = (r - 1)(d/D)^2, beta = -(d/D)^4 (METHOD.md); a partly
+    """Fully cored elements: alpha = (r - 1)(d/D)^2, beta = -(d/D)^4 (docs/method.md); a partly
     cored element gets the overlap fraction; uncored elements 0."""
     model = build_model(CYLINDER, WOOD, beam="timoshenko", n_elements=33)
     core = Core(1.0 * IN_TO_M, 10.5 * IN_TO_M, 1 / 3, 0.0, IN_TO_M)

@@ -1,4 +1,4 @@
-"""`batlab inspect`: the lab's verdict on a re-test of a bat (../shared/CONTRACT.md).
+"""`batlab inspect`: the lab's verdict on a re-test of a bat (docs/contract.md).
 
 Two forms, the same verdict:
     batlab inspect --profile P --meta M --baseline B.uff --retest R.uff [--json]   (stateless)

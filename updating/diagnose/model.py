@@ -1,6 +1,6 @@
 """The diagnosis model family: the paper's nominal bat model plus switchable physical extensions.
 
-Nominal (METHOD.md): Euler-Bernoulli, isotropic, handbook E and density, ~1 in elements,
+Nominal (docs/method.md): Euler-Bernoulli, isotropic, handbook E and density, ~1 in elements,
 nothing attached. Each extension adds physics and at most one parameter:
 
     modulus             E                                fitted, parameter ln E
@@ -197,7 +197,7 @@ class ModalSensitivities:
 
 def interpolation_matrix(model: BatModel, x_m: np.ndarray) -> np.ndarray:
     """(P, n) matrix N with w(x_p) = N[p] @ dofs: the element shape functions N_w at each x
-    (vectorised fe_model.displacement_at)."""
+    (vectorised updating.model.assembly.displacement_at)."""
     from updating.model.element import shape_functions
 
     x = np.asarray(x_m, dtype=float)

@@ -141,7 +141,7 @@ class Diagnosis:
         return {}, {}
 
     def to_json_dict(self) -> dict:
-        """The contract's `batlab diagnose` object (../shared/CONTRACT.md) plus extra keys."""
+        """The contract's `batlab diagnose` object (docs/contract.md) plus extra keys."""
         ref = self.reference
         modes = [{"measured_hz": float(f), "nominal_hz": float(n), "extended_hz": float(e),
                   "mac": float(m)}

@@ -16,7 +16,7 @@ the reference first, so the map shows only the local change:
    levels the inspection estimated, and a fixed smoothness prior ``prior_sigma``).
 
 Before each update the measured shapes psi are freed of the roving-hammer fitter's
-driving-point factor (``change_model.driving_point_scale``): psi / sqrt(phi(x_s) / phi(x_d)),
+driving-point factor (``inspect.model.driving_point_scale``): psi / sqrt(phi(x_s) / phi(x_d)),
 with phi the paired modes of the model being updated, x_s the accelerometer's position in that
 model and x_d the test's labelled driving point. The sensor is re-mounted between the tests,
 so the two factors differ per mode and would otherwise show up as element changes.
@@ -136,10 +136,10 @@ def msso_map(
         stiffness_scale, density_scale, sensor_shift_m: the accepted fit's drift (the shift
             relative to the baseline's sensor position, as ``ChangeParams.sensor_shift_m``).
         baseline_sensor_offset_m: the baseline's sensor position relative to
-            ``reference.sensor_x_m`` (``change_model.baseline_sensor_offset``).
+            ``reference.sensor_x_m`` (``updating.inspect.model.baseline_sensor_offset``).
         shape_sigma: shape noise relative to each mode's RMS; freq_sigma: relative frequency
             noise of one test.
-        prior_sigma: smoothness prior of the refinement (``refine.prior_matrix``).
+        prior_sigma: smoothness prior of the refinement (``updating.msso.iterate.prior_matrix``).
         stiffness, mass: ``update_elements`` parameterisation ("bend"/"trans" by default).
     Raises:
         ValueError: when the test modes cannot be paired with the model's.

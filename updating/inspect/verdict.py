@@ -19,8 +19,11 @@ class Verdict:
         region_m: (start, end) of the altered region from the knob end, or None.
         core_diameter_m, fill_density_ratio: the fitted core, or None when not altered.
         uncertainty: standard uncertainties of the fitted quantities (same keys, SI).
-        element_x0_m, element_x1_m: (e,) element ends; alpha, beta: (e,) element mass and
-            stiffness factors from MSSO (translational mass, bending stiffness).
+        element_x0_m, element_x1_m: (e,) element ends of the reference mesh; alpha, beta:
+            (e,) element mass and bending-stiffness factors implied by the fitted core
+            (``updating.msso.core_elements.core_element_factors`` of the H1 core:
+            element-averaged section ratios) when altered, zeros when not. They do not come
+            from MSSO: the MSSO element map is reported separately in ``details["msso"]``.
         moisture: {"stiffness_scale": ..., "density_scale": ...} uniform drift fitted.
         modes: paired modes, list of dicts {baseline_hz, retest_hz, mac, ...}.
         details: anything else worth reporting (fit residuals, ranks, timings).

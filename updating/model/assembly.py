@@ -2,7 +2,7 @@
 
 Planar beam along x, two DOFs per node (transverse displacement w, rotation theta), node i
 owns DOFs (2i, 2i+1); element i joins nodes i and i+1, so its connectivity c_i is the DOF
-slice 2i..2i+3 and its global matrices are the 4x4 parts placed there (METHOD.md eq. 1-2).
+slice 2i..2i+3 and its global matrices are the 4x4 parts placed there (docs/method.md).
 Section properties are integrated over each element by Gauss quadrature on every linear
 piece of the profile that the element overlaps (steps included exactly).
 """
@@ -258,7 +258,7 @@ def assemble(
 ) -> tuple[np.ndarray, np.ndarray]:
     """K and M with element changes: K = sum (1+beta_b) k_b + (1+beta_s) k_s (+ springs), M alike.
 
-    Changes are (e,) arrays or None (no change); METHOD.md: K_I = K_S + sum beta_i k_i.
+    Changes are (e,) arrays or None (no change); docs/method.md: K_I = K_S + sum beta_i k_i.
     """
     def one_plus(v):
         return None if v is None else 1.0 + np.asarray(v, dtype=float)

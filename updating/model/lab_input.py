@@ -1,6 +1,6 @@
 """A bat's lab inputs (meta.json) turned into model inputs, and alteration specs.
 
-meta.json (../shared/CONTRACT.md): serial, species, nominal_E_psi,
+meta.json (docs/contract.md): serial, species, nominal_E_psi,
 nominal_weight_density_lbf_in3, weight_lb, points_in; extra keys are ignored.
 """
 

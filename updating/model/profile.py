@@ -1,7 +1,7 @@
 """The bat's outer profile: diameter along the axis, from a caliper CSV.
 
 `profile.csv` has the header ``x_in,diameter_in`` with x from the knob end, non-decreasing;
-a step in diameter is two rows at the same x (../shared/CONTRACT.md). Between stations the
+a step in diameter is two rows at the same x (docs/contract.md). Between stations the
 diameter varies linearly.
 """
 

@@ -1,4 +1,4 @@
-"""Element mass and stiffness factors implied by a physical core (the MSSO unknowns).
+"""Element mass and stiffness factors implied by a physical core (the quantities MSSO estimates).
 
 For element i of the reference mesh, with section properties averaged over the element,
 
@@ -7,7 +7,7 @@ For element i of the reference mesh, with section properties averaged over the e
     beta_shear_i = <kGA>_cored / <kGA>_ref - 1   (shear stiffness)
 
 so that a fully cored element of outer diameter D reads alpha = (r - 1)(d/D)^2 and
-beta = -(d/D)^4 (METHOD.md), and a partly cored element the overlap-weighted value.
+beta = -(d/D)^4 (docs/method.md), and a partly cored element the overlap-weighted value.
 """
 
 from __future__ import annotations

@@ -1,6 +1,6 @@
 """Random pro-style bats and re-test scenarios for hidden-effect tests of the inspection.
 
-Each case is a bat from a model richer than its reference (../shared/BAT_PHYSICS.md): smooth
+Each case is a bat from a model richer than its reference (docs/method.md, real bats): smooth
 profile (knob 1.3-1.7 in, handle 0.9-1.0 in, barrel 2.45-2.61 in, length 32-34 in) with
 caliper noise on the copy the lab measures, Timoshenko wood with E/G 10-18, a 2-6 g
 accelerometer off its labelled point, two bungees, and a re-test with moisture drift (up to
@@ -121,7 +121,7 @@ def case_modes(
     return out[0], out[1]
 
 
-SPECIES = {  # handbook values at 12 % moisture (../shared/BAT_PHYSICS.md): E psi, lbf/in^3
+SPECIES = {  # handbook values at 12 % moisture (docs/method.md, real bats): E psi, lbf/in^3
     "white ash": (1.74e6, 0.60 * 0.036127),
     "paper birch": (1.60e6, 0.55 * 0.036127),
     "yellow birch": (2.02e6, 0.62 * 0.036127),

@@ -4,7 +4,7 @@ The truth is deliberately richer than batlab's default reference: Timoshenko bea
 wood's E/G and rotary inertia, a finer mesh, an accelerometer's mass (possibly off its
 labelled point), two bungees, modal damping rising with frequency, moisture drift and noise.
 Moisture: one percentage point of moisture content changes E by about -2 % and mass by about
-+1 % (../shared/BAT_PHYSICS.md).
++1 % (docs/method.md, real bats).
 """
 
 from __future__ import annotations
@@ -150,7 +150,7 @@ def simulate_modes(
     position included), mass-normalised, with relative Gaussian noise on frequencies and
     shape entries (``shape_noise`` times each shape's RMS). Scaled as the fitter scales them,
     through the driving-point FRF: an accelerometer off its labelled point multiplies each
-    shape by sqrt(phi(sensor) / phi(driving point)) (``change_model.driving_point_scale``).
+    shape by sqrt(phi(sensor) / phi(driving point)) (``inspect.model.driving_point_scale``).
     For fast tests of the updating stage; the full path (simulate_test + ema fit) is the real
     thing.
     """
