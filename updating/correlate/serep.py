@@ -15,6 +15,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from updating.correlate.pairing import paired_elastic
+
 
 @dataclass(frozen=True)
 class Serep:
@@ -69,3 +71,30 @@ def serep(basis_n: np.ndarray, dofs_a: np.ndarray) -> Serep:
         raise ValueError(f"SEREP: the {a} measured DOFs cannot separate the {k} basis modes "
                          f"(cond {cond:.2e})")
     return Serep(basis_n @ np.linalg.pinv(U_a), dofs_a, basis_n, cond)
+
+
+def paired_serep(model_shapes: np.ndarray, test_shapes: np.ndarray, dofs_a: np.ndarray,
+                 n_rigid: int) -> tuple[np.ndarray, Serep]:
+    """SEREP on the test's own modes: the basis is the ``n_rigid`` rigid-body (or suspension)
+    modes and the model modes paired with the test modes by MAC at ``dofs_a``
+    (``correlate.pairing.paired_elastic``).
+
+    Parameters
+    ----------
+    model_shapes : (n, k) array
+        The model's modes, ascending, mass-normalised.
+    test_shapes : (a, m) array
+        Measured shapes at ``dofs_a``.
+    dofs_a : (a,) int array
+        Measured translational DOFs.
+    n_rigid : int
+        Leading model modes taken into the basis unpaired.
+
+    Returns
+    -------
+    (int array, Serep)
+        The paired model mode of each test mode, and the transformation.
+    """
+    idx = paired_elastic(model_shapes, test_shapes, dofs_a, n_rigid)
+    basis = np.column_stack([model_shapes[:, :n_rigid], model_shapes[:, idx]])
+    return idx, serep(basis, dofs_a)

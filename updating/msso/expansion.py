@@ -14,8 +14,8 @@ from __future__ import annotations
 import numpy as np
 
 from updating.correlate.measured import MeasuredModes, dofs_at
-from updating.correlate.pairing import align_signs, paired_elastic
-from updating.correlate.serep import serep
+from updating.correlate.pairing import align_signs
+from updating.correlate.serep import paired_serep
 from updating.model.assembly import BatModel
 from updating.model.modes import model_modes
 from updating.msso.factors import ElementFactors, apply_factors, zero_factors
@@ -49,9 +49,7 @@ def expansion_pass(
     updated = apply_factors(model, factors)
     Phi = model_modes(updated).shapes
     dofs = dofs_at(model, test.x_m)
-    idx = paired_elastic(Phi, test.shapes, dofs, n_rigid)
-    basis = np.column_stack([Phi[:, :n_rigid], Phi[:, idx]])
-    T = serep(basis, dofs)
+    idx, T = paired_serep(Phi, test.shapes, dofs, n_rigid)
     shapes = align_signs(Phi[np.ix_(dofs, idx)], test.shapes)
     res = msso_elements(updated, T.expand(shapes), test.omega2, **msso_kw)
     return factors.compose(res.factors), res, T.cond

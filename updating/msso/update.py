@@ -12,8 +12,8 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from updating.correlate.measured import MeasuredModes, dofs_at, with_noise
-from updating.correlate.pairing import align_signs, paired_elastic, pseudo_orthogonality
-from updating.correlate.serep import serep
+from updating.correlate.pairing import align_signs, pseudo_orthogonality
+from updating.correlate.serep import paired_serep
 from updating.model.assembly import BatModel, assemble
 from updating.model.modes import model_modes
 from updating.msso.expansion import expansion_pass
@@ -69,8 +69,7 @@ def mass_normalise(model: BatModel, test: MeasuredModes, n_rigid: int = 2) -> Me
     psi_r / sqrt(psi_r^T M_a psi_r), M_a = T^T M T."""
     Phi = model_modes(model).shapes
     dofs = dofs_at(model, test.x_m)
-    idx = paired_elastic(Phi, test.shapes, dofs, n_rigid)
-    T = serep(np.column_stack([Phi[:, :n_rigid], Phi[:, idx]]), dofs)
+    _, T = paired_serep(Phi, test.shapes, dofs, n_rigid)
     Ma = T.reduce(assemble(model)[1])
     mm = np.einsum("ar,ab,br->r", test.shapes, Ma, test.shapes)
     return replace(test, shapes=test.shapes / np.sqrt(mm))
@@ -178,8 +177,7 @@ def update_elements(
                                    mass_normalised, sig, prior_sigma)
     # scaling check: POC of the (scaled) test shapes with the SEREP-reduced reference mass
     Phi = model_modes(model).shapes
-    idx = paired_elastic(Phi, shapes_a, dofs_a, 2)
-    T = serep(np.column_stack([Phi[:, :2], Phi[:, idx]]), dofs_a)
+    idx, T = paired_serep(Phi, shapes_a, dofs_a, 2)
     sa = align_signs(Phi[np.ix_(dofs_a, idx)], shapes_a)
     if not mass_normalised:
         sa = mass_normalise(model, test).shapes
