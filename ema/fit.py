@@ -45,12 +45,12 @@ import numpy as np
 
 from ema.io.frf_data import FrfTest
 from ema.mode_checks import ClosePair, close_pairs, mode_warnings
-from ema.poles.autopoles import auto_poles, take
+from ema.poles.autopoles import auto_poles
 from ema.poles.lscf import PoleSweep
 from ema.poles.mif import PeakPick, pick_peaks, receptance_power, sum_mif
 from ema.poles.refine import refine_poles
 from ema.poles.rejected import Rejection
-from ema.poles.stabilisation import SelectedPoles, Stability
+from ema.poles.stabilisation import Stability
 from ema.shapes.complexity import mpc, mpd, real_modes
 from ema.shapes.lsfd import QUANTITY_POWER, LsfdResult, lsfd
 from ema.shapes.mass_line import RigidBody, rigid_body_from_mass_line, rigid_body_from_modes
@@ -93,7 +93,7 @@ class ModalFit:
         band_hz, method, quantity: what was fitted.
         band_freq_hz: (F_band,) lines of the fit; synth: (F_band, n_resp, n_ref) synthesis.
         mif: (F_band,) sum MIF of the measured FRFs on those lines.
-        sweep, stability, selected: LSCF stabilisation data (None for the peak method).
+        sweep, stability: LSCF stabilisation data (None for the peak method).
         peaks: the sum-MIF peaks (both methods: the quick cross-check).
         rejected: every candidate pole not reported, with why (``ema.poles.rejected``).
         warnings: per mode, what its numbers cannot be trusted for (``ema.mode_checks``).
@@ -131,7 +131,6 @@ class ModalFit:
     mif: np.ndarray
     sweep: PoleSweep | None
     stability: Stability | None
-    selected: SelectedPoles | None
     peaks: PeakPick
     scaled: bool = True
     rejected: tuple[Rejection, ...] = ()
@@ -164,7 +163,6 @@ class _Poles:
     extra: np.ndarray
     sweep: PoleSweep | None
     stability: Stability | None
-    selected: SelectedPoles | None
     rejected: list[Rejection]
 
     @property
@@ -237,13 +235,45 @@ def _select_poles(
         n_poly_ref = lay.h_poly.shape[2]
         p_max = int(max_order) if max_order else max(12, 30 // n_poly_ref)
         auto = auto_poles(test.freq_hz, lay.h_poly, band, p_max)
-        sel = auto.modes
-        return _Poles(sel.freq_hz, sel.damping_ratio, sel.freq_std_hz, sel.damping_std,
-                      sel.count, np.concatenate([auto.outside.pole, auto.computational]),
-                      auto.sweep, auto.stability, sel, list(auto.rejected))
+        sel, rejected = auto.modes, list(auto.rejected)
+        rescued = _peak_confirmed(sel.freq_hz, rejected, peaks)
+        f_r = np.array([r.freq_hz for r in rescued])
+        z_r = np.array([r.damping_ratio for r in rescued])
+        order = np.argsort(np.r_[sel.freq_hz, f_r])
+
+        def cat(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+            return np.r_[a, b][order]
+
+        return _Poles(cat(sel.freq_hz, f_r), cat(sel.damping_ratio, z_r),
+                      cat(sel.freq_std_hz, np.full(f_r.size, np.nan)),
+                      cat(sel.damping_std, np.full(f_r.size, np.nan)),
+                      cat(sel.count, np.array([r.stable_orders for r in rescued], dtype=int)),
+                      np.concatenate([auto.outside.pole, auto.computational]),
+                      auto.sweep, auto.stability,
+                      [r for r in rejected if r not in rescued])
     n = peaks.freq_hz.size
     return _Poles(peaks.freq_hz, peaks.damping_ratio, np.full(n, np.nan), np.full(n, np.nan),
-                  np.zeros(n, dtype=int), np.zeros(0, dtype=complex), None, None, None, [])
+                  np.zeros(n, dtype=int), np.zeros(0, dtype=complex), None, None, [])
+
+
+def _peak_confirmed(
+    mode_freq_hz: np.ndarray, rejected: list[Rejection], peaks: PeakPick, min_orders: int = 3
+) -> list[Rejection]:
+    """Candidates rejected for stability that a sum-MIF peak confirms: stable at >= min_orders
+    orders, within the peak's half-power half-width (at least 1 %) of a peak that no selected
+    mode explains. A heavily damped mode whose peak moves between the FRFs is stable at fewer
+    orders than the automatic criterion asks, yet plain to see; the support check after the
+    LSFD still applies to it. One (the most stable) per peak."""
+    out: list[Rejection] = []
+    for fp, zp in zip(peaks.freq_hz, peaks.damping_ratio, strict=True):
+        width = max(zp, 0.01) * fp
+        if np.any(np.abs(mode_freq_hz - fp) <= width):
+            continue
+        near = [r for r in rejected if r.reason == "stability" and r.stable_orders >= min_orders
+                and abs(r.freq_hz - fp) <= width and r not in out]
+        if near:
+            out.append(max(near, key=lambda r: r.stable_orders))
+    return out
 
 
 def _support(
@@ -308,17 +338,17 @@ def _residues(
         ]
         p = _Poles(p.freq_hz[keep], p.damping_ratio[keep], p.freq_std_hz[keep],
                    p.damping_std[keep], p.count[keep], extra, p.sweep, p.stability,
-                   None if p.selected is None else take(p.selected, keep), rejected)
+                   rejected)
         fit = lsfd(freq, h_flat, np.concatenate([p.pole, extra]), test.quantity, band,
                    lower=lower)
     else:
         p = _Poles(p.freq_hz, p.damping_ratio, p.freq_std_hz, p.damping_std, p.count, extra,
-                   p.sweep, p.stability, p.selected, rejected)
+                   p.sweep, p.stability, rejected)
     if refine and p.freq_hz.size:
         ref = refine_poles(freq, h_flat, p.freq_hz, p.damping_ratio, test.quantity, band,
                            lower=lower, extra_poles=extra)
         p = _Poles(ref.freq_hz, ref.damping_ratio, ref.freq_std_hz, ref.damping_std, p.count,
-                   ref.extra_pole, p.sweep, p.stability, p.selected, p.rejected)
+                   ref.extra_pole, p.sweep, p.stability, p.rejected)
         fit = lsfd(freq, h_flat, np.r_[p.pole, p.extra], test.quantity, band, lower=lower)
     return p, fit
 
@@ -469,7 +499,6 @@ def fit_test(
         mif=mif,
         sweep=p.sweep,
         stability=p.stability,
-        selected=p.selected,
         peaks=peaks,
         scaled=lay.driving is not None,
         rejected=tuple(sorted(p.rejected, key=lambda r: r.freq_hz)),

@@ -17,12 +17,14 @@ REASONS = ("stability", "complexity", "band_edge", "support", "merged")
 
 @dataclass(frozen=True)
 class Rejection:
-    """One rejected candidate: its frequency (Hz), damping ratio, reason and a short detail."""
+    """One rejected candidate: its frequency (Hz), damping ratio, reason and a short detail;
+    ``stable_orders``: model orders at which it was stable (0 when not from a sweep)."""
 
     freq_hz: float
     damping_ratio: float
     reason: str
     detail: str
+    stable_orders: int = 0
 
     def __post_init__(self) -> None:
         if self.reason not in REASONS:

@@ -179,7 +179,8 @@ def select_poles(
         if members.size < min_count:
             if members.size >= 2:
                 rejected.append(Rejection(fm, zm, "stability", f"stable at {members.size} of "
-                                          f"{sweep.orders.size} orders (needs {min_count})"))
+                                          f"{sweep.orders.size} orders (needs {min_count})",
+                                          int(members.size)))
             continue
         rep = members[np.argmin(np.abs(f - fm) / fm + np.abs(z - zm) / zm)]
         phase = float(mpc(sweep.shape[rep][:, None])[0])
