@@ -42,11 +42,13 @@ class AutoPoles:
 
 
 def sub_bands(
-    band_hz: tuple[float, float], overlap: float = 0.25
+    band_hz: tuple[float, float], overlap: float = 0.25, shift: float = 1.0
 ) -> list[tuple[tuple[float, float], tuple[float, float]]]:
-    """[(core, fitted band), ...] covering band_hz (see module docstring)."""
+    """[(core, fitted band), ...] covering band_hz (see module docstring); ``shift`` multiplies
+    the inner core edges (the second partition uses sqrt 2: its core centres sit on the first
+    partition's core edges)."""
     lo, hi = band_hz
-    edges = [lo, max(2 * lo, lo + 80.0)]
+    edges = [lo, max(2 * lo, lo + 80.0) * shift]
     while edges[-1] < hi:
         edges.append(2 * edges[-1])
     edges[-1] = hi
@@ -108,14 +110,55 @@ def auto_poles(
     dup_tol: float = 0.003,
     order_step: int = 1,
 ) -> AutoPoles:
-    """Physical poles in band_hz of frf (F, l, m) (polyreference orientation), automatically."""
+    """Physical poles in band_hz of frf (F, l, m) (polyreference orientation), automatically.
+
+    Two partitions into sub-bands are fitted, the second with its core edges shifted by
+    sqrt 2 (``sub_bands``): a mode near a core edge of one (where it is fitted off-centre and
+    may fall short of the stability criterion) sits mid-core in the other. The modes are the
+    union (a second-partition mode within the duplicate tolerance of a first-partition one is
+    the same mode), so which modes are found depends much less on where the band starts and
+    ends: a mode found in a sub-band is found in the full band. The stabilisation data and
+    computational poles are the first partition's.
+    """
+    one = _partition_poles(freq_hz, frf, band_hz, max_order, dup_tol, order_step, 1.0)
+    two = _partition_poles(freq_hz, frf, band_hz, max_order, dup_tol, order_step, np.sqrt(2))
+    a, b = one.modes, two.modes
+    new = np.ones(b.freq_hz.size, dtype=bool)
+    for k in range(b.freq_hz.size):
+        tol = max(dup_tol, 0.5 * b.damping_ratio[k]) * b.freq_hz[k]
+        new[k] = not np.any(np.abs(a.freq_hz - b.freq_hz[k]) <= tol)
+    modes, merged_away = merge_overlapping(_concat([a, take(b, new)], a.shape.shape[1]))
+    found = modes.freq_hz
+
+    def explained(r: Rejection) -> bool:  # a rejection that the other partition overturned
+        return bool(np.any(np.abs(found - r.freq_hz) <= max(dup_tol, 0.5 * r.damping_ratio)
+                           * r.freq_hz))
+
+    rejected = [r for r in one.rejected + two.rejected if not explained(r)] + merged_away
+    unique: dict[tuple[str, float], Rejection] = {}
+    for r in rejected:  # the same candidate rejected by both partitions: listed once
+        unique.setdefault((r.reason, round(r.freq_hz, 0)), r)
+    return AutoPoles(modes, one.outside, one.computational, one.sweep, one.stability,
+                     one.sub_bands, sorted(unique.values(), key=lambda r: r.freq_hz))
+
+
+def _partition_poles(
+    freq_hz: np.ndarray,
+    frf: np.ndarray,
+    band_hz: tuple[float, float],
+    max_order: int,
+    dup_tol: float,
+    order_step: int,
+    shift: float,
+) -> AutoPoles:
+    """``auto_poles`` over one partition into sub-bands (``sub_bands(band_hz, shift=shift)``)."""
     freq_hz = np.asarray(freq_hz, dtype=float)
     df = freq_hz[1] - freq_hz[0]
     n_out = frf.shape[1]
     lo, hi = band_hz
     found, outside, sweeps, stabs, computational = [], [], [], [], []
     rejected: list[Rejection] = []
-    for (a, b), (fa, fb) in sub_bands(band_hz):
+    for (a, b), (fa, fb) in sub_bands(band_hz, shift=shift):
         n_lines = int((fb - fa) / df)
         p = min(int(max_order), n_lines // 4)
         if p < 4:
@@ -192,7 +235,8 @@ def auto_poles(
     )
     return AutoPoles(
         modes, out, _distinct(np.concatenate(computational), out.pole), merged, merged_stab,
-        [fb for _, fb in sub_bands(band_hz)], sorted(rejected, key=lambda r: r.freq_hz),
+        [fb for _, fb in sub_bands(band_hz, shift=shift)],
+        sorted(rejected, key=lambda r: r.freq_hz),
     )
 
 
