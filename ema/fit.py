@@ -22,8 +22,8 @@ the data is clipped to it, with a note):
    and used for the mass check (``ema.shapes.mass_line``). A band starting below
    ``suspension_max_hz`` fits them as modes and drops the lower residual terms (which would
    trade off against them); otherwise the lower residual is the mass line;
-7. per-mode warnings (under-resolved damping, leakage, low coherence) and close pairs
-   (``ema.mode_checks``).
+7. per-mode warnings (under-resolved damping, leakage, low coherence: ``ema.mode_checks``;
+   possibly merged pair: a rejected second pole next to it) and close pairs.
 
 Every candidate pole that is not reported says why (``ModalFit.rejected``,
 ``ema.poles.rejected``), and a fit that finds nothing says why in ``ModalFit.notes``.
@@ -44,7 +44,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ema.io.frf_data import FrfTest
-from ema.mode_checks import ClosePair, close_pairs, mode_warnings
+from ema.mode_checks import CLOSE_PAIR, ClosePair, close_pairs, mode_warnings
 from ema.poles.autopoles import auto_poles
 from ema.poles.lscf import PoleSweep
 from ema.poles.mif import PeakPick, pick_peaks, receptance_power, sum_mif
@@ -97,7 +97,7 @@ class ModalFit:
         peaks: the sum-MIF peaks (both methods: the quick cross-check).
         rejected: every candidate pole not reported, with why (``ema.poles.rejected``).
         warnings: per mode, what its numbers cannot be trusted for (``ema.mode_checks``).
-        close_pairs: neighbouring modes closer than 6 % (``ema.mode_checks``).
+        close_pairs: neighbouring modes closer than 6.5 % (``ema.mode_checks``).
         notes: fit-level notes (band clipped, no driving point, why nothing was found).
     """
 
@@ -254,6 +254,23 @@ def _select_poles(
     n = peaks.freq_hz.size
     return _Poles(peaks.freq_hz, peaks.damping_ratio, np.full(n, np.nan), np.full(n, np.nan),
                   np.zeros(n, dtype=int), np.zeros(0, dtype=complex), None, None, [])
+
+
+def _merge_warnings(freq_hz: np.ndarray, rejected: list[Rejection]) -> list[list[str]]:
+    """Per mode: 'possibly merged pair' when a second pole within ``CLOSE_PAIR`` of it was
+    rejected (merged into it, or without support in the data): the fitter saw two poles and
+    reports one."""
+    out: list[list[str]] = []
+    for f in freq_hz:
+        w = []
+        near = [r for r in rejected if r.reason in ("merged", "support")
+                and 0 < abs(r.freq_hz / f - 1) < CLOSE_PAIR]
+        if near:
+            r = min(near, key=lambda r: abs(r.freq_hz - f))
+            w.append(f"possibly merged pair: a second pole at {r.freq_hz:.5g} Hz "
+                     f"({abs(r.freq_hz / f - 1):.2%} away) was rejected ({r.reason})")
+        out.append(w)
+    return out
 
 
 def _peak_confirmed(
@@ -454,6 +471,7 @@ def fit_test(
     df = float(freq[1] - freq[0])
     coh = None if test.coherence is None else test.coherence[sel]
     warn = mode_warnings(p.freq_hz, zr, df, coh, freq[sel])  # on the fitted (windowed) zeta
+    warn = [a + b for a, b in zip(warn, _merge_warnings(p.freq_hz, p.rejected), strict=True)]
     zr = zr - window
 
     x_m = test.x_m(lay.nodes)

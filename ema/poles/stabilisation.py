@@ -106,7 +106,8 @@ def _join_smeared(
 
     A heavily damped mode, or one whose peak moves between the FRFs, shows up at some orders
     as two poles (one per order is allowed in a cluster), fragmenting it into clusters that
-    each look unstable; together they are one mode.
+    each look unstable; together they are one mode. Two clusters present together at more
+    than half the orders of the smaller one are two modes (a close pair) and stay apart.
     """
     med = [(float(np.median(sweep.freq_hz[g])), float(np.median(sweep.damping_ratio[g])), g)
            for g in groups]
@@ -115,7 +116,9 @@ def _join_smeared(
     for fm, zm, g in med:
         if out:
             f0, z0, g0 = out[-1]
-            if fm - f0 <= max(tol_freq, 0.25 * (z0 + zm)) * 0.5 * (f0 + fm):
+            shared = np.intersect1d(sweep.order[g0], sweep.order[g]).size
+            if (fm - f0 <= max(tol_freq, 0.25 * (z0 + zm)) * 0.5 * (f0 + fm)
+                    and shared <= 0.5 * min(g0.size, g.size)):
                 g1 = np.concatenate([g0, g])
                 out[-1] = [float(np.median(sweep.freq_hz[g1])),
                            float(np.median(sweep.damping_ratio[g1])), g1]
