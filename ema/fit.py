@@ -185,7 +185,11 @@ def clip_band(
     """
     f = np.asarray(freq_hz, dtype=float)
     if band_hz is None:
-        return default_band(f), []
+        band = default_band(f)
+        if band[0] >= band[1]:
+            raise ValueError(f"the data end at {band[1]:g} Hz, below the default band start "
+                             f"{band[0]:g} Hz: give --band")
+        return band, []
     lo, hi = float(band_hz[0]), float(band_hz[1])
     first, last = float(f[f > 0][0]), float(f[-1])
     if not lo < hi:
@@ -207,6 +211,15 @@ def _poles(zeta: np.ndarray, freq_hz: np.ndarray) -> np.ndarray:
 
 def _misfit(fit: LsfdResult, h: np.ndarray) -> float:
     return float(np.linalg.norm(h - fit.synth))
+
+
+def _require_usable(h_band: np.ndarray, band: tuple[float, float]) -> None:
+    """ValueError when the data cannot hold a mode: too few lines or no signal in the band."""
+    if h_band.shape[0] < 8:
+        raise ValueError(f"band {band[0]:g}-{band[1]:g} Hz has {h_band.shape[0]} lines "
+                         "(too few lines to fit; at least 8)")
+    if not np.any(np.abs(h_band) > 0):
+        raise ValueError(f"every FRF is zero in {band[0]:g}-{band[1]:g} Hz")
 
 
 def _layout(test: FrfTest) -> _Layout:
@@ -451,6 +464,7 @@ def fit_test(
                      "unscaled (largest entry 1), no mass normalisation or rigid-body check")
     n_resp, n_ref = test.frf.shape[1:]
     sel = (freq >= band[0]) & (freq <= band[1]) & (freq > 0)
+    _require_usable(test.frf[sel], band)
     mif = sum_mif(test.frf[sel])
     peaks = pick_peaks(freq[sel], receptance_power(freq[sel], mif, test.quantity), band)
 

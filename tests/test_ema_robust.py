@@ -205,3 +205,22 @@ def test_unresolved_pair_is_said_to_be_merged():
     else:
         k = int(np.argmin(np.abs(fit.freq_hz - 560.0)))
         assert any(w.startswith("possibly merged pair") for w in fit.warnings[k])
+
+
+def test_unusable_data_exit_2_with_one_line(tmp_path, capsys):
+    """Data that cannot hold a mode (all zero; ending below the default band) is an error:
+    exit 2, one line naming the problem, nothing on stdout."""
+    from ema.io.uff import write_uff
+
+    nodes = np.arange(1, 5)
+    x = {k: 0.1 * k for k in range(1, 5)}
+    cases = [(FrfTest(FREQ, np.zeros((FREQ.size, 1, 4), complex), [1], nodes, x),
+              "every FRF is zero"),
+             (FrfTest(FREQ[:30], np.ones((30, 1, 4), complex), [1], nodes, x),
+              "below the default band start")]
+    for test, message in cases:
+        path = tmp_path / "bad.uff"
+        write_uff(path, test)
+        assert main(["fit", str(path), "--json"]) == 2
+        cap = capsys.readouterr()
+        assert cap.out == "" and message in cap.err.strip().splitlines()[-1]
