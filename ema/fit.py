@@ -1,6 +1,7 @@
 """Automatic experimental modal analysis of one test: FRFs -> poles -> scaled modes.
 
-``fit_test`` runs, with no human picking:
+``fit_test`` runs, with no human picking (one function per step below; a band reaching past
+the data is clipped to it, with a note):
 
 1. poles: polyreference LSCF over an order sweep in overlapping sub-bands (``ema.poles.lscf``,
    ``ema.poles.autopoles``), stabilisation and automatic selection
@@ -20,7 +21,14 @@
 6. modes below ``suspension_max_hz`` are the suspension's rigid-body modes: reported apart,
    and used for the mass check (``ema.shapes.mass_line``). A band starting below
    ``suspension_max_hz`` fits them as modes and drops the lower residual terms (which would
-   trade off against them); otherwise the lower residual is the mass line.
+   trade off against them); otherwise the lower residual is the mass line;
+7. per-mode warnings (under-resolved damping, leakage, low coherence: ``ema.mode_checks``;
+   possibly merged pair: a rejected second pole next to it) and close pairs.
+
+Every candidate pole that is not reported says why (``ModalFit.rejected``,
+``ema.poles.rejected``), and a fit that finds nothing says why in ``ModalFit.notes``.
+A test without a driving point gives *unscaled* shapes (largest entry 1, ``scaled`` False):
+the mass normalisation needs the driving-point residue.
 
 Orientation: the polyreference "references" are the side with fewer nodes. For a roving-hammer
 test (1 accelerometer x n impacts) the FRF matrix is fitted transposed (reciprocity,
@@ -36,17 +44,20 @@ from dataclasses import dataclass
 import numpy as np
 
 from ema.io.frf_data import FrfTest
-from ema.poles.autopoles import auto_poles, take
+from ema.mode_checks import CLOSE_PAIR, ClosePair, close_pairs, mode_warnings
+from ema.poles.autopoles import auto_poles
 from ema.poles.lscf import PoleSweep
 from ema.poles.mif import PeakPick, pick_peaks, receptance_power, sum_mif
 from ema.poles.refine import refine_poles
-from ema.poles.stabilisation import SelectedPoles, Stability
+from ema.poles.rejected import Rejection
+from ema.poles.stabilisation import Stability
 from ema.shapes.complexity import mpc, mpd, real_modes
 from ema.shapes.lsfd import QUANTITY_POWER, LsfdResult, lsfd
 from ema.shapes.mass_line import RigidBody, rigid_body_from_mass_line, rigid_body_from_modes
-from ema.shapes.scaling import fix_sign, mass_normalised_shapes
+from ema.shapes.scaling import fix_sign, mass_normalised_shapes, unscaled_shapes
 
 METHODS = ("lscf", "peak")
+MIN_SNR = 10.0
 
 
 @dataclass(frozen=True)
@@ -56,13 +67,16 @@ class ModalFit:
     Attributes:
         freq_hz: (m,) undamped natural frequencies |lambda| / 2 pi, Hz.
         damping_ratio: (m,) viscous damping ratios (exponential window removed).
-        shapes: (n_nodes, m) complex mass-normalised shapes, 1/sqrt(kg) (``ema.shapes.scaling``).
+        shapes: (n_nodes, m) complex mass-normalised shapes, 1/sqrt(kg) (``ema.shapes.scaling``);
+            unscaled (largest entry 1) when the test has no driving point (``scaled`` False).
         real_shapes: (n_nodes, m) nearest real shapes, 1/sqrt(kg); sign: driving-point entry
-            positive (largest-magnitude entry positive when the driving point is a node).
+            positive (largest-magnitude entry positive when the driving point is a node or
+            the test has none).
         nodes: (n_nodes,) node numbers of the shape rows (the impact nodes for a roving hammer).
         x_m: (n_nodes,) node positions from the knob end, m.
-        driving_index: row of ``nodes`` that is the driving point.
-        driving_frf: (response index, reference index) of the driving-point FRF.
+        driving_index: row of ``nodes`` that is the driving point (None: no driving point).
+        driving_frf: (response index, reference index) of the driving-point FRF (or None).
+        scaled: True when the shapes are mass-normalised (a driving point was measured).
         mpc: (m,) modal phase collinearity, 0..1 (1: real mode).
         mpd: (m,) mean phase deviation, degrees (0: real mode).
         freq_std_hz, damping_std: (m,) spread over the model orders (NaN for the peak method);
@@ -79,8 +93,12 @@ class ModalFit:
         band_hz, method, quantity: what was fitted.
         band_freq_hz: (F_band,) lines of the fit; synth: (F_band, n_resp, n_ref) synthesis.
         mif: (F_band,) sum MIF of the measured FRFs on those lines.
-        sweep, stability, selected: LSCF stabilisation data (None for the peak method).
+        sweep, stability: LSCF stabilisation data (None for the peak method).
         peaks: the sum-MIF peaks (both methods: the quick cross-check).
+        rejected: every candidate pole not reported, with why (``ema.poles.rejected``).
+        warnings: per mode, what its numbers cannot be trusted for (``ema.mode_checks``).
+        close_pairs: neighbouring modes closer than 6.5 % (``ema.mode_checks``).
+        notes: fit-level notes (band clipped, no driving point, why nothing was found).
     """
 
     freq_hz: np.ndarray
@@ -89,8 +107,8 @@ class ModalFit:
     real_shapes: np.ndarray
     nodes: np.ndarray
     x_m: np.ndarray
-    driving_index: int
-    driving_frf: tuple[int, int]
+    driving_index: int | None
+    driving_frf: tuple[int, int] | None
     mpc: np.ndarray
     mpd: np.ndarray
     freq_std_hz: np.ndarray
@@ -113,14 +131,76 @@ class ModalFit:
     mif: np.ndarray
     sweep: PoleSweep | None
     stability: Stability | None
-    selected: SelectedPoles | None
     peaks: PeakPick
+    scaled: bool = True
+    rejected: tuple[Rejection, ...] = ()
+    warnings: tuple[tuple[str, ...], ...] = ()
+    close_pairs: tuple[ClosePair, ...] = ()
+    notes: tuple[str, ...] = ()
+
+
+@dataclass(frozen=True)
+class _Layout:
+    """Polyreference orientation (module docstring): the FRFs as fitted, the shape nodes, the
+    driving point (None when the test has none) and the residue row the shapes come from."""
+
+    h_poly: np.ndarray
+    nodes: np.ndarray
+    row_layout: bool
+    driving: tuple[int, int] | None
+    d_index: int | None
+
+
+@dataclass(frozen=True)
+class _Poles:
+    """Poles to fit residues to (step 1) and their uncertainties."""
+
+    freq_hz: np.ndarray
+    damping_ratio: np.ndarray
+    freq_std_hz: np.ndarray
+    damping_std: np.ndarray
+    count: np.ndarray
+    extra: np.ndarray
+    sweep: PoleSweep | None
+    stability: Stability | None
+    rejected: list[Rejection]
+
+    @property
+    def pole(self) -> np.ndarray:
+        return _poles(self.damping_ratio, self.freq_hz)
 
 
 def default_band(freq_hz: np.ndarray, low_hz: float = 20.0) -> tuple[float, float]:
     """(max(low_hz, first nonzero line), last line)."""
     f = np.asarray(freq_hz, dtype=float)
     return float(max(low_hz, f[f > 0][0])), float(f[-1])
+
+
+def clip_band(
+    freq_hz: np.ndarray, band_hz: tuple[float, float] | None
+) -> tuple[tuple[float, float], list[str]]:
+    """The band to fit and a note when the requested one reached past the data.
+
+    ValueError when the requested band and the data do not overlap.
+    """
+    f = np.asarray(freq_hz, dtype=float)
+    if band_hz is None:
+        band = default_band(f)
+        if band[0] >= band[1]:
+            raise ValueError(f"the data end at {band[1]:g} Hz, below the default band start "
+                             f"{band[0]:g} Hz: give --band")
+        return band, []
+    lo, hi = float(band_hz[0]), float(band_hz[1])
+    first, last = float(f[f > 0][0]), float(f[-1])
+    if not lo < hi:
+        raise ValueError(f"band {lo:g}-{hi:g} Hz is empty")
+    if hi <= first or lo >= last:
+        raise ValueError(f"band {lo:g}-{hi:g} Hz is not inside the test's {f[0]:g}-{last:g} Hz")
+    clipped = (max(lo, first), min(hi, last))
+    if clipped != (lo, hi):
+        return clipped, [f"band {lo:g}-{hi:g} Hz reaches past the data ({f[0]:g}-{last:g} Hz): "
+                         f"clipped to {clipped[0]:g}-{clipped[1]:g} Hz"]
+    return clipped, []
 
 
 def _poles(zeta: np.ndarray, freq_hz: np.ndarray) -> np.ndarray:
@@ -133,10 +213,104 @@ def _misfit(fit: LsfdResult, h: np.ndarray) -> float:
     return float(np.linalg.norm(h - fit.synth))
 
 
-def _supported(
-    fit: LsfdResult, h: np.ndarray, poles: np.ndarray, quantity: str, min_snr: float
-) -> np.ndarray:
-    """Mask of the modes whose contribution at resonance stands above the local misfit."""
+def _require_usable(h_band: np.ndarray, band: tuple[float, float]) -> None:
+    """ValueError when the data cannot hold a mode: too few lines or no signal in the band."""
+    if h_band.shape[0] < 8:
+        raise ValueError(f"band {band[0]:g}-{band[1]:g} Hz has {h_band.shape[0]} lines "
+                         "(too few lines to fit; at least 8)")
+    if not np.any(np.abs(h_band) > 0):
+        raise ValueError(f"every FRF is zero in {band[0]:g}-{band[1]:g} Hz")
+
+
+def _layout(test: FrfTest) -> _Layout:
+    """Step 0: orientation (fewer nodes = references) and the driving point, if any."""
+    n_resp, n_ref = test.frf.shape[1:]
+    row_layout = n_ref >= n_resp  # shapes along the references (roving hammer)
+    try:
+        driving = test.driving_point
+    except ValueError:
+        driving = None
+    return _Layout(
+        h_poly=np.transpose(test.frf, (0, 2, 1)) if row_layout else test.frf,
+        nodes=np.asarray(test.reference_nodes if row_layout else test.response_nodes),
+        row_layout=row_layout,
+        driving=driving,
+        d_index=None if driving is None else (driving[1] if row_layout else driving[0]),
+    )
+
+
+def _select_poles(
+    test: FrfTest, lay: _Layout, band: tuple[float, float], method: str,
+    max_order: int | None, peaks: PeakPick,
+) -> _Poles:
+    """Step 1: poles by LSCF + automatic stabilisation, or the sum-MIF peaks."""
+    if method == "lscf":
+        n_poly_ref = lay.h_poly.shape[2]
+        p_max = int(max_order) if max_order else max(12, 30 // n_poly_ref)
+        auto = auto_poles(test.freq_hz, lay.h_poly, band, p_max)
+        sel, rejected = auto.modes, list(auto.rejected)
+        rescued = _peak_confirmed(sel.freq_hz, rejected, peaks)
+        f_r = np.array([r.freq_hz for r in rescued])
+        z_r = np.array([r.damping_ratio for r in rescued])
+        order = np.argsort(np.r_[sel.freq_hz, f_r])
+
+        def cat(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+            return np.r_[a, b][order]
+
+        return _Poles(cat(sel.freq_hz, f_r), cat(sel.damping_ratio, z_r),
+                      cat(sel.freq_std_hz, np.full(f_r.size, np.nan)),
+                      cat(sel.damping_std, np.full(f_r.size, np.nan)),
+                      cat(sel.count, np.array([r.stable_orders for r in rescued], dtype=int)),
+                      np.concatenate([auto.outside.pole, auto.computational]),
+                      auto.sweep, auto.stability,
+                      [r for r in rejected if r not in rescued])
+    n = peaks.freq_hz.size
+    return _Poles(peaks.freq_hz, peaks.damping_ratio, np.full(n, np.nan), np.full(n, np.nan),
+                  np.zeros(n, dtype=int), np.zeros(0, dtype=complex), None, None, [])
+
+
+def _merge_warnings(freq_hz: np.ndarray, rejected: list[Rejection]) -> list[list[str]]:
+    """Per mode: 'possibly merged pair' when a second pole within ``CLOSE_PAIR`` of it was
+    rejected (merged into it, or without support in the data): the fitter saw two poles and
+    reports one."""
+    out: list[list[str]] = []
+    for f in freq_hz:
+        w = []
+        near = [r for r in rejected if r.reason in ("merged", "support")
+                and 0 < abs(r.freq_hz / f - 1) < CLOSE_PAIR]
+        if near:
+            r = min(near, key=lambda r: abs(r.freq_hz - f))
+            w.append(f"possibly merged pair: a second pole at {r.freq_hz:.5g} Hz "
+                     f"({abs(r.freq_hz / f - 1):.2%} away) was rejected ({r.reason})")
+        out.append(w)
+    return out
+
+
+def _peak_confirmed(
+    mode_freq_hz: np.ndarray, rejected: list[Rejection], peaks: PeakPick, min_orders: int = 3
+) -> list[Rejection]:
+    """Candidates rejected for stability that a sum-MIF peak confirms: stable at >= min_orders
+    orders, within the peak's half-power half-width (at least 1 %) of a peak that no selected
+    mode explains. A heavily damped mode whose peak moves between the FRFs is stable at fewer
+    orders than the automatic criterion asks, yet plain to see; the support check after the
+    LSFD still applies to it. One (the most stable) per peak."""
+    out: list[Rejection] = []
+    for fp, zp in zip(peaks.freq_hz, peaks.damping_ratio, strict=True):
+        width = max(zp, 0.01) * fp
+        if np.any(np.abs(mode_freq_hz - fp) <= width):
+            continue
+        near = [r for r in rejected if r.reason == "stability" and r.stable_orders >= min_orders
+                and abs(r.freq_hz - fp) <= width and r not in out]
+        if near:
+            out.append(max(near, key=lambda r: r.stable_orders))
+    return out
+
+
+def _support(
+    fit: LsfdResult, h: np.ndarray, poles: np.ndarray, quantity: str
+) -> tuple[np.ndarray, np.ndarray]:
+    """(signal, noise) per mode: its contribution at its own resonance (RMS over the FRFs)
+    and the RMS misfit of the synthesis within 5 half-power half-widths (at least 5 lines)."""
     f = fit.freq_hz
     misfit = np.sqrt(np.mean(np.abs(h - fit.synth) ** 2, axis=1))  # (F,)
     s = 1j * np.abs(poles)  # i w_r
@@ -145,13 +319,111 @@ def _supported(
         / (s - np.conj(poles))
     )  # (n_frf, m): each mode's own contribution at its resonance
     signal = np.sqrt(np.mean(np.abs(term) ** 2, axis=0))
-    keep = np.ones(poles.size, dtype=bool)
+    noise = np.zeros(poles.size)
     for r, lam in enumerate(poles):  # one window per mode
         half_bw = max(-lam.real / (2 * np.pi), f[1] - f[0])
         near = np.abs(f - abs(lam) / (2 * np.pi)) <= 5 * half_bw
-        noise = np.sqrt(np.mean(misfit[near] ** 2)) if near.any() else 0.0
-        keep[r] = signal[r] > min_snr * noise
-    return keep
+        noise[r] = np.sqrt(np.mean(misfit[near] ** 2)) if near.any() else 0.0
+    return signal, noise
+
+
+def support_threshold(damping_ratio: np.ndarray, min_snr: float = MIN_SNR) -> np.ndarray:
+    """Support a mode needs: min_snr / sqrt(max(1, zeta / 1 %)).
+
+    The local misfit of a heavily damped mode holds more than noise: FRFs whose peak moves
+    ~2 % between the points leave a systematic misfit over its wide half-power band that a
+    common-pole model cannot remove (at 5 % damping the threshold is 4.5, at 1 % and below
+    ``min_snr``)."""
+    return min_snr / np.sqrt(np.maximum(1.0, np.asarray(damping_ratio, float) / 0.01))
+
+
+def _residues(
+    test: FrfTest, band: tuple[float, float], sel: np.ndarray, p: _Poles, lower: bool,
+    min_snr: float, refine: bool,
+) -> tuple[_Poles, LsfdResult]:
+    """Steps 2-3 (and the optional refinement): LSFD residues with the computational poles
+    when they lower a real misfit by 5 %, then modes without support dropped (reported)."""
+    freq = test.freq_hz
+    h_flat = test.frf.reshape(freq.size, -1)
+    fit = lsfd(freq, h_flat, p.pole, test.quantity, band, lower=lower)
+    extra = p.extra
+    if extra.size:  # computational poles only when they explain the band edges better
+        with_extra = lsfd(freq, h_flat, np.r_[p.pole, extra], test.quantity, band, lower=lower)
+        base = _misfit(fit, h_flat[sel])
+        better = _misfit(with_extra, h_flat[sel]) < 0.95 * base
+        if better and base > 1e-4 * np.linalg.norm(h_flat[sel]):
+            fit = with_extra
+        else:
+            extra = extra[:0]
+    signal, noise = _support(fit, h_flat[sel], p.pole, test.quantity)
+    need = support_threshold(p.damping_ratio, min_snr)
+    keep = signal > need * noise
+    rejected = list(p.rejected)
+    if not keep.all():
+        rejected += [
+            Rejection(float(p.freq_hz[r]), float(p.damping_ratio[r]), "support",
+                      f"contribution at resonance {signal[r] / max(noise[r], 1e-300):.3g} x the "
+                      f"local misfit (needs {need[r]:.3g})")
+            for r in np.flatnonzero(~keep)
+        ]
+        p = _Poles(p.freq_hz[keep], p.damping_ratio[keep], p.freq_std_hz[keep],
+                   p.damping_std[keep], p.count[keep], extra, p.sweep, p.stability,
+                   rejected)
+        fit = lsfd(freq, h_flat, np.concatenate([p.pole, extra]), test.quantity, band,
+                   lower=lower)
+    else:
+        p = _Poles(p.freq_hz, p.damping_ratio, p.freq_std_hz, p.damping_std, p.count, extra,
+                   p.sweep, p.stability, rejected)
+    if refine and p.freq_hz.size:
+        ref = refine_poles(freq, h_flat, p.freq_hz, p.damping_ratio, test.quantity, band,
+                           lower=lower, extra_poles=extra)
+        p = _Poles(ref.freq_hz, ref.damping_ratio, ref.freq_std_hz, ref.damping_std, p.count,
+                   ref.extra_pole, p.sweep, p.stability, p.rejected)
+        fit = lsfd(freq, h_flat, np.r_[p.pole, p.extra], test.quantity, band, lower=lower)
+    return p, fit
+
+
+def _shapes(
+    test: FrfTest, lay: _Layout, residue: np.ndarray, poles: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """Step 4: (complex, real) shapes, mass-normalised through the driving point, else
+    unscaled from the first row of residues."""
+    if lay.driving is not None:
+        i_d, j_d = lay.driving
+        row = residue[i_d, :, :] if lay.row_layout else residue[:, j_d, :]
+        shapes = mass_normalised_shapes(row, poles, lay.d_index)
+    else:
+        row = residue[0, :, :] if lay.row_layout else residue[:, 0, :]
+        shapes = unscaled_shapes(row, poles)
+    return shapes, fix_sign(real_modes(shapes), lay.d_index)
+
+
+def _rigid(
+    lay: _Layout, real_susp: np.ndarray, mass_line: np.ndarray, x_m: np.ndarray,
+    known_mass_kg: float | None,
+) -> RigidBody:
+    """Step 6: the rigid body from the suspension modes, else from the mass line."""
+    if lay.driving is None:
+        return RigidBody(None, None, None)
+    if real_susp.shape[1] >= 2:
+        return rigid_body_from_modes(real_susp, x_m)
+    i_d, j_d = lay.driving
+    ml_row = mass_line[i_d, :] if lay.row_layout else mass_line[:, j_d]
+    return rigid_body_from_mass_line(ml_row, x_m, float(x_m[lay.d_index]), known_mass_kg)
+
+
+def _empty_notes(p: _Poles, peaks: PeakPick, method: str) -> list[str]:
+    """Why a fit found no mode (stderr and --json say it)."""
+    if method == "peak":
+        return ["no mode: no sum-MIF peak with prominence x4 and a half-power width in the band"]
+    counts: dict[str, int] = {}
+    for r in p.rejected:
+        counts[r.reason] = counts.get(r.reason, 0) + 1
+    why = ", ".join(f"{n} {k}" for k, n in counts.items()) or "no pole stable over the orders"
+    hint = (f"; the sum MIF has {peaks.freq_hz.size} peak(s) at "
+            + ", ".join(f"{f:.4g}" for f in peaks.freq_hz[:8]) + " Hz: try --method peak"
+            if peaks.freq_hz.size else "")
+    return [f"no mode: candidates rejected ({why}){hint}"]
 
 
 def fit_test(
@@ -161,130 +433,92 @@ def fit_test(
     max_order: int | None = None,
     suspension_max_hz: float = 20.0,
     known_mass_kg: float | None = None,
-    min_snr: float = 10.0,
+    min_snr: float = MIN_SNR,
     refine: bool = False,
 ) -> ModalFit:
     """Natural frequencies, damping ratios and mass-normalised shapes of a test, automatically.
 
     Args:
-        test: the FRFs (one driving point needed for the scaling).
-        band_hz: (lo, hi) Hz fitted; default from 20 Hz (above the suspension) to the last line.
+        test: the FRFs (one or several references; without a driving point the shapes are
+            unscaled).
+        band_hz: (lo, hi) Hz fitted; default from 20 Hz (above the suspension) to the last
+            line; clipped to the data with a note.
         method: "lscf" (polyreference LSCF + stabilisation + LSFD) or "peak" (sum-MIF peaks,
             half-power damping + LSFD).
         max_order: highest LSCF order (default 120 / number of polyreference references).
         suspension_max_hz: modes below are the suspension's rigid-body modes.
         known_mass_kg: the bat's mass, for the mass-line check when the band excludes the
             suspension modes.
-        min_snr: modes whose resonant contribution is below min_snr x local misfit are dropped.
+        min_snr: modes whose resonant contribution is below min_snr x local misfit are dropped
+            (reported as ``support`` rejections).
         refine: refine all poles together by maximum likelihood (``ema.poles.refine``); the
             uncertainties are then the least-squares standard deviations.
     """
     if method not in METHODS:
         raise ValueError(f"unknown method {method!r}; use one of {', '.join(METHODS)}")
     freq = test.freq_hz
-    band = default_band(freq) if band_hz is None else (float(band_hz[0]), float(band_hz[1]))
-    if not (band[0] < band[1] and band[0] >= freq[0] and band[1] <= freq[-1] + 1e-9):
-        raise ValueError(
-            f"band {band[0]:g}-{band[1]:g} Hz is not inside the test's {freq[0]:g}-{freq[-1]:g} Hz"
-        )
-    i_d, j_d = test.driving_point
+    band, notes = clip_band(freq, band_hz)
+    lay = _layout(test)
+    if lay.driving is None:
+        notes.append("no driving point (no impact node equals a response node): shapes are "
+                     "unscaled (largest entry 1), no mass normalisation or rigid-body check")
     n_resp, n_ref = test.frf.shape[1:]
-    row_layout = n_ref >= n_resp  # shapes along the references (roving hammer)
-    h_poly = np.transpose(test.frf, (0, 2, 1)) if row_layout else test.frf
-    nodes = test.reference_nodes if row_layout else test.response_nodes
-    d_index = j_d if row_layout else i_d
     sel = (freq >= band[0]) & (freq <= band[1]) & (freq > 0)
+    _require_usable(test.frf[sel], band)
     mif = sum_mif(test.frf[sel])
     peaks = pick_peaks(freq[sel], receptance_power(freq[sel], mif, test.quantity), band)
 
-    sweep = stab = selected = None
-    extra = np.zeros(0, dtype=complex)
-    if method == "lscf":
-        n_poly_ref = h_poly.shape[2]
-        p_max = int(max_order) if max_order else max(12, 30 // n_poly_ref)
-        auto = auto_poles(freq, h_poly, band, p_max)
-        sweep, stab, selected = auto.sweep, auto.stability, auto.modes
-        extra = np.concatenate([auto.outside.pole, auto.computational])
-        fr, zr = selected.freq_hz, selected.damping_ratio
-        f_std, z_std, count = selected.freq_std_hz, selected.damping_std, selected.count
-    else:
-        fr, zr = peaks.freq_hz, peaks.damping_ratio
-        f_std = np.full(fr.size, np.nan)
-        z_std = np.full(fr.size, np.nan)
-        count = np.zeros(fr.size, dtype=int)
-
-    h_flat = test.frf.reshape(freq.size, -1)
-    poles = _poles(zr, fr)
-    m = poles.size
+    p = _select_poles(test, lay, band, method, max_order, peaks)
     lower = band[0] >= suspension_max_hz  # else the suspension modes are fitted as modes
-    fit = lsfd(freq, h_flat, poles, test.quantity, band, lower=lower)
-    if extra.size:  # computational poles only when they explain the band edges better
-        with_extra = lsfd(freq, h_flat, np.r_[poles, extra], test.quantity, band, lower=lower)
-        base = _misfit(fit, h_flat[sel])
-        better = _misfit(with_extra, h_flat[sel]) < 0.95 * base
-        if better and base > 1e-4 * np.linalg.norm(h_flat[sel]):
-            fit = with_extra
-        else:
-            extra = extra[:0]
-    keep = _supported(fit, h_flat[sel], poles, test.quantity, min_snr)
-    if not keep.all():
-        fr, zr, f_std, z_std, count = (a[keep] for a in (fr, zr, f_std, z_std, count))
-        poles = poles[keep]
-        m = poles.size
-        if selected is not None:
-            selected = take(selected, keep)
-        fit = lsfd(freq, h_flat, np.concatenate([poles, extra]), test.quantity, band, lower=lower)
-
-    if refine and m:
-        ref = refine_poles(freq, h_flat, fr, zr, test.quantity, band, lower=lower,
-                           extra_poles=extra)
-        fr, zr, f_std, z_std, poles, extra = (ref.freq_hz, ref.damping_ratio, ref.freq_std_hz,
-                                              ref.damping_std, ref.pole, ref.extra_pole)
-        fit = lsfd(freq, h_flat, np.r_[poles, extra], test.quantity, band, lower=lower)
+    p, fit = _residues(test, band, sel, p, lower, min_snr, refine)
+    m = p.freq_hz.size
+    poles = p.pole
 
     residue = fit.residue[:, :m].reshape(n_resp, n_ref, m)
-    row = residue[i_d, :, :] if row_layout else residue[:, j_d, :]
-    shapes = mass_normalised_shapes(row, poles, d_index)
-    real = fix_sign(real_modes(shapes), d_index)
+    shapes, real = _shapes(test, lay, residue, poles)
     mass_line = fit.lower[:, 0].reshape(n_resp, n_ref)
 
-    window = np.zeros(fr.size)
+    zr = p.damping_ratio
+    window = np.zeros(m)
     if test.exp_window_tau_s:
-        window = 1.0 / (test.exp_window_tau_s * 2 * np.pi * fr)
+        window = 1.0 / (test.exp_window_tau_s * 2 * np.pi * p.freq_hz)
+    df = float(freq[1] - freq[0])
+    coh = None if test.coherence is None else test.coherence[sel]
+    warn = mode_warnings(p.freq_hz, zr, df, coh, freq[sel])  # on the fitted (windowed) zeta
+    warn = [a + b for a, b in zip(warn, _merge_warnings(p.freq_hz, p.rejected), strict=True)]
     zr = zr - window
 
-    x_m = test.x_m(nodes)
-    susp = fr < suspension_max_hz
-    if susp.sum() >= 2:
-        rigid = rigid_body_from_modes(real[:, susp], x_m)
-    else:
-        ml_row = mass_line[i_d, :] if row_layout else mass_line[:, j_d]
-        rigid = rigid_body_from_mass_line(ml_row, x_m, float(x_m[d_index]), known_mass_kg)
+    x_m = test.x_m(lay.nodes)
+    susp = p.freq_hz < suspension_max_hz
+    rigid = _rigid(lay, real[:, susp], mass_line, x_m, known_mass_kg)
 
     h_band = test.frf[sel]
     synth = fit.synth.reshape(h_band.shape)
     err = np.linalg.norm(h_band - synth, axis=0) / np.linalg.norm(h_band, axis=0)
     err_total = float(np.linalg.norm(h_band - synth) / np.linalg.norm(h_band))
     el = ~susp
+    if not el.any():
+        notes += _empty_notes(p, peaks, method)
     return ModalFit(
-        freq_hz=fr[el],
+        freq_hz=p.freq_hz[el],
         damping_ratio=zr[el],
         shapes=shapes[:, el],
         real_shapes=real[:, el],
-        nodes=np.asarray(nodes),
+        nodes=lay.nodes,
         x_m=x_m,
-        driving_index=int(d_index),
-        driving_frf=(int(i_d), int(j_d)),
+        driving_index=None if lay.d_index is None else int(lay.d_index),
+        driving_frf=None if lay.driving is None else (int(lay.driving[0]),
+                                                        int(lay.driving[1])),
         mpc=mpc(shapes[:, el]),
         mpd=mpd(shapes[:, el]),
-        freq_std_hz=f_std[el],
-        damping_std=z_std[el],
-        stable_count=count[el],
+        freq_std_hz=p.freq_std_hz[el],
+        damping_std=p.damping_std[el],
+        stable_count=p.count[el],
         synthesis_error=err,
         synthesis_error_total=err_total,
         residue=residue[:, :, el],
         mass_line=mass_line,
-        suspension_freq_hz=fr[susp],
+        suspension_freq_hz=p.freq_hz[susp],
         suspension_damping_ratio=zr[susp],
         suspension_shapes=real[:, susp],
         rigid_body=rigid,
@@ -295,8 +529,12 @@ def fit_test(
         band_freq_hz=freq[sel],
         synth=synth,
         mif=mif,
-        sweep=sweep,
-        stability=stab,
-        selected=selected,
+        sweep=p.sweep,
+        stability=p.stability,
         peaks=peaks,
+        scaled=lay.driving is not None,
+        rejected=tuple(sorted(p.rejected, key=lambda r: r.freq_hz)),
+        warnings=tuple(tuple(w) for w, e in zip(warn, el, strict=True) if e),
+        close_pairs=tuple(close_pairs(p.freq_hz[el], zr[el], real[:, el])),
+        notes=tuple(notes),
     )

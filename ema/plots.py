@@ -65,7 +65,8 @@ def plot_synthesis(fit: ModalFit, measured: np.ndarray, path: str | os.PathLike,
     h = np.asarray(measured).reshape(fit.band_freq_hz.size, -1)
     s = fit.synth.reshape(h.shape)
     err = fit.synthesis_error.ravel()
-    dp = fit.driving_frf[0] * fit.synthesis_error.shape[1] + fit.driving_frf[1]
+    i_d, j_d = fit.driving_frf if fit.driving_frf is not None else (0, 0)  # none: the first
+    dp = i_d * fit.synthesis_error.shape[1] + j_d
     picks = list(dict.fromkeys([dp] + [int(k) for k in np.argsort(err)[::-1][: n_frfs - 1]]))
     fig, axes = plt.subplots(len(picks), 1, figsize=(10, 2.6 * len(picks)), sharex=True,
                              squeeze=False)

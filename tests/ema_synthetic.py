@@ -110,3 +110,32 @@ def make_test(
         quantity=quantity,
     )
     return SyntheticTest(test, model, np.arange(n_modes), band, d)
+
+
+def make_inconsistent_test(
+    seed: int, shift: float = 0.02, n_points: int = 12, noise: float = 0.01
+) -> tuple[FrfTest, np.ndarray, np.ndarray]:
+    """A heavily damped (3-7 %) roving-hammer test whose peaks move between the points.
+
+    Five modes at 180-2300 Hz; each FRF's natural frequencies are scaled by its own factor
+    1 + shift u, u uniform in -1/2..1/2 (the structure changed a little between impacts: a
+    tool re-clamped, a wheel re-hung), 1 Hz lines to 3200 Hz, complex noise of ``noise`` x each
+    FRF's RMS. Returns (test, true frequencies, true damping).
+    """
+    rng = np.random.default_rng(seed)
+    f = np.array([180.0, 420.0, 900.0, 1500.0, 2300.0])
+    z = rng.uniform(0.03, 0.07, f.size)
+    x = np.linspace(0.02, 0.84, n_points)
+    shapes = 1.3 * np.stack([np.cos((i + 1.5) * np.pi * x / 0.86 + 0.2) for i in range(f.size)], 1)
+    freq = np.arange(0.0, 3200.5, 1.0)
+    d = n_points - 2
+    cols = [ModalModel(f * (1 + shift * rng.uniform(-0.5, 0.5)), z, shapes, x).accelerance(
+        freq, [d], [j]) for j in range(n_points)]
+    h = np.concatenate(cols, axis=2)
+    rms = np.sqrt(np.mean(np.abs(h) ** 2, axis=0, keepdims=True))
+    white = rng.standard_normal(h.shape) + 1j * rng.standard_normal(h.shape)
+    h = h + noise * rms * white / np.sqrt(2)
+    nodes = np.arange(1, n_points + 1)
+    test = FrfTest(freq, h, nodes[[d]], nodes,
+                   {int(k): float(v) for k, v in zip(nodes, x, strict=True)})
+    return test, f, z

@@ -190,7 +190,10 @@ def test_mif_peaks_and_cmif():
 def test_bad_band_and_method_raise():
     test = _test(_bat_like())
     with pytest.raises(ValueError, match="band"):
-        fit_test(test, band_hz=(100.0, 5000.0))
+        fit_test(test, band_hz=(5000.0, 6000.0))  # no overlap with the data
+    # issue 13: a band reaching past the data is clipped, with a note (it used to raise)
+    clipped = fit_test(test, band_hz=(100.0, 5000.0))
+    assert clipped.band_hz == (100.0, 3200.0) and "clipped" in clipped.notes[0]
     with pytest.raises(ValueError, match="method"):
         fit_test(test, method="magic")
     with pytest.raises(ValueError, match="too few lines"):

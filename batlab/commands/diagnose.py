@@ -67,6 +67,8 @@ def run(args) -> int:
     result = diagnose(profile, meta, measured, suspension_hz, min_gain_pct=min_gain)
     out = result.to_json_dict()
     out["serial"] = meta.serial
+    for w in result.warnings:
+        print(f"batlab diagnose: warning: {w}", file=sys.stderr)
     if args.plot:
         path = write_plot(result, Path(args.plot) / "diagnose.png", title=meta.serial)
         print(f"batlab diagnose: wrote {path}", file=sys.stderr)

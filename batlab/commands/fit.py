@@ -5,6 +5,8 @@ from __future__ import annotations
 import json
 import sys
 
+from ema.fit import MIN_SNR
+
 HELP = "fit natural frequencies, damping and mass-normalised mode shapes to a test's FRFs"
 
 
@@ -19,6 +21,9 @@ def add_arguments(p) -> None:
                    help="highest LSCF model order per sub-band (default 30)")
     p.add_argument("--refine", action="store_true",
                    help="refine the poles by maximum likelihood (slower; LS uncertainties)")
+    p.add_argument("--min-snr", type=float, default=MIN_SNR,
+                   help="support a mode needs: its contribution at resonance over the local "
+                        f"misfit, divided by sqrt(max(1, zeta/1%%)) (default {MIN_SNR:g})")
     p.add_argument("--mass-kg", type=float, default=None,
                    help="the bat's mass, kg, for the mass-line scaling check")
     p.add_argument("--json", action="store_true", help="print the modes as JSON on stdout")
@@ -48,6 +53,7 @@ def _mode_rows(fit) -> list[dict]:
                 "damping_std": _num(fit.damping_std[k]),
                 "stable_orders": int(fit.stable_count[k]),
             },
+            "warnings": list(fit.warnings[k]) if k < len(fit.warnings) else [],
         })
     return rows
 
@@ -63,8 +69,22 @@ def summary(fit) -> dict:
         "method": fit.method,
         "band_hz": list(fit.band_hz),
         "quantity": fit.quantity,
-        "driving_point_node": int(fit.nodes[fit.driving_index]),
+        "driving_point_node": (None if fit.driving_index is None
+                               else int(fit.nodes[fit.driving_index])),
+        "scaled": bool(fit.scaled),
         "modes": _mode_rows(fit),
+        "close_pairs": [
+            {"modes": [c.i, c.j], "frequency_hz": [float(fit.freq_hz[c.i]),
+                                                   float(fit.freq_hz[c.j])],
+             "separation": c.separation, "modal_overlap": c.modal_overlap, "mac": c.mac}
+            for c in fit.close_pairs
+        ],
+        "rejected": [
+            {"frequency_hz": r.freq_hz, "damping_ratio": r.damping_ratio, "reason": r.reason,
+             "detail": r.detail}
+            for r in fit.rejected
+        ],
+        "notes": list(fit.notes),
         "synthesis_error": {
             "total": fit.synthesis_error_total,
             "per_frf": [float(v) for v in fit.synthesis_error.ravel()],
@@ -107,17 +127,44 @@ def _table(fit) -> str:
     return "\n".join(lines)
 
 
+def explain(fit) -> list[str]:
+    """The short stderr summary: notes, rejections by reason, warned modes, close pairs."""
+    lines = [f"batlab fit: note: {n}" for n in fit.notes]
+    counts: dict[str, list[float]] = {}
+    for r in fit.rejected:
+        counts.setdefault(r.reason, []).append(r.freq_hz)
+    if counts:
+        lines.append("batlab fit: rejected candidates: " + "; ".join(
+            f"{len(v)} {k} (" + ", ".join(f"{f:.4g}" for f in v[:4])
+            + (", ..." if len(v) > 4 else "") + " Hz)" for k, v in counts.items()))
+    kinds: dict[str, list[int]] = {}
+    for k, w in enumerate(fit.warnings):
+        for msg in w:
+            kinds.setdefault(msg.split(":")[0], []).append(k + 1)
+    for kind, modes in kinds.items():
+        lines.append(f"batlab fit: {kind} in mode(s) {', '.join(map(str, modes))} "
+                     "(details per mode in --json)")
+    for c in fit.close_pairs:
+        lines.append(f"batlab fit: close pair: modes {c.i + 1} and {c.j + 1} "
+                     f"({c.separation:.2%} apart, modal overlap {c.modal_overlap:.2f}, "
+                     f"MAC {c.mac:.3f})")
+    return lines
+
+
 def run(args) -> int:
     from ema.fit import fit_test
     from ema.io.frf_io import read_test
 
     print(f"batlab fit: reading {args.test}", file=sys.stderr)
-    test = read_test(args.test)
+    test = read_test(args.test, require_driving=False)
     print(f"batlab fit: {test.frf.shape[1]} x {test.frf.shape[2]} FRFs, "
           f"{test.freq_hz.size} lines; fitting ({args.method})", file=sys.stderr)
     fit = fit_test(test, band_hz=args.band, method=args.method, max_order=args.max_order,
-                   known_mass_kg=args.mass_kg, refine=args.refine)
-    print(f"batlab fit: {fit.freq_hz.size} modes", file=sys.stderr)
+                   known_mass_kg=args.mass_kg, refine=args.refine, min_snr=args.min_snr)
+    print(f"batlab fit: {fit.freq_hz.size} modes"
+          + ("" if fit.scaled else " (unscaled shapes: no driving point)"), file=sys.stderr)
+    for line in explain(fit):
+        print(line, file=sys.stderr)
     if args.out:
         from ema.io.uff_modes import write_modes_uff
 

@@ -38,10 +38,12 @@ def require_driving_point(test: FrfTest, path: str | os.PathLike) -> FrfTest:
     return test
 
 
-def read_test(path: str | os.PathLike) -> FrfTest:
-    """Read an FRF test file of any supported type and check it has a driving point."""
+def read_test(path: str | os.PathLike, require_driving: bool = True) -> FrfTest:
+    """Read an FRF test file of any supported type and (by default) check it has a driving
+    point; ``batlab fit`` reads without the check (it then gives unscaled shapes)."""
     path = Path(path)
-    return require_driving_point(READERS[_suffix(path, READERS)](path), path)
+    test = READERS[_suffix(path, READERS)](path)
+    return require_driving_point(test, path) if require_driving else test
 
 
 def write_test(path: str | os.PathLike, test: FrfTest) -> None:

@@ -22,7 +22,10 @@ from dataclasses import dataclass
 import numpy as np
 
 from ema.poles.lscf import PoleSweep, lscf_sweep
+from ema.poles.rejected import Rejection
 from ema.poles.stabilisation import SelectedPoles, Stability, select_poles, stability
+
+MERGE_OVERLAP = 1.4  # two poles closer than zeta f / MERGE_OVERLAP are one mode (or unresolvable)
 
 
 @dataclass(frozen=True)
@@ -35,14 +38,17 @@ class AutoPoles:
     sweep: PoleSweep
     stability: Stability
     sub_bands: list
+    rejected: list[Rejection]
 
 
 def sub_bands(
-    band_hz: tuple[float, float], overlap: float = 0.25
+    band_hz: tuple[float, float], overlap: float = 0.25, shift: float = 1.0
 ) -> list[tuple[tuple[float, float], tuple[float, float]]]:
-    """[(core, fitted band), ...] covering band_hz (see module docstring)."""
+    """[(core, fitted band), ...] covering band_hz (see module docstring); ``shift`` multiplies
+    the inner core edges (the second partition uses sqrt 2: its core centres sit on the first
+    partition's core edges)."""
     lo, hi = band_hz
-    edges = [lo, max(2 * lo, lo + 80.0)]
+    edges = [lo, max(2 * lo, lo + 80.0) * shift]
     while edges[-1] < hi:
         edges.append(2 * edges[-1])
     edges[-1] = hi
@@ -104,25 +110,76 @@ def auto_poles(
     dup_tol: float = 0.003,
     order_step: int = 1,
 ) -> AutoPoles:
-    """Physical poles in band_hz of frf (F, l, m) (polyreference orientation), automatically."""
+    """Physical poles in band_hz of frf (F, l, m) (polyreference orientation), automatically.
+
+    Two partitions into sub-bands are fitted, the second with its core edges shifted by
+    sqrt 2 (``sub_bands``): a mode near a core edge of one (where it is fitted off-centre and
+    may fall short of the stability criterion) sits mid-core in the other. The modes are the
+    union (a second-partition mode within the duplicate tolerance of a first-partition one is
+    the same mode), so which modes are found depends much less on where the band starts and
+    ends: a mode found in a sub-band is found in the full band. The stabilisation data and
+    computational poles are the first partition's.
+    """
+    one = _partition_poles(freq_hz, frf, band_hz, max_order, dup_tol, order_step, 1.0)
+    two = _partition_poles(freq_hz, frf, band_hz, max_order, dup_tol, order_step, np.sqrt(2))
+    a, b = one.modes, two.modes
+    new = np.ones(b.freq_hz.size, dtype=bool)
+    for k in range(b.freq_hz.size):
+        tol = max(dup_tol, 0.5 * b.damping_ratio[k]) * b.freq_hz[k]
+        new[k] = not np.any(np.abs(a.freq_hz - b.freq_hz[k]) <= tol)
+    modes, merged_away = merge_overlapping(_concat([a, take(b, new)], a.shape.shape[1]))
+    found = modes.freq_hz
+
+    def explained(r: Rejection) -> bool:  # a rejection that the other partition overturned
+        return bool(np.any(np.abs(found - r.freq_hz) <= max(dup_tol, 0.5 * r.damping_ratio)
+                           * r.freq_hz))
+
+    rejected = [r for r in one.rejected + two.rejected if not explained(r)] + merged_away
+    unique: dict[tuple[str, float], Rejection] = {}
+    for r in rejected:  # the same candidate rejected by both partitions: listed once
+        unique.setdefault((r.reason, round(r.freq_hz, 0)), r)
+    return AutoPoles(modes, one.outside, one.computational, one.sweep, one.stability,
+                     one.sub_bands, sorted(unique.values(), key=lambda r: r.freq_hz))
+
+
+def _partition_poles(
+    freq_hz: np.ndarray,
+    frf: np.ndarray,
+    band_hz: tuple[float, float],
+    max_order: int,
+    dup_tol: float,
+    order_step: int,
+    shift: float,
+) -> AutoPoles:
+    """``auto_poles`` over one partition into sub-bands (``sub_bands(band_hz, shift=shift)``)."""
     freq_hz = np.asarray(freq_hz, dtype=float)
     df = freq_hz[1] - freq_hz[0]
     n_out = frf.shape[1]
     lo, hi = band_hz
     found, outside, sweeps, stabs, computational = [], [], [], [], []
-    for (a, b), (fa, fb) in sub_bands(band_hz):
+    rejected: list[Rejection] = []
+    for (a, b), (fa, fb) in sub_bands(band_hz, shift=shift):
         n_lines = int((fb - fa) / df)
         p = min(int(max_order), n_lines // 4)
         if p < 4:
             continue
         sw = lscf_sweep(freq_hz, frf, (fa, fb), p, order_step=order_step)
         st = stability(sw)
-        wide = select_poles(sw, st, freq_range_hz=(0.9 * fa, 1.1 * fb))
+        wide, why = select_poles(sw, st, freq_range_hz=(0.9 * fa, 1.1 * fb))
         centre = np.sqrt(a * b)
-        in_core = (wide.freq_hz >= a - dup_tol * a) & (wide.freq_hz <= b + dup_tol * b)
+        tol = np.maximum(dup_tol, 0.5 * wide.damping_ratio)
+        in_core = (wide.freq_hz >= a * (1 - tol)) & (wide.freq_hz <= b * (1 + tol))
         guard = wide.damping_ratio * wide.freq_hz + 2 * df
         inside = (wide.freq_hz > lo + guard) & (wide.freq_hz < hi - guard)
         found.append((take(wide, in_core & inside), centre))
+        rejected += [r for r in why if a <= r.freq_hz < b or (b >= hi and r.freq_hz == b)]
+        for f_r, z_r in zip(wide.freq_hz[in_core & ~inside & (wide.freq_hz >= lo)
+                                         & (wide.freq_hz <= hi)],
+                            wide.damping_ratio[in_core & ~inside & (wide.freq_hz >= lo)
+                                               & (wide.freq_hz <= hi)], strict=True):
+            rejected.append(Rejection(float(f_r), float(z_r), "band_edge",
+                                      f"within {z_r * f_r + 2 * df:.3g} Hz (zeta f + 2 lines) "
+                                      f"of the band edge"))
         edge = ~inside & (((wide.freq_hz > 0.5 * (a + b)) & (b >= hi)) |
                           ((wide.freq_hz < 0.5 * (a + b)) & (a <= lo)))
         outside.append(take(wide, edge))
@@ -147,15 +204,19 @@ def auto_poles(
         for j, (other, c2) in enumerate(found):
             if j == i or other.freq_hz.size == 0 or sel.freq_hz.size == 0:
                 continue
-            close = np.abs(sel.freq_hz[:, None] / other.freq_hz[None, :] - 1) < dup_tol
-            close &= np.abs(sel.damping_ratio[:, None] / other.damping_ratio[None, :] - 1) < 0.2
+            zeta = 0.5 * (sel.damping_ratio[:, None] + other.damping_ratio[None, :])
+            close = np.abs(sel.freq_hz[:, None] / other.freq_hz[None, :] - 1) < np.maximum(
+                dup_tol, 0.5 * zeta)
+            close &= np.abs(sel.damping_ratio[:, None] / other.damping_ratio[None, :] - 1) < (
+                0.2 * np.maximum(1.0, zeta / 0.01))
             dist_self = np.abs(np.log(sel.freq_hz / centre))
             dist_other = np.abs(np.log(other.freq_hz[None, :] / c2))
             worse = close & ((dist_self[:, None] > dist_other) |
                              ((dist_self[:, None] == dist_other) & (j < i)))
             keep &= ~worse.any(axis=1)
         parts.append(take(sel, keep))
-    modes = _concat(parts, n_out)
+    modes, merged_away = merge_overlapping(_concat(parts, n_out))
+    rejected += merged_away
     out = _concat(outside, n_out)
     merged = PoleSweep(
         order=np.concatenate([s.order[c] for s, c in sweeps]),
@@ -174,5 +235,34 @@ def auto_poles(
     )
     return AutoPoles(
         modes, out, _distinct(np.concatenate(computational), out.pole), merged, merged_stab,
-        [fb for _, fb in sub_bands(band_hz)],
+        [fb for _, fb in sub_bands(band_hz, shift=shift)],
+        sorted(rejected, key=lambda r: r.freq_hz),
     )
+
+
+def merge_overlapping(sel: SelectedPoles) -> tuple[SelectedPoles, list[Rejection]]:
+    """One mode where two selected poles sit inside one half-power width.
+
+    Two poles closer than zeta f / ``MERGE_OVERLAP`` (modal overlap above 1.4, zeta f the
+    mean half-power half-width) cannot be told apart from one mode whose peak moves between
+    the FRFs (inconsistent data) or a pair the data do not resolve: the pole stable at more
+    orders is kept, the other reported as ``merged``.
+    """
+    keep = np.ones(sel.freq_hz.size, dtype=bool)
+    out: list[Rejection] = []
+    for i in range(1, sel.freq_hz.size):
+        j = np.flatnonzero(keep[:i])
+        if j.size == 0:
+            continue
+        j = j[-1]
+        f1, f2 = sel.freq_hz[j], sel.freq_hz[i]
+        half = 0.5 * (sel.damping_ratio[j] * f1 + sel.damping_ratio[i] * f2)
+        if (f2 - f1) * MERGE_OVERLAP >= half:
+            continue
+        lose, win = (i, j) if sel.count[i] <= sel.count[j] else (j, i)
+        keep[lose] = False
+        out.append(Rejection(
+            float(sel.freq_hz[lose]), float(sel.damping_ratio[lose]), "merged",
+            f"{abs(f2 - f1) / f1:.2%} from the mode at {sel.freq_hz[win]:.4g} Hz, inside its "
+            f"half-power width (modal overlap {half / (f2 - f1):.1f}): reported as one mode"))
+    return take(sel, keep), out

@@ -14,7 +14,8 @@ With the suspension modes fitted (band reaching below them) all of G is known an
 implied mass follows. From the lower residual of a roving-hammer test only one row of G is
 known, a line a(x) = c0 + c1 x, and M is not identifiable from it alone: a(x_d) = 1/M +
 (x_d - x_c)^2 / I bounds M <= 1 / a(x_d), and a known mass fixes x_c = (1/M - c0) / c1 and
-I = (x_d - x_c) / c1, which must be plausible (x_c on the bat, I > 0).
+I = (x_d - x_c) / c1, which must be plausible (x_c on the bat, I > 0). With one node (a
+single FRF) only the bound is known.
 """
 
 from __future__ import annotations
@@ -54,6 +55,9 @@ def rigid_body_from_mass_line(
     """What one driving-point row of the mass line (1/kg at x_m) says about the rigid body."""
     a = np.asarray(mass_line, dtype=float)
     x = np.asarray(x_m, dtype=float)
+    if np.unique(x).size < 2:  # one node (a single FRF): a(x_d) only, no slope
+        a_d = float(np.mean(a))
+        return RigidBody(None, None, None, float(1.0 / a_d) if a_d > 0 else None)
     c1, c0 = np.polyfit(x, a, 1)
     a_d = c0 + c1 * x_drive_m
     bound = float(1.0 / a_d) if a_d > 0 else None

@@ -40,16 +40,31 @@ def mass_normalised_shapes(
     return ra / np.where(phi_d != 0, phi_d, np.inf)[None, :]
 
 
-def fix_sign(shapes: np.ndarray, driving_index: int, min_relative: float = 1e-3) -> np.ndarray:
+def unscaled_shapes(residue_row: np.ndarray, poles: np.ndarray) -> np.ndarray:
+    """Shapes (n, m) known up to a factor, from one row of residues without its driving point.
+
+    rA_jk = phi_j phi_k along k is the shape times phi_j (unknown): each column is divided by
+    its largest-magnitude entry (that entry becomes 1).
+    """
+    ra = modal_constants(residue_row, poles)
+    if ra.size == 0:
+        return ra
+    big = ra[np.argmax(np.abs(ra), axis=0), np.arange(ra.shape[1])]
+    return ra / np.where(big != 0, big, np.inf)[None, :]
+
+
+def fix_sign(
+    shapes: np.ndarray, driving_index: int | None, min_relative: float = 1e-3
+) -> np.ndarray:
     """Flip each real shape so its driving-point entry is positive.
 
-    When the driving point is (near) a node of the mode (|phi_d| < min_relative max|phi|), the
-    largest-magnitude entry is made positive instead.
+    When the driving point is (near) a node of the mode (|phi_d| < min_relative max|phi|), or
+    there is none (``driving_index`` None), the largest-magnitude entry is made positive.
     """
     s = np.array(shapes, dtype=float, copy=True)
     if s.size == 0:
         return s
-    dp = s[driving_index]
     big = s[np.argmax(np.abs(s), axis=0), np.arange(s.shape[1])]
+    dp = big if driving_index is None else s[driving_index]
     ref = np.where(np.abs(dp) >= min_relative * np.abs(big), dp, big)
     return s * np.where(ref < 0, -1.0, 1.0)[None, :]

@@ -19,6 +19,9 @@ qualifies as in 2 are named causes.
 5. Backward check: each named cause is removed from the calibrated model in turn; if that
    costs less than the naming test of 2 (the greedy order let it stand in for later ones) it
    is not named, and it leaves the model unless the Akaike test of 4 keeps it.
+6. Pairing checks (``updating.diagnose.pairing_check``): low-MAC pairs, skipped model modes and
+   parameters at their bounds are reported in ``warnings``, and then no cause is named;
+   unreliable shapes are paired in frequency order, with a warning.
 The calibrated model is the bat's reference for inspect.
 """
 
@@ -40,6 +43,7 @@ from updating.diagnose.model import (
     modal_sensitivities,
     reference_of,
 )
+from updating.diagnose.pairing_check import checked_pairing, pairing_warnings, refuse_causes
 from updating.model.lab_input import BatMeta
 from updating.model.profile import Profile
 from updating.model.reference import BatReference
@@ -94,6 +98,8 @@ class Diagnosis:
         min_gain_pct: naming threshold, percentage points.
         reference: the calibrated reference (updating.model.reference.BatReference).
         fine_element_m: element length of the 'geometry' extension, m.
+        warnings: pairing problems (``updating.diagnose.pairing_check``); when one makes the
+            pairing untrustworthy no cause is named.
     """
 
     measured_hz: np.ndarray
@@ -106,6 +112,7 @@ class Diagnosis:
     min_gain_pct: float
     reference: BatReference
     fine_element_m: float = FINE_ELEMENT_IN * IN_TO_M
+    warnings: tuple[str, ...] = ()
 
     @property
     def causes(self) -> tuple[Step, ...]:
@@ -165,17 +172,22 @@ class Diagnosis:
                           for s in self.steps if not s.named],
             "min_gain_pct": self.min_gain_pct,
             "unpaired_hz": [float(f) for f in self.unpaired_hz],
+            "warnings": list(self.warnings),
             "reference": ref.to_dict(),
         }
 
 
 def observations(
     setup: Setup, measured: MeasuredModes, suspension_hz, min_mac: float,
-) -> tuple[Observations, np.ndarray, np.ndarray]:
-    """Pair measured modes with the nominal model's; (observations, measured index, unpaired)."""
+) -> tuple[Observations, np.ndarray, np.ndarray, list[str]]:
+    """Pair measured modes with the nominal model's (by MAC, or in frequency order when the
+    shapes are unreliable: ``pairing_check``); (observations, measured index, unpaired,
+    pairing notes)."""
     m = measured.freq_hz.size
     nominal = modal_sensitivities(setup, frozenset(), start_state(setup, suspension_hz), m + 4)
-    meas_idx, model_idx, _ = pair_modes(measured.shapes, nominal.shapes, min_mac=min_mac)
+    meas_idx, model_idx, macs = pair_modes(measured.shapes, nominal.shapes, min_mac=min_mac)
+    meas_idx, model_idx, notes = checked_pairing(measured.freq_hz, measured.x_m.size, meas_idx,
+                                                 model_idx, macs, nominal.shapes.shape[1])
     order = np.argsort(measured.freq_hz[meas_idx])
     meas_idx, model_idx = meas_idx[order], model_idx[order]
     if meas_idx.size == 0:
@@ -189,7 +201,7 @@ def observations(
     obs = Observations(f, measured.shapes[:, meas_idx], model_idx, sigma_f,
                        suspension_hz=susp[susp > 0][:2])
     unpaired = np.setdiff1d(np.arange(m), meas_idx)
-    return obs, meas_idx, measured.freq_hz[unpaired]
+    return obs, meas_idx, measured.freq_hz[unpaired], notes
 
 
 def start_state(setup: Setup, suspension_hz=None) -> State:
@@ -287,7 +299,7 @@ def diagnose(
         raise ValueError("a test point lies outside the bat's profile")
     setup = Setup(profile, meta.material, meta.weight_kg, np.asarray(measured.x_m, dtype=float),
                   float(measured.sensor_x_m), fine_element_m)
-    obs, meas_idx, unpaired = observations(setup, measured, suspension_hz, min_mac)
+    obs, meas_idx, unpaired, warnings = observations(setup, measured, suspension_hz, min_mac)
     nominal = fit_model(setup, frozenset(), obs, start_state(setup, suspension_hz))
     crit = scipy.stats.chi2.ppf(CONFIDENCE, np.arange(8))
 
@@ -329,6 +341,10 @@ def diagnose(
     path, final, dropped = backward_check(setup, obs, path, final, nameable, facts)
     rejected = [replace(s, role="rejected") for s in dropped + rejected]
     reference = reference_of(setup, final.active, final.state)
+    warnings += pairing_warnings(final, obs.model_index, by_mac=not warnings)
+    if refuse_causes(warnings):  # 6. no cause is named from a pairing that cannot be trusted
+        warnings.append("causes not named: the pairing or the calibration cannot be trusted")
+        path = [replace(s, role="calibration") if s.named else s for s in path]
     return Diagnosis(obs.freq_hz, meas_idx, obs.model_index, nominal, final,
                      tuple(path + rejected), unpaired, min_gain_pct, reference,
-                     fine_element_m)
+                     fine_element_m, tuple(warnings))
