@@ -28,6 +28,7 @@ class BatReference:
         bungee_k_n_per_m: each of two bungees 1 in from either end (0: free-free).
         element_length_m: the mesh the parameters were calibrated on (nodes also at the test
             points); None: the default ~1 in grid.
+        shear_coefficient: "cowper" or "hutchinson" (updating.model.sections).
     """
 
     E_pa: float
@@ -40,9 +41,11 @@ class BatReference:
     sensor_x_m: float = 0.0
     bungee_k_n_per_m: float = 0.0
     element_length_m: float | None = None
+    shear_coefficient: str = "cowper"
 
     def material(self) -> Material:
-        return Material(self.E_pa, self.rho_kg_m3, self.e_over_g, self.nu)
+        return Material(self.E_pa, self.rho_kg_m3, self.e_over_g, self.nu,
+                        self.shear_coefficient)
 
     def attachments(self, length_m: float) -> tuple[Attachment, ...]:
         out = []
