@@ -29,9 +29,11 @@ from dataclasses import dataclass, replace
 import numpy as np
 import scipy.stats
 
+from ema.shapes.mac import mac
 from updating.correlate.measured import MeasuredModes
 from updating.diagnose.fit import Fit, Observations, fit_model, pair_modes, shape_sigma
 from updating.diagnose.model import (
+    BOUNDS,
     CAUSES,
     Setup,
     State,
@@ -93,6 +95,8 @@ class Diagnosis:
         min_gain_pct: naming threshold, percentage points.
         reference: the calibrated reference (updating.model.reference.BatReference).
         fine_element_m: element length of the 'geometry' extension, m.
+        warnings: what the diagnosis could not establish (limits), one sentence each.
+        n_split: measured bending pairs with both planes' members seen.
     """
 
     measured_hz: np.ndarray
@@ -105,6 +109,8 @@ class Diagnosis:
     min_gain_pct: float
     reference: BatReference
     fine_element_m: float = FINE_ELEMENT_IN * IN_TO_M
+    warnings: tuple[str, ...] = ()
+    n_split: int = 0
 
     @property
     def causes(self) -> tuple[Step, ...]:
@@ -137,6 +143,16 @@ class Diagnosis:
         if name == "geometry":
             return ({"element_length_in": self.fine_element_m / IN_TO_M,
                      "nodes_at_test_points": True}, {})
+        if name == "shear_coefficient":
+            return {"formula": ref.shear_coefficient}, {}
+        if name == "two_planes":
+            eg2 = ref.e_over_g_plane2
+            return ({"E_over_G_plane2": eg2, "E_over_G": ref.e_over_g,
+                     "tap_angle_deg": ref.tap_angle_deg, "pairs_split": self.n_split},
+                    {"E_over_G_plane2": eg2 * rel_std("ln_g_ratio"),
+                     "tap_angle_deg": float(np.degrees(rel_std("theta")))})
+        if name == "beam_theory":
+            return {"corrections_pct": [100 * c for c in ref.beam_theory_corrections or ()]}, {}
         return {}, {}
 
     def to_json_dict(self) -> dict:
@@ -158,35 +174,72 @@ class Diagnosis:
             "causes": causes,
             "calibrated": {"E_psi": ref.E_pa / PSI_TO_PA, "E_over_G": ref.e_over_g,
                            "weight_density_lbf_in3": ref.rho_kg_m3 / LBF_IN3_TO_KG_M3,
-                           "sensor_mass_g": 1e3 * ref.sensor_mass_kg},
+                           "sensor_mass_g": 1e3 * ref.sensor_mass_kg,
+                           "shear_coefficient": ref.shear_coefficient,
+                           **({"E_over_G_plane2": ref.e_over_g_plane2,
+                               "tap_angle_deg": ref.tap_angle_deg}
+                              if ref.e_over_g_plane2 is not None else {})},
             "not_named": [{"name": s.name, "gain_pct": s.gain_pct,
                            "in_reference": s.role == "calibration"}
                           for s in self.steps if not s.named],
             "min_gain_pct": self.min_gain_pct,
             "unpaired_hz": [float(f) for f in self.unpaired_hz],
+            "warnings": list(self.warnings),
             "reference": ref.to_dict(),
         }
 
 
 def observations(
     setup: Setup, measured: MeasuredModes, suspension_hz, min_mac: float,
+    max_split: float = 0.12,
 ) -> tuple[Observations, np.ndarray, np.ndarray]:
-    """Pair measured modes with the nominal model's; (observations, measured index, unpaired)."""
+    """Pair measured modes with the nominal model's; (observations, measured index, unpaired).
+
+    One-to-one pairing by MAC first; a measured mode left over whose shape matches an
+    already paired model mode (MAC >= min_mac) within ``max_split`` in frequency of its
+    partner is the other bending plane's member of that pair (a split pair).
+    """
     m = measured.freq_hz.size
     nominal = solve(setup, frozenset(), start_state(setup, suspension_hz), m + 4)
     meas_idx, model_idx, _ = pair_modes(measured.shapes, nominal.shapes, min_mac)
-    order = np.argsort(measured.freq_hz[meas_idx])
-    meas_idx, model_idx = meas_idx[order], model_idx[order]
     if meas_idx.size == 0:
         raise ValueError("no measured mode matches a model mode (MAC below "
                          f"{min_mac}): check the test points and the profile")
+    partner = dict(zip(model_idx.tolist(), meas_idx.tolist(), strict=True))
+    macs = mac(measured.shapes, nominal.shapes)
+    extra_meas, extra_model = [], []
+    for j in np.setdiff1d(np.arange(m), meas_idx):
+        for r in np.argsort(-macs[j]):
+            if macs[j, r] < min_mac:
+                break
+            i = partner.get(int(r))
+            if (i is not None and int(r) not in extra_model
+                    and abs(measured.freq_hz[j] / measured.freq_hz[i] - 1) < max_split):
+                extra_meas.append(int(j))
+                extra_model.append(int(r))
+                break
+    meas_idx = np.concatenate([meas_idx, np.array(extra_meas, dtype=int)])
+    model_idx = np.concatenate([model_idx, np.array(extra_model, dtype=int)])
+    order = np.argsort(measured.freq_hz[meas_idx])
+    meas_idx, model_idx = meas_idx[order], model_idx[order]
     f = measured.freq_hz[meas_idx]
+    y = measured.shapes[:, meas_idx]
+    code = np.full(meas_idx.size, 2)
+    combined = y.copy()
+    norm = np.linalg.norm(y, axis=0)
+    for r in np.unique(model_idx):
+        both = np.flatnonzero(model_idx == r)
+        if both.size == 2:
+            big, small = both[np.argsort(-norm[both])]
+            code[big], code[small] = 0, 1
+            if norm[big] > 0:
+                combined[:, big] = y[:, big] * np.hypot(norm[big], norm[small]) / norm[big]
     sigma_f = 5e-4
     if measured.freq_std_hz is not None and np.all(np.isfinite(measured.freq_std_hz)):
         sigma_f = max(1e-4, float(np.median(measured.freq_std_hz[meas_idx] / f)))
     susp = np.sort(np.asarray([] if suspension_hz is None else suspension_hz, dtype=float))
-    obs = Observations(f, measured.shapes[:, meas_idx], model_idx, sigma_f,
-                       suspension_hz=susp[susp > 0][:2])
+    obs = Observations(f, y, model_idx, sigma_f, suspension_hz=susp[susp > 0][:2], code=code,
+                       combined=combined)
     unpaired = np.setdiff1d(np.arange(m), meas_idx)
     return obs, meas_idx, measured.freq_hz[unpaired]
 
@@ -262,10 +315,62 @@ def backward_check(
     return path, final, dropped
 
 
+PARAMETER_LABELS = {"ln_E": "E", "ln_rho": "density", "ln_e_over_g": "E/G",
+                    "sensor_g": "sensor mass", "bungee_kn_per_m": "bungee stiffness",
+                    "ln_g_ratio": "the second plane's E/G", "theta": "the tapping angle"}
+# relative (ln parameters), grams, kN/m, radians: above this standard uncertainty a parameter
+# is reported as poorly identified
+POOR = {"ln_E": 0.01, "ln_rho": 0.02, "ln_e_over_g": 0.05, "sensor_g": 0.5,
+        "bungee_kn_per_m": 0.1, "ln_g_ratio": 0.05, "theta": 0.1}
+
+
+def limits(obs: Observations, final: Fit, solid_tried: bool) -> tuple[str, ...]:
+    """What the calibrated model could not establish, in words (Diagnosis.warnings)."""
+    out = []
+    code = obs.codes
+    if obs.n_split == 0:
+        out.append("each bending mode was seen once: the two bending planes are not resolved "
+                   "(tapped in a grain plane, or a split below the frequency resolution); "
+                   "two_planes not assessed")
+    elif np.any(code == 2):
+        hz = ", ".join(f"{f:.0f}" for f in obs.freq_hz[code == 2])
+        out.append(f"modes at {hz} Hz were seen once (the other bending plane's member was "
+                   "not found); they are compared with the first plane's model at full "
+                   "amplitude")
+    for name, v in zip(final.names, final.x, strict=True):
+        lo, hi = BOUNDS[name]
+        label = PARAMETER_LABELS[name]
+        if min(v - lo, hi - v) < 1e-4 * (hi - lo):
+            out.append(f"{label} ended at its bound ({v:.4g} in fit units): not identified "
+                       "by the data, fixed by the bound")
+        elif final.std(name) > POOR[name]:
+            out.append(f"{label} is poorly identified (standard uncertainty {final.std(name):.3g}"
+                       f" in fit units, above {POOR[name]})")
+    if "sensor_mass" not in final.active:
+        out.append("no accelerometer mass in the calibrated model: the data did not show one "
+                   "(from frequencies alone a point mass trades off against E and density; "
+                   "the mass-normalised shapes are what fix it)")
+    if "ln_E" in final.names and "ln_e_over_g" in final.names:
+        i, j = final.names.index("ln_E"), final.names.index("ln_e_over_g")
+        c = final.cov[i, j] / np.sqrt(max(final.cov[i, i] * final.cov[j, j], 1e-300))
+        if abs(c) > 0.95:
+            out.append(f"E and E/G are strongly correlated in the fit (r = {c:.2f}): an error "
+                       "the model family cannot represent moves both")
+    floor = 100 * obs.sigma_f
+    if final.rms_pct > 3 * floor:
+        hint = ("" if solid_tried else
+                " (batlab diagnose --solid measures what a 1D beam cannot represent)")
+        out.append(f"residual floor: the calibrated model misses the frequencies by "
+                   f"{final.rms_pct:.3f} % RMS, {final.rms_pct / floor:.0f} x their "
+                   f"uncertainty ({floor:.3f} %): the model family lacks something{hint}")
+    return tuple(out)
+
+
 def diagnose(
     profile: Profile, meta: BatMeta, measured: MeasuredModes, suspension_hz=None,
     min_gain_pct: float = MIN_GAIN_PCT, min_mac: float = 0.5,
     fine_element_m: float = FINE_ELEMENT_IN * IN_TO_M, shape_sigma_floor: float = 0.002,
+    solid_corrections: np.ndarray | None = None,
 ) -> Diagnosis:
     """Diagnose a baseline test against the nominal model and calibrate the bat's reference.
 
@@ -278,13 +383,16 @@ def diagnose(
         min_mac: pairing threshold.
         fine_element_m: element length of the 'geometry' extension.
         shape_sigma_floor: least relative uncertainty of a measured shape entry.
+        solid_corrections: per-mode corrections c_r of the 1D beam against a 3D solid
+            (updating.solid.compare); 'beam_theory' is tried only with them.
     """
     if measured.shapes.shape[0] != measured.x_m.size:
         raise ValueError("measured shapes do not match the number of test points")
     if np.any(measured.x_m < -1e-9) or np.any(measured.x_m > profile.length_m + 1e-9):
         raise ValueError("a test point lies outside the bat's profile")
     setup = Setup(profile, meta.material, meta.weight_kg, np.asarray(measured.x_m, dtype=float),
-                  float(measured.sensor_x_m), fine_element_m)
+                  float(measured.sensor_x_m), fine_element_m,
+                  None if solid_corrections is None else np.asarray(solid_corrections, float))
     obs, meas_idx, unpaired = observations(setup, measured, suspension_hz, min_mac)
     nominal = fit_model(setup, frozenset(), obs, start_state(setup, suspension_hz))
     crit = scipy.stats.chi2.ppf(CONFIDENCE, np.arange(8))
@@ -293,7 +401,9 @@ def diagnose(
         return s.gain_pct >= min_gain_pct and s.chi2_drop_freq >= crit[s.new_params]
 
     remaining = [c for c in CAUSES if not (c == "density" and meta.weight_kg is None
-                                           and not np.any(measured.shapes))]
+                                           and not np.any(measured.shapes))
+                 and not (c == "two_planes" and obs.n_split == 0)
+                 and not (c == "beam_theory" and setup.solid_corrections is None)]
     # 1. causes: extensions that lower the frequency error measurably and significantly
     named, current, _, _ = forward_select(setup, obs, nominal, remaining, "cause",
                                           accept=nameable, key=lambda s: s.gain_pct)
@@ -329,4 +439,5 @@ def diagnose(
     reference = reference_of(setup, final.active, final.state)
     return Diagnosis(obs.freq_hz, meas_idx, obs.model_index, nominal, final,
                      tuple(path + rejected), unpaired, min_gain_pct, reference,
-                     fine_element_m)
+                     fine_element_m, limits(obs, final, setup.solid_corrections is not None),
+                     obs.n_split)

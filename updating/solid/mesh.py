@@ -28,10 +28,11 @@ from updating.model.profile import Profile
 INNER = 0.5
 
 
-def _block(s: np.ndarray, t: np.ndarray, z: np.ndarray, f) -> MeshHex:
+def _block(s: np.ndarray, t: np.ndarray, z: np.ndarray, f) -> tuple[np.ndarray, np.ndarray]:
+    """(points, cells) of a tensor block in (s, t, z) mapped in-plane by f."""
     m = MeshHex.init_tensor(s, t, z)
     x, y = f(m.p[0], m.p[1])
-    return MeshHex(np.ascontiguousarray(np.vstack([x, y, m.p[2]])), m.t)
+    return np.vstack([x, y, m.p[2]]), m.t
 
 
 def reference_section_mesh(n: int, m: int, z: np.ndarray) -> MeshHex:
@@ -39,7 +40,7 @@ def reference_section_mesh(n: int, m: int, z: np.ndarray) -> MeshHex:
     tau = np.linspace(-1.0, 1.0, n + 1)
     sig = np.linspace(INNER, 1.0, m + 1)
     c = INNER
-    mesh = _block(c * tau, c * tau, z, lambda a, b: (a, b))
+    blocks = [_block(c * tau, c * tau, z, lambda a, b: (a, b))]
     for rot in range(4):
         ca, sa = np.cos(rot * np.pi / 2), np.sin(rot * np.pi / 2)
 
@@ -47,8 +48,14 @@ def reference_section_mesh(n: int, m: int, z: np.ndarray) -> MeshHex:
             x, y = s, s * t
             return ca * x - sa * y, sa * x + ca * y
 
-        mesh = mesh + _block(sig, tau, z, f)
-    return mesh
+        blocks.append(_block(sig, tau, z, f))
+    offsets = np.cumsum([0] + [p.shape[1] for p, _ in blocks])
+    p = np.hstack([p for p, _ in blocks])
+    t = np.hstack([t + o for (_, t), o in zip(blocks, offsets[:-1], strict=True)])
+    _, first, inverse = np.unique(np.round(p.T, 9), axis=0, return_index=True,
+                                  return_inverse=True)
+    return MeshHex(np.ascontiguousarray(p[:, first]),
+                   np.ascontiguousarray(inverse.ravel()[t]))
 
 
 def disc_map(y: np.ndarray, z: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -110,4 +117,5 @@ def bat_mesh(profile: Profile, n_axial: int = 40, n_section: int = 2, n_ring: in
     u = p[2] - k
     x = xs[k] + u * (xs[k + 1] - xs[k])
     r = rs[k] + u * (rs[k + 1] - rs[k])
-    return MeshHex2(np.ascontiguousarray(np.vstack([x, r * y, r * z])), quad.t)
+    return MeshHex2(np.ascontiguousarray(np.vstack([x, r * y, r * z])),
+                    np.ascontiguousarray(quad.t))
