@@ -77,8 +77,9 @@ class Setup:
         points_m: impact points from the knob end, m.
         sensor_x_m: the accelerometer (driving point) position, m.
         fine_element_m: element length of the 'geometry' extension, m.
-        solid_corrections: (k,) per-mode frequency corrections c_r of the 1D beam measured
-            against a 3D solid (updating.solid.compare), or None ('beam_theory' not tried).
+        solid_corrections: (k,) or (2, k) per-mode frequency corrections c_r of the 1D beam
+            measured against a 3D solid (updating.solid.compare; a row per bending plane), or
+            None ('beam_theory' not tried).
     """
 
     profile: Profile
@@ -199,7 +200,8 @@ def reference_of(setup: Setup, active: frozenset[str], state: State,
         shear_coefficient="hutchinson" if "shear_coefficient" in active else "cowper",
         e_over_g_plane2=s.e_over_g * s.g_ratio if two else None,
         tap_angle_deg=float(np.degrees(s.theta_rad)) if two else None,
-        beam_theory_corrections=None if corr is None else tuple(float(c) for c in corr))
+        beam_theory_corrections=None if corr is None else tuple(
+            tuple(float(c) for c in row) for row in np.atleast_2d(corr)))
 
 
 def build(setup: Setup, active: frozenset[str], state: State, plane: int = 0) -> BatModel:
@@ -290,12 +292,12 @@ def solve(
     """
     one = solve_plane(setup, active, state, n_elastic, names, 0)
     k = one.elastic_hz.size
-    factor = np.ones(k)
+    factor = np.ones((2, k))
     if "beam_theory" in active and setup.solid_corrections is not None:
-        c = np.asarray(setup.solid_corrections, dtype=float)[:k]
-        factor[:c.size] += c
+        c = np.atleast_2d(np.asarray(setup.solid_corrections, dtype=float))[:, :k]
+        factor[:, :c.shape[1]] += c[[0, -1]]
     if "two_planes" not in active:
-        return replace(one, elastic_hz=one.elastic_hz * factor)
+        return replace(one, elastic_hz=one.elastic_hz * factor[0])
     two = solve_plane(setup, active, state, n_elastic, names, 1)
     s = effective_state(setup, active, state)
     c, sn = np.cos(s.theta_rad), np.sin(s.theta_rad)
@@ -305,7 +307,8 @@ def solve(
         j = names.index("theta")
         dshapes[j] = np.hstack([-sn * one.shapes, c * two.shapes, np.zeros_like(one.shapes)])
     return ModalSolution(
-        np.concatenate([one.elastic_hz, two.elastic_hz, one.elastic_hz]) * np.tile(factor, 3),
+        np.concatenate([one.elastic_hz * factor[0], two.elastic_hz * factor[1],
+                        one.elastic_hz * factor[0]]),
         one.low_hz, shapes, np.hstack([one.dlnf, two.dlnf, one.dlnf]), one.dlnf_low, dshapes,
         n_planes=2)
 

@@ -152,7 +152,8 @@ class Diagnosis:
                     {"E_over_G_plane2": eg2 * rel_std("ln_g_ratio"),
                      "tap_angle_deg": float(np.degrees(rel_std("theta")))})
         if name == "beam_theory":
-            return {"corrections_pct": [100 * c for c in ref.beam_theory_corrections or ()]}, {}
+            c = np.atleast_2d(np.asarray(ref.beam_theory_corrections or (), dtype=float))
+            return {"corrections_pct": (100 * c).tolist()}, {}
         return {}, {}
 
     def to_json_dict(self) -> dict:

@@ -33,7 +33,8 @@ class BatReference:
             from the first plane, when diagnose resolved both planes (else None); the model
             built here is the first plane's.
         beam_theory_corrections: per-mode frequency corrections c_r measured against a 3D
-            solid (f_3D = f_1D (1 + c_r)), when diagnose used them (else None).
+            solid (f_3D = f_1D (1 + c_r)), one row per bending plane, when diagnose used them
+            (else None). Carried for the record; inspect does not apply them yet.
     """
 
     E_pa: float
@@ -49,7 +50,7 @@ class BatReference:
     shear_coefficient: str = "cowper"
     e_over_g_plane2: float | None = None
     tap_angle_deg: float | None = None
-    beam_theory_corrections: tuple[float, ...] | None = None
+    beam_theory_corrections: tuple[tuple[float, ...], ...] | None = None
 
     def material(self) -> Material:
         return Material(self.E_pa, self.rho_kg_m3, self.e_over_g, self.nu,
@@ -84,5 +85,5 @@ class BatReference:
     def from_dict(d: dict) -> BatReference:
         kw = {k: d[k] for k in BatReference.__dataclass_fields__ if k in d}
         if kw.get("beam_theory_corrections") is not None:
-            kw["beam_theory_corrections"] = tuple(kw["beam_theory_corrections"])
+            kw["beam_theory_corrections"] = tuple(tuple(r) for r in kw["beam_theory_corrections"])
         return BatReference(**kw)

@@ -116,3 +116,13 @@ def solid_check(profile: Profile, wood: OrthotropicWood, n_modes: int = 6,
         modes = SolidModes(modes.freq_hz, kinds_f, modes.axis_x_m, modes.axis_w, modes.n_dof)
     return tuple(check_plane(profile, modes, wood, p, n_modes, nu, shear_coefficient)
                  for p in planes)
+
+
+def beam_corrections(profile: Profile, wood: OrthotropicWood, n_modes: int = 8,
+                     n_axial: int = 40, n_section: int = 2, n_ring: int = 1, nu: float = 0.3,
+                     shear_coefficient: str = "cowper", progress: bool = False) -> np.ndarray:
+    """Per-mode corrections (2, n_modes) for a 1D reference, a row per bending plane (y: the
+    L-R plane, z: L-T): f_3D / f_1D(calibrated) - 1 (planar grain)."""
+    checks = solid_check(profile, wood, n_modes, n_axial, n_section, n_ring, "planar", nu,
+                         shear_coefficient, progress)
+    return np.array([c.corrections for c in checks])

@@ -121,15 +121,30 @@ def classify(u: np.ndarray, on_axis: np.ndarray) -> tuple[str, np.ndarray]:
 
 def solid_modes(
     mesh: MeshHex2, wood: OrthotropicWood, n_modes: int = 30, orientation: str = "planar",
-    progress: bool = False,
+    progress: bool = False, point_masses: tuple[tuple[float, float], ...] = (),
 ) -> SolidModes:
-    """Lowest elastic modes of the free-free solid (rigid-body modes dropped)."""
+    """Lowest elastic modes of the free-free solid (rigid-body modes dropped).
+
+    ``point_masses``: (x_m, kg) lumped on the axis node nearest x (an accelerometer), in all
+    three directions.
+    """
     def say(msg):
         if progress:
             print(f"solid: {msg}", file=sys.stderr, flush=True)
 
     say(f"{mesh.nelements} quadratic hexahedra, assembling ...")
     K, M, basis = assemble_solid(mesh, wood, orientation)
+    loc = basis.doflocs
+    r = np.hypot(loc[1], loc[2])
+    on_axis = np.flatnonzero(r < 1e-9 * max(np.ptp(loc[0]), 1e-12))
+    on_axis = on_axis[np.argsort(loc[0, on_axis])]
+    if point_masses:
+        M = M.tolil()
+        for x_m, kg in point_masses:
+            a = on_axis[np.argmin(np.abs(loc[0, on_axis] - x_m))]
+            for i in range(3):
+                M[3 * a + i, 3 * a + i] += kg
+        M = M.tocsr()
     say(f"{K.shape[0]} DOF; solving for {n_modes} modes ...")
     # shift well below the first elastic mode; the rigid-body modes sit at 0
     lam, vec = scipy.sparse.linalg.eigsh(K, k=n_modes + 6, M=M, sigma=-(2 * np.pi * 10.0) ** 2,
@@ -139,11 +154,6 @@ def solid_modes(
     f = np.sqrt(np.clip(lam, 0.0, None)) / (2 * np.pi)
     elastic = f > 1e-3 * f.max()
     f, vec = f[elastic], vec[:, elastic]
-    loc = basis.doflocs
-    r = np.hypot(loc[1], loc[2])
-    on_axis = np.flatnonzero(r < 1e-9 * max(np.ptp(loc[0]), 1e-12))
-    order_ax = np.argsort(loc[0, on_axis])
-    on_axis = on_axis[order_ax]
     kinds, ws = [], []
     for j in range(f.size):
         k, w = classify(vec[:, j], on_axis)
