@@ -1,6 +1,7 @@
 """Rig check on a reference bar: sections, the bar file, and hidden rig faults flagged."""
 
 import json
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -68,7 +69,7 @@ def virtual_bar(E_pa=200e9, zeta=0.001, **kw) -> VirtualBat:
 
 def measured(bat: VirtualBat, sensitivity: float = 1.0, seed: int = 1) -> MeasuredModes:
     m = simulate_modes(bat, n_modes=5, freq_noise=3e-4, shape_noise=0.005, seed=seed)
-    return MeasuredModes(m.freq_hz, m.shapes / np.sqrt(sensitivity), m.x_m, m.damping_ratio,
+    return MeasuredModes(m.freq_hz, m.shapes * np.sqrt(sensitivity), m.x_m, m.damping_ratio,
                          m.sensor_x_m, m.freq_std_hz)
 
 
@@ -84,7 +85,7 @@ def test_good_rig_passes_and_hidden_faults_are_flagged():
     # the bar is not what the file says: E 4 % lower than stated
     soft = check_rig(bar, measured(virtual_bar(E_pa=192e9)))
     assert verdicts(soft) == {**verdicts(good), "frequencies": False}
-    # hammer x accelerometer sensitivity 25 % off: FRFs 1.25 x, shapes / sqrt(1.25)
+    # hammer x accelerometer sensitivity 25 % off: FRFs 1.25 x, shapes sqrt(1.25) x
     loud = check_rig(bar, measured(virtual_bar(), sensitivity=1.25))
     assert verdicts(loud) == {**verdicts(good), "amplitude_scale": False}
     scale = next(c for c in loud.checks if c.name == "amplitude_scale").value
@@ -103,6 +104,14 @@ def test_check_rig_command_end_to_end(tmp_path, capsys):
     assert main(args + ["--json"]) == 0
     out = json.loads(capsys.readouterr().out)
     assert out["ok"] and len(out["modes"]) >= 4
+    # the same test with the FRFs 25 % too large (a sensitivity entered wrong)
+    test = simulate_test(virtual_bar(), seed=3)
+    write_test(tmp_path / "loud.uff", replace(test, frf=1.25 * test.frf))
+    assert main(["check-rig", "--bar", str(tmp_path / "bar.json"), "--frf",
+                 str(tmp_path / "loud.uff"), "--json"]) == 1
+    checks = {c["name"]: c for c in json.loads(capsys.readouterr().out)["checks"]}
+    assert checks["amplitude_scale"]["value"] == pytest.approx(1.25, rel=0.02)
+    assert not checks["mass_line"]["ok"] and checks["frequencies"]["ok"]
     assert {c["name"] for c in out["checks"]} >= {"frequencies", "damping", "amplitude_scale"}
     wrong = {**ROUND, "material": {**STEEL, "E_gpa": 210.0}}
     (tmp_path / "wrong.json").write_text(json.dumps(wrong))

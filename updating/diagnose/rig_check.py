@@ -9,8 +9,8 @@ point) is paired with the measured modes by MAC. Checks, each with its tolerance
   a clamp, a hand, a stiff cord, or a poor fit);
 - amplitude scale: the measured mass-normalised shapes against the model's, per mode
   q_r = u_r . y_r / u_r . u_r; an error s in the product of the hammer and accelerometer
-  sensitivities scales the FRFs by s and the shapes by 1/sqrt(s) (shapes come from
-  residues A = phi_j phi_k), so s = 1 / median(q)^2; |s - 1| <= scale_tol;
+  sensitivities scales the FRFs by s and the shapes by sqrt(s) (shapes come from
+  residues A = phi_j phi_k), so s = median(q)^2; |s - 1| <= scale_tol;
 - mass line (when the fit measured it): the lower residual at the driving point against
   the bar's rigid-body flexibility 1/M + (x_d - x_c)^2 / I (ema.shapes.mass_line), within
   scale_tol;
@@ -114,7 +114,7 @@ def check_rig(
             "damping", float(zeta.max()), max_damping, bool(zeta.max() <= max_damping),
             f"largest damping ratio {100 * zeta.max():.3f} % (at most {100 * max_damping:.2f} "
             "% for a bar on soft cords)"))
-        s = float(1 / np.median(q) ** 2)
+        s = float(np.median(q) ** 2)
         checks.append(Check(
             "amplitude_scale", s, scale_tol, bool(abs(s - 1) <= scale_tol),
             f"measured FRFs are {s:.3f} x the bar's (hammer x accelerometer sensitivity "
