@@ -348,9 +348,11 @@ def limits(obs: Observations, final: Fit, solid_tried: bool) -> tuple[str, ...]:
             out.append(f"{label} is poorly identified (standard uncertainty {final.std(name):.3g}"
                        f" in fit units, above {POOR[name]})")
     if "sensor_mass" not in final.active:
-        out.append("no accelerometer mass in the calibrated model: the data did not show one "
-                   "(from frequencies alone a point mass trades off against E and density; "
-                   "the mass-normalised shapes are what fix it)")
+        out.append("no accelerometer mass in the calibrated model: the data did not show one. "
+                   "A mass near a free end lowers every mode by about the same fraction, as a "
+                   "lower E does, so frequencies alone cannot separate them; only the absolute "
+                   "scale of the mass-normalised shapes can. If an accelerometer was mounted, "
+                   "E is low by about its share")
     if "ln_E" in final.names and "ln_e_over_g" in final.names:
         i, j = final.names.index("ln_E"), final.names.index("ln_e_over_g")
         c = final.cov[i, j] / np.sqrt(max(final.cov[i, i] * final.cov[j, j], 1e-300))
