@@ -2,8 +2,8 @@
 
 Two passes: (1) diagnose with the 1D model family; (2) build the bat's 3D solid
 (updating.solid) with the fitted E, density and E/G of each bending plane (Wood Handbook
-ratios for the rest), measure per-mode, per-plane corrections c_r = f_3D / f_1D - 1 of the 1D
-beam calibrated on the solid, and diagnose again with 'beam_theory' (f (1 + c_r)) in the
+ratios for the rest), measure per-mode, per-plane corrections c_r = f_3D / f_1D - 1 against
+the 1D beam with the same E and E/G, and diagnose again with 'beam_theory' (f (1 + c_r)) in the
 model family. Its measured gain is what the beam theory missed for this bat.
 """
 

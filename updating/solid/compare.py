@@ -6,9 +6,10 @@ shear coefficient) is compared with the solid's bending frequencies twice:
 - calibrated: E and E/G fitted to the solid's frequencies (least squares on
   e_r = f_1D,r / f_3D,r - 1): the residual RMS is what no E, E/G can absorb, the fitted
   values show the bias that absorbing it would cause.
-The calibrated residuals give per-mode corrections c_r = f_3D,r / f_1D,r - 1 that a 1D
-reference can carry (updating.diagnose's `beam_theory` extension multiplies the model's
-frequencies by 1 + c_r).
+The nominal errors give per-mode corrections c_r = f_3D,r / f_1D,r - 1 that a 1D reference
+can carry (updating.diagnose's `beam_theory` extension multiplies the model's frequencies by
+1 + c_r); taken against the nominal beam, a 1D model carrying them estimates the solid's own
+E and E/G.
 """
 
 from __future__ import annotations
@@ -62,8 +63,10 @@ class PlaneCheck:
 
     @property
     def corrections(self) -> np.ndarray:
-        """c_r = f_3D / f_1D(calibrated) - 1."""
-        return self.solid_hz / self.calibrated_hz - 1
+        """c_r = f_3D / f_1D(nominal) - 1: against the beam with the solid's own E_L and E/G,
+        so that a 1D model carrying them and fitted to a test estimates the physical E and
+        E/G (against the calibrated beam it would estimate the beam's biased ones)."""
+        return self.solid_hz / self.nominal_hz - 1
 
 
 def calibrate(profile: Profile, target_hz: np.ndarray, start: Material) -> Material:
@@ -122,7 +125,7 @@ def beam_corrections(profile: Profile, wood: OrthotropicWood, n_modes: int = 8,
                      n_axial: int = 40, n_section: int = 2, n_ring: int = 1, nu: float = 0.3,
                      shear_coefficient: str = "cowper", progress: bool = False) -> np.ndarray:
     """Per-mode corrections (2, n_modes) for a 1D reference, a row per bending plane (y: the
-    L-R plane, z: L-T): f_3D / f_1D(calibrated) - 1 (planar grain)."""
+    L-R plane, z: L-T): f_3D / f_1D(nominal) - 1 (planar grain)."""
     checks = solid_check(profile, wood, n_modes, n_axial, n_section, n_ring, "planar", nu,
                          shear_coefficient, progress)
     return np.array([c.corrections for c in checks])
