@@ -3,8 +3,9 @@
 Two passes: (1) diagnose with the 1D model family; (2) build the bat's 3D solid
 (updating.solid) with the fitted E, density and E/G of each bending plane (Wood Handbook
 ratios for the rest), measure per-mode, per-plane corrections c_r = f_3D / f_1D - 1 against
-the 1D beam with the same E and E/G, and diagnose again with 'beam_theory' (f (1 + c_r)) in the
-model family. Its measured gain is what the beam theory missed for this bat.
+the 1D beam with the same E and E/G on the first pass's mesh, and diagnose again with
+'beam_theory' (f (1 + c_r)) in the model family. Its measured gain is what the beam theory
+missed for this bat.
 """
 
 from __future__ import annotations
@@ -34,7 +35,11 @@ def diagnose_with_solid(
         print(f"diagnose --solid: 3D solid with E/G {wood.e_over_g_lr:.1f} and "
               f"{wood.e_over_g_lt:.1f} in the two planes ...", file=sys.stderr)
     n = int(first.model_index.max()) + 2
+    # the 1D beam on the reference's own mesh (diagnose.model.build), so the corrections
+    # carry its discretisation error too
+    fine = ref.element_length_m is not None
+    mesh = (ref.element_length_m, tuple(measured.x_m) if fine else ())
     corr = beam_corrections(profile, wood, n_modes=n, n_axial=n_axial,
-                            nu=meta.material.nu, progress=progress)
+                            nu=meta.material.nu, progress=progress, mesh=mesh)
     return diagnose(profile, meta, measured, suspension_hz, solid_corrections=corr,
                     **kwargs), corr

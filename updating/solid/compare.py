@@ -31,10 +31,12 @@ from updating.solid.modes import SolidModes, solid_modes
 FINE_1D_M = 0.25 * IN_TO_M
 
 
-def beam_hz(profile: Profile, material: Material, n_modes: int) -> np.ndarray:
-    """Lowest n_modes elastic frequencies of the free-free 1D Timoshenko beam (fine mesh)."""
+def beam_hz(profile: Profile, material: Material, n_modes: int,
+            element_length_m: float | None = FINE_1D_M, stations_m=()) -> np.ndarray:
+    """Lowest n_modes elastic frequencies of the free-free 1D Timoshenko beam (0.25 in
+    elements unless a mesh is given: None is the reference's ~1 in grid)."""
     model = build_model(profile, material, beam="timoshenko", rotary_inertia=True,
-                        element_length_m=FINE_1D_M)
+                        element_length_m=element_length_m, stations_m=stations_m)
     return model_modes(model, n_modes + 2).elastic().freq_hz[:n_modes]
 
 
@@ -86,8 +88,10 @@ def calibrate(profile: Profile, target_hz: np.ndarray, start: Material) -> Mater
 
 
 def check_plane(profile: Profile, modes: SolidModes, wood: OrthotropicWood, plane: str,
-                n_modes: int, nu: float, shear_coefficient: str) -> PlaneCheck:
-    """Compare the first n_modes bending modes of one plane."""
+                n_modes: int, nu: float, shear_coefficient: str,
+                mesh: tuple[float | None, tuple] = (FINE_1D_M, ())) -> PlaneCheck:
+    """Compare the first n_modes bending modes of one plane; ``mesh`` (element length,
+    stations) of the 1D nominal beam (the calibration always uses the fine mesh)."""
     f3 = modes.bending_hz(plane)[:n_modes]
     if f3.size < n_modes:
         raise ValueError(f"the solid gave only {f3.size} bending modes in plane {plane}; "
@@ -95,7 +99,7 @@ def check_plane(profile: Profile, modes: SolidModes, wood: OrthotropicWood, plan
     eg = wood.e_over_g_lr if plane == "y" else wood.e_over_g_lt
     nominal = Material(wood.E_L_pa, wood.rho_kg_m3, eg, nu, shear_coefficient)
     cal = calibrate(profile, f3, nominal)
-    return PlaneCheck(plane, f3, beam_hz(profile, nominal, n_modes),
+    return PlaneCheck(plane, f3, beam_hz(profile, nominal, n_modes, *mesh),
                       beam_hz(profile, cal, n_modes), eg, cal.E_pa, cal.e_over_g)
 
 
@@ -103,6 +107,7 @@ def solid_check(profile: Profile, wood: OrthotropicWood, n_modes: int = 6,
                 n_axial: int = 40, n_section: int = 2, n_ring: int = 1,
                 orientation: str = "planar", nu: float = 0.3,
                 shear_coefficient: str = "hutchinson", progress: bool = False,
+                beam_mesh: tuple[float | None, tuple] = (FINE_1D_M, ()),
                 ) -> tuple[PlaneCheck, ...]:
     """Solve the solid and compare each bending plane with the 1D beam."""
     mesh = bat_mesh(profile, n_axial, n_section, n_ring)
@@ -117,15 +122,18 @@ def solid_check(profile: Profile, wood: OrthotropicWood, n_modes: int = 6,
         sel = np.flatnonzero(kinds == "bend_y")[keep]
         kinds_f[sel] = "bend_y"
         modes = SolidModes(modes.freq_hz, kinds_f, modes.axis_x_m, modes.axis_w, modes.n_dof)
-    return tuple(check_plane(profile, modes, wood, p, n_modes, nu, shear_coefficient)
-                 for p in planes)
+    return tuple(check_plane(profile, modes, wood, p, n_modes, nu, shear_coefficient,
+                             beam_mesh) for p in planes)
 
 
 def beam_corrections(profile: Profile, wood: OrthotropicWood, n_modes: int = 8,
                      n_axial: int = 40, n_section: int = 2, n_ring: int = 1, nu: float = 0.3,
-                     shear_coefficient: str = "cowper", progress: bool = False) -> np.ndarray:
+                     shear_coefficient: str = "cowper", progress: bool = False,
+                     mesh: tuple[float | None, tuple] = (FINE_1D_M, ())) -> np.ndarray:
     """Per-mode corrections (2, n_modes) for a 1D reference, a row per bending plane (y: the
-    L-R plane, z: L-T): f_3D / f_1D(nominal) - 1 (planar grain)."""
+    L-R plane, z: L-T): f_3D / f_1D(nominal) - 1 (planar grain), the 1D beam on ``mesh``
+    (element length or None for the ~1 in grid, stations): the reference's own mesh, so
+    that its discretisation error is corrected too."""
     checks = solid_check(profile, wood, n_modes, n_axial, n_section, n_ring, "planar", nu,
-                         shear_coefficient, progress)
+                         shear_coefficient, progress, mesh)
     return np.array([c.corrections for c in checks])
