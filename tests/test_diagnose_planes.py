@@ -87,3 +87,16 @@ def test_beam_theory_corrections_hidden_and_recovered():
     assert fixed.reference.e_over_g == pytest.approx(WOOD.e_over_g, rel=0.03)
     assert fixed.reference.beam_theory_corrections[0] == pytest.approx(tuple(c))
     assert not any(w.startswith("residual floor") for w in fixed.warnings)
+
+
+def test_solid_pass_does_not_claim_beam_theory_for_beam_data():
+    """diagnose --solid on data that a 1D beam generated: the 3D corrections do not fit them,
+    so beam_theory is not named and the calibration is unchanged (no false cause)."""
+    from updating.diagnose.solid import diagnose_with_solid
+
+    bat = VirtualBat(PROFILE, WOOD, POINTS, sensor_mass_kg=3e-3, bungee_k_n_per_m=300.0)
+    meas = simulate_modes(bat, n_modes=4, seed=6, freq_noise=2e-4, shape_noise=0.005)
+    result, corr = diagnose_with_solid(PROFILE, meta_for(WOOD), meas, n_axial=12)
+    assert corr.shape[0] == 2 and np.all(np.abs(corr) < 0.05)
+    assert "beam_theory" not in [c.name for c in result.causes]
+    assert result.reference.E_pa == pytest.approx(WOOD.E_pa, rel=0.01)
