@@ -68,11 +68,7 @@ def comparison() -> None:
         t0 = time.perf_counter()
         modes = solid_modes(bat_mesh(profile, 80, 2, 1), wood, 26, orient)
         if orient == "cylindrical":
-            keep = np.flatnonzero(np.char.startswith(modes.kind.astype(str), "bend"))[::2]
-            kind = modes.kind.copy()
-            kind[np.char.startswith(kind.astype(str), "bend")] = "x"
-            kind[keep] = "bend_y"
-            modes = type(modes)(modes.freq_hz, kind, modes.axis_x_m, modes.axis_w, modes.n_dof)
+            modes = modes.one_plane()
         planes = ("y",) if orient == "cylindrical" else ("y", "z")
         nu = 0.3
         for plane in planes:

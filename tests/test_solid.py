@@ -84,3 +84,4 @@ def test_planar_grain_splits_the_bending_planes():
     cyl = solid_modes(mesh, wood, 10, "cylindrical")
     f = np.sort(cyl.freq_hz[np.char.startswith(cyl.kind.astype(str), "bend")])[:4]
     assert f[1] == pytest.approx(f[0], rel=1e-6) and f[3] == pytest.approx(f[2], rel=1e-6)
+    assert np.allclose(cyl.one_plane().bending_hz("y")[:2], f[::2])

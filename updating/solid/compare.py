@@ -114,14 +114,7 @@ def solid_check(profile: Profile, wood: OrthotropicWood, n_modes: int = 6,
     modes = solid_modes(mesh, wood, 3 * n_modes + 8, orientation, progress)
     planes = ("y", "z") if orientation == "planar" else ("y",)
     if orientation != "planar":  # one plane: the pairs are degenerate
-        kinds = modes.kind.copy()
-        kinds[kinds == "bend_z"] = "bend_y"
-        f = modes.freq_hz[kinds == "bend_y"]
-        keep = np.concatenate([[True], np.diff(f) > 1e-6 * f[1:]])
-        kinds_f = np.where(kinds == "bend_y", "", kinds)
-        sel = np.flatnonzero(kinds == "bend_y")[keep]
-        kinds_f[sel] = "bend_y"
-        modes = SolidModes(modes.freq_hz, kinds_f, modes.axis_x_m, modes.axis_w, modes.n_dof)
+        modes = modes.one_plane()
     return tuple(check_plane(profile, modes, wood, p, n_modes, nu, shear_coefficient,
                              beam_mesh) for p in planes)
 

@@ -50,6 +50,15 @@ class SolidModes:
         """Bending frequencies in plane "y" or "z", ascending."""
         return self.freq_hz[self.kind == f"bend_{plane}"]
 
+    def one_plane(self) -> SolidModes:
+        """For an axisymmetric solid (both planes alike): one mode of each degenerate pair,
+        labelled "bend_y", the other "other"."""
+        kind = self.kind.astype(object).copy()
+        bend = np.flatnonzero(np.char.startswith(self.kind.astype(str), "bend"))
+        kind[bend] = "other"
+        kind[bend[::2]] = "bend_y"
+        return SolidModes(self.freq_hz, kind.astype(str), self.axis_x_m, self.axis_w, self.n_dof)
+
 
 def material_axes(points: np.ndarray, orientation: str) -> np.ndarray:
     """(..., 3, 3) columns L, R, T in global components at points (3, ...)."""
