@@ -32,6 +32,7 @@ COMMANDS: tuple[str, ...] = (
     "acquire",
     "paper",
     "fit",
+    "check-rig",
 )
 
 
@@ -42,7 +43,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
     for name in COMMANDS:
-        module = importlib.import_module(f"batlab.commands.{name}")
+        module = importlib.import_module(f"batlab.commands.{name.replace('-', '_')}")
         p = sub.add_parser(name, help=module.HELP, description=module.HELP)
         module.add_arguments(p)
         p.set_defaults(_run=module.run)

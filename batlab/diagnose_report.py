@@ -23,7 +23,7 @@ def format_table(out: dict) -> str:
         lines.append("  none above the threshold")
     for c in out["causes"]:
         unc = c.get("uncertainty", {})
-        vals = ", ".join(f"{k} {v:.4g}" + (f" +- {unc[k]:.2g}" if unc.get(k) else "")
+        vals = ", ".join(f"{k} {_num(v)}" + (f" +- {unc[k]:.2g}" if unc.get(k) else "")
                          for k, v in c["value"].items())
         lines.append(f"  {c['name']:<18} gain {c['gain_pct']:6.3f} pp   {vals}")
     quiet = [n for n in out.get("not_named", []) if n.get("in_reference")]
@@ -35,7 +35,21 @@ def format_table(out: dict) -> str:
     lines.append(f"calibrated: E {cal['E_psi']:.4g} psi, E/G {cal['E_over_G']:.3g}, weight "
                  f"density {cal['weight_density_lbf_in3']:.5f} lbf/in^3, sensor "
                  f"{cal['sensor_mass_g']:.2f} g")
+    if cal.get("E_over_G_plane2") is not None:
+        lines.append(f"second bending plane: E/G {cal['E_over_G_plane2']:.3g}, tapped at "
+                     f"{cal['tap_angle_deg']:.1f} deg from the first")
+    for w in out.get("warnings", []):
+        lines += textwrap.wrap("warning: " + w, 96, subsequent_indent="  ")
     return "\n".join(lines)
+
+
+def _num(v) -> str:
+    """A value of the JSON as text: numbers to 4 digits, lists element-wise."""
+    if isinstance(v, bool) or isinstance(v, str):
+        return str(v)
+    if isinstance(v, (list, tuple)):
+        return "[" + " ".join(_num(x) for x in v) + "]"
+    return f"{v:.4g}"
 
 
 def write_plot(result, path: Path, title: str = "") -> Path:

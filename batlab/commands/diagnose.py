@@ -19,6 +19,9 @@ def add_arguments(p) -> None:
                    help="least RMS gain, percentage points, to name a cause (default 0.05)")
     p.add_argument("--method", choices=("lscf", "peak"), default="lscf",
                    help="modal estimation method of the ema fitter")
+    p.add_argument("--solid", action="store_true",
+                   help="also measure what the 1D beam misses against a 3D solid model of the "
+                        "bat (about a minute; names beam_theory with its gain)")
 
 
 def modal_fitter():
@@ -64,7 +67,16 @@ def run(args) -> int:
     print(f"batlab diagnose: {measured.freq_hz.size} elastic modes; ranking the causes ...",
           file=sys.stderr)
     min_gain = MIN_GAIN_PCT if args.min_gain is None else args.min_gain
-    result = diagnose(profile, meta, measured, suspension_hz, min_gain_pct=min_gain)
+    if args.solid:
+        from updating.diagnose.solid import diagnose_with_solid
+
+        result, corr = diagnose_with_solid(profile, meta, measured, suspension_hz,
+                                           progress=True, min_gain_pct=min_gain)
+        print("batlab diagnose: 3D/1D corrections per plane, %: "
+              + "; ".join(" ".join(f"{100 * c:+.2f}" for c in row) for row in corr),
+              file=sys.stderr)
+    else:
+        result = diagnose(profile, meta, measured, suspension_hz, min_gain_pct=min_gain)
     out = result.to_json_dict()
     out["serial"] = meta.serial
     for w in result.warnings:

@@ -48,6 +48,11 @@ class Observations:
         sigma_s: uncertainty of a shape entry relative to its mode's RMS.
         suspension_hz: (<= 2,) measured suspension (rigid-body) frequencies, Hz.
         sigma_b: their relative uncertainty.
+        code: (m,) 0 / 1: the larger / smaller member of a split pair (two bending planes
+            seen), 2: a mode seen once; None: all seen once.
+        combined: (n_points, m) for the larger member of a pair its shape scaled to carry
+            the pair's amplitude sqrt(|y_1|^2 + |y_2|^2) (what a one-plane model predicts),
+            else the measured shape; None: the shapes.
     """
 
     freq_hz: np.ndarray
@@ -57,10 +62,38 @@ class Observations:
     sigma_s: float = 0.01
     suspension_hz: np.ndarray = field(default_factory=lambda: np.zeros(0))
     sigma_b: float = 0.01
+    code: np.ndarray | None = None
+    combined: np.ndarray | None = None
 
     @property
     def n_model_modes(self) -> int:
         return int(self.model_index.max()) + 1
+
+    @property
+    def codes(self) -> np.ndarray:
+        return np.full(self.freq_hz.size, 2) if self.code is None else self.code
+
+    @property
+    def n_split(self) -> int:
+        """Number of split pairs (both bending planes seen)."""
+        return int(np.sum(self.codes == 1))
+
+
+def columns(
+    sol: ModalSensitivities, obs: Observations,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(model column of each measured mode, measured modes with a shape residual, their
+    measured shapes): a one-plane model predicts a pair once (the larger member, with the
+    pair's combined shape), the two-plane model each member (module docstring of
+    updating.diagnose.model)."""
+    code = obs.codes
+    if sol.n_planes == 2:
+        k = sol.elastic_hz.size // 3
+        rows = np.arange(code.size)
+        return obs.model_index + k * code, rows, obs.shapes
+    rows = np.flatnonzero(code != 1)
+    y = obs.shapes if obs.combined is None else obs.combined
+    return obs.model_index, rows, y[:, rows]
 
 
 @dataclass(frozen=True)
@@ -103,12 +136,12 @@ class DiagnosisFit:
 
 def residuals(sol: ModalSensitivities, obs: Observations, with_suspension: bool):
     """(residual vector, Jacobian (N, p)) of one modal solution."""
-    f_ratio = sol.elastic_hz[obs.model_index] / obs.freq_hz
+    idx, rows, y = columns(sol, obs)
+    f_ratio = sol.elastic_hz[idx] / obs.freq_hz
     res = [f_ratio - 1.0]
-    jac = [(f_ratio[None, :] * sol.dlnf[:, obs.model_index]).T]
-    u = sol.shapes[:, obs.model_index]
-    du = sol.dshapes[:, :, obs.model_index]
-    y = obs.shapes
+    jac = [(f_ratio[None, :] * sol.dlnf[:, idx]).T]
+    u = sol.shapes[:, idx[rows]]
+    du = sol.dshapes[:, :, idx[rows]]
     sign = np.where(np.sum(u * y, axis=0) < 0, -1.0, 1.0)
     w = obs.sigma_f / obs.sigma_s / np.sqrt(np.mean(y * y, axis=0))
     res.append((w * (y - sign * u)).ravel())
@@ -155,11 +188,12 @@ def fit_model(
     else:
         x = np.zeros(0)
     res, jac, sol = evaluate(x)
+    idx, rows, _ = columns(sol, obs)
     m = obs.freq_hz.size
-    k = m + obs.shapes.size
+    k = m + obs.shapes.shape[0] * rows.size
     cov = covariance(jac, res, s2_default=obs.sigma_f**2)
-    model_hz = sol.elastic_hz[obs.model_index]
-    shapes = sol.shapes[:, obs.model_index]
+    model_hz = sol.elastic_hz[idx]
+    shapes = sol.shapes[:, idx]
     mac_values = np.diag(mac(obs.shapes, shapes))
     rms = float(100 * np.sqrt(np.mean((model_hz / obs.freq_hz - 1) ** 2)))
     return DiagnosisFit(frozenset(active), from_vector(start, names, x), names, x, cov, model_hz,

@@ -13,6 +13,19 @@ nothing attached. Each extension adds physics and at most one parameter:
     suspension          two bungees 1 in from the ends   fitted, kN/m each
     geometry            finer mesh (0.5 in) with nodes   no parameter
                         at the test points
+    shear_coefficient   Hutchinson's shear coefficient    no parameter (physics; a 3D solid
+                        instead of Cowper's               agrees better, docs/model.md)
+    two_planes          two bending planes: plane 2 has  fitted, ln(g_ratio) and theta;
+                        E/G g_ratio times plane 1's, the  tried only when the test shows
+                        tap at angle theta from plane 1   split pairs
+    beam_theory         per-mode corrections f (1 + c_r)  no parameter; c_r from the 3D solid
+                        measured against a 3D solid       (updating.solid; --solid)
+
+Two planes: the model's modes are the union of each plane's (same E, density, sensor and
+bungees; E/G and E/G g_ratio); a tap and a response along the angle theta see plane 1's mode
+shapes times cos(theta) and plane 2's times sin(theta) (residue cos^2 / sin^2). Columns of
+the solution: plane 1 scaled, plane 2 scaled, plane 1 unscaled (for a mode seen once, whose
+measured shape carries the whole pair's amplitude).
 
 Modal sensitivities of mass-normalised modes with the full modal basis (Fox & Kapoor 1968;
 exact for distinct eigenvalues):
@@ -48,7 +61,7 @@ from updating.model.reference import BatReference
 from updating.model.units import IN_TO_M
 
 CAUSES = ("modulus", "density", "shear_deformation", "rotary_inertia", "sensor_mass",
-          "suspension", "geometry")
+          "suspension", "geometry", "shear_coefficient", "two_planes", "beam_theory")
 FINE_ELEMENT_M = 0.5 * IN_TO_M
 BUNGEE_FROM_END_M = IN_TO_M  # as BatReference places them
 
@@ -64,6 +77,9 @@ class Setup:
         points_m: impact points from the knob end, m.
         sensor_x_m: the accelerometer (driving point) position, m.
         fine_element_m: element length of the 'geometry' extension, m.
+        solid_corrections: (k,) or (2, k) per-mode frequency corrections c_r of the 1D beam
+            measured against a 3D solid (updating.solid.compare; a row per bending plane), or
+            None ('beam_theory' not tried).
     """
 
     profile: Profile
@@ -72,6 +88,7 @@ class Setup:
     points_m: np.ndarray
     sensor_x_m: float
     fine_element_m: float = FINE_ELEMENT_M
+    solid_corrections: np.ndarray | None = None
 
     @cached_property
     def rho_from_weight(self) -> float | None:
@@ -91,6 +108,8 @@ class State:
     e_over_g: float = 10.0
     sensor_mass_kg: float = 1e-3
     bungee_k_n_per_m: float = 100.0
+    g_ratio: float = 1.2
+    theta_rad: float = 0.4
 
 
 def free_parameters(active: frozenset[str], setup: Setup) -> tuple[str, ...]:
@@ -106,13 +125,16 @@ def free_parameters(active: frozenset[str], setup: Setup) -> tuple[str, ...]:
         names.append("sensor_g")
     if "suspension" in active:
         names.append("bungee_kn_per_m")
+    if "two_planes" in active:
+        names += ["ln_g_ratio", "theta"]
     return tuple(names)
 
 
 def to_vector(state: State, names: tuple[str, ...]) -> np.ndarray:
     value = {"ln_E": np.log(state.E_pa), "ln_rho": np.log(state.rho_kg_m3),
              "ln_e_over_g": np.log(state.e_over_g), "sensor_g": 1e3 * state.sensor_mass_kg,
-             "bungee_kn_per_m": 1e-3 * state.bungee_k_n_per_m}
+             "bungee_kn_per_m": 1e-3 * state.bungee_k_n_per_m,
+             "ln_g_ratio": np.log(state.g_ratio), "theta": state.theta_rad}
     return np.array([value[n] for n in names])
 
 
@@ -127,6 +149,10 @@ def from_vector(state: State, names: tuple[str, ...], x: np.ndarray) -> State:
             changes["e_over_g"] = float(np.exp(v))
         elif n == "sensor_g":
             changes["sensor_mass_kg"] = 1e-3 * float(v)
+        elif n == "ln_g_ratio":
+            changes["g_ratio"] = float(np.exp(v))
+        elif n == "theta":
+            changes["theta_rad"] = float(v)
         else:
             changes["bungee_k_n_per_m"] = 1e3 * float(v)
     return replace(state, **changes)
@@ -135,7 +161,8 @@ def from_vector(state: State, names: tuple[str, ...], x: np.ndarray) -> State:
 # physical ranges; E/G >= 2 = 2 (1 + nu) with nu >= 0 (the isotropic limit; wood: 9-20)
 BOUNDS = {"ln_E": (np.log(1e8), np.log(1e11)), "ln_rho": (np.log(50.0), np.log(3000.0)),
           "ln_e_over_g": (np.log(2.0), np.log(60.0)), "sensor_g": (0.0, 100.0),
-          "bungee_kn_per_m": (0.0, 100.0)}
+          "bungee_kn_per_m": (0.0, 100.0), "ln_g_ratio": (np.log(0.25), np.log(4.0)),
+          "theta": (0.0, np.pi / 2)}
 
 
 def effective_state(setup: Setup, active: frozenset[str], state: State) -> State:
@@ -150,24 +177,36 @@ def effective_state(setup: Setup, active: frozenset[str], state: State) -> State
         e_over_g=state.e_over_g if "shear_deformation" in active else ISOTROPIC_E_OVER_G,
         sensor_mass_kg=state.sensor_mass_kg if "sensor_mass" in active else 0.0,
         bungee_k_n_per_m=state.bungee_k_n_per_m if "suspension" in active else 0.0,
+        g_ratio=state.g_ratio if "two_planes" in active else 1.0,
+        theta_rad=state.theta_rad if "two_planes" in active else 0.0,
     )
 
 
-def reference_of(setup: Setup, active: frozenset[str], state: State) -> BatReference:
-    """The calibrated reference (updating.model.reference) of a fitted model."""
+def reference_of(setup: Setup, active: frozenset[str], state: State,
+                 plane: int = 0) -> BatReference:
+    """The calibrated reference (updating.model.reference) of a fitted model; ``plane`` 1:
+    the model of the second bending plane (E/G times g_ratio)."""
     s = effective_state(setup, active, state)
-    shear = "shear_deformation" in active
+    shear = "shear_deformation" in active or "two_planes" in active
+    two = "two_planes" in active
+    corr = setup.solid_corrections if "beam_theory" in active else None
     return BatReference(
-        E_pa=s.E_pa, rho_kg_m3=s.rho_kg_m3, e_over_g=s.e_over_g, nu=setup.handbook.nu,
+        E_pa=s.E_pa, rho_kg_m3=s.rho_kg_m3, nu=setup.handbook.nu,
+        e_over_g=s.e_over_g * (s.g_ratio if plane == 1 else 1.0),
         beam="timoshenko" if shear else "euler", rotary_inertia="rotary_inertia" in active,
         sensor_mass_kg=s.sensor_mass_kg, sensor_x_m=setup.sensor_x_m,
         bungee_k_n_per_m=s.bungee_k_n_per_m,
-        element_length_m=setup.fine_element_m if "geometry" in active else None)
+        element_length_m=setup.fine_element_m if "geometry" in active else None,
+        shear_coefficient="hutchinson" if "shear_coefficient" in active else "cowper",
+        e_over_g_plane2=s.e_over_g * s.g_ratio if two else None,
+        tap_angle_deg=float(np.degrees(s.theta_rad)) if two else None,
+        beam_theory_corrections=None if corr is None else tuple(
+            tuple(float(c) for c in row) for row in np.atleast_2d(corr)))
 
 
-def build(setup: Setup, active: frozenset[str], state: State) -> BatModel:
+def build(setup: Setup, active: frozenset[str], state: State, plane: int = 0) -> BatModel:
     """The FE model of the extensions ``active`` with parameter values ``state``."""
-    ref = reference_of(setup, active, state)
+    ref = reference_of(setup, active, state, plane)
     fine = "geometry" in active
     return ref.build(setup.profile, stations_m=setup.points_m if fine else (),
                      element_length_m=setup.fine_element_m if fine else None)
@@ -185,6 +224,7 @@ class ModalSensitivities:
         dlnf: (p, k) d ln f / d parameter of the elastic modes.
         dlnf_low: (p, 2) the same for the two lowest modes.
         dshapes: (p, n_points, k) d shape / d parameter at the test points.
+        n_planes: 2 for the two-plane model, whose columns are 3 k (module docstring).
     """
 
     elastic_hz: np.ndarray
@@ -193,6 +233,7 @@ class ModalSensitivities:
     dlnf: np.ndarray
     dlnf_low: np.ndarray
     dshapes: np.ndarray
+    n_planes: int = 1
 
 
 def interpolation_matrix(model: BatModel, x_m: np.ndarray) -> np.ndarray:
@@ -210,13 +251,17 @@ def interpolation_matrix(model: BatModel, x_m: np.ndarray) -> np.ndarray:
 
 
 def derivative_matrices(
-    model: BatModel, names: tuple[str, ...], setup: Setup,
+    model: BatModel, names: tuple[str, ...], setup: Setup, plane: int = 0,
 ) -> list[tuple[np.ndarray | None, np.ndarray | None]]:
-    """(dK, dM) per parameter name (None: zero)."""
+    """(dK, dM) per parameter name (None: zero) of the model of bending plane ``plane``."""
     out = []
     n = model.n_dof
     for name in names:
-        if name == "ln_E":
+        if name == "theta" or (name == "ln_g_ratio" and plane == 0):
+            out.append((None, None))
+        elif name == "ln_g_ratio":
+            out.append((-place(model, model.parts.k_shear), None))
+        elif name == "ln_E":
             out.append((assemble(model, with_attachments=False)[0], None))
         elif name == "ln_rho":
             out.append((None, assemble(model, with_attachments=False)[1]))
@@ -240,8 +285,40 @@ def modal_sensitivities(
     setup: Setup, active: frozenset[str], state: State, n_elastic: int,
     names: tuple[str, ...] = (),
 ) -> ModalSensitivities:
-    """Lowest ``n_elastic`` elastic modes of the model, with sensitivities to ``names``."""
-    model = build(setup, active, state)
+    """Lowest ``n_elastic`` elastic modes of the model, with sensitivities to ``names``.
+
+    With 'two_planes' the solution has 3 k columns (module docstring); with 'beam_theory'
+    the frequencies carry the solid's corrections (1 + c_r), constant in the parameters.
+    """
+    one = solve_plane(setup, active, state, n_elastic, names, 0)
+    k = one.elastic_hz.size
+    factor = np.ones((2, k))
+    if "beam_theory" in active and setup.solid_corrections is not None:
+        c = np.atleast_2d(np.asarray(setup.solid_corrections, dtype=float))[:, :k]
+        factor[:, :c.shape[1]] += c[[0, -1]]
+    if "two_planes" not in active:
+        return replace(one, elastic_hz=one.elastic_hz * factor[0])
+    two = solve_plane(setup, active, state, n_elastic, names, 1)
+    s = effective_state(setup, active, state)
+    c, sn = np.cos(s.theta_rad), np.sin(s.theta_rad)
+    shapes = np.hstack([c * one.shapes, sn * two.shapes, one.shapes])
+    dshapes = np.concatenate([c * one.dshapes, sn * two.dshapes, one.dshapes], axis=2)
+    if "theta" in names:
+        j = names.index("theta")
+        dshapes[j] = np.hstack([-sn * one.shapes, c * two.shapes, np.zeros_like(one.shapes)])
+    return ModalSensitivities(
+        np.concatenate([one.elastic_hz * factor[0], two.elastic_hz * factor[1],
+                        one.elastic_hz * factor[0]]),
+        one.low_hz, shapes, np.hstack([one.dlnf, two.dlnf, one.dlnf]), one.dlnf_low, dshapes,
+        n_planes=2)
+
+
+def solve_plane(
+    setup: Setup, active: frozenset[str], state: State, n_elastic: int,
+    names: tuple[str, ...], plane: int,
+) -> ModalSensitivities:
+    """The modes of one bending plane's model with their sensitivities."""
+    model = build(setup, active, state, plane)
     K, M = assemble(model)
     modes = solve_modes(K, M)
     phi, lam = modes.shapes, modes.omega2
@@ -254,7 +331,9 @@ def modal_sensitivities(
     dlnf = np.zeros((p, k))
     dlnf_low = np.zeros((p, 2))
     dshapes = np.zeros((p, n_pts.shape[0], k))
-    for j, (dK, dM) in enumerate(derivative_matrices(model, names, setup)):
+    for j, (dK, dM) in enumerate(derivative_matrices(model, names, setup, plane)):
+        if dK is None and dM is None:
+            continue
         A = phi.T @ dK @ phi if dK is not None else np.zeros_like(K)
         B = phi.T @ dM @ phi if dM is not None else np.zeros_like(K)
         dlam = np.diag(A) - lam * np.diag(B)

@@ -62,7 +62,9 @@ def pairing_warnings(fit: DiagnosisFit, model_index: np.ndarray, by_mac: bool) -
                 f"measured mode {k + 1} / model mode {int(model_index[k]) + 1} MAC "
                 f"{fit.mac[k]:.2f}" for k in low) + f" (< {MIN_PAIR_MAC})")
     idx = np.asarray(model_index)
-    if idx.size and not np.array_equal(idx, np.arange(idx.size)):
+    # the two members of a split pair (both bending planes seen) share one model mode
+    distinct = idx[np.r_[True, idx[1:] != idx[:-1]]] if idx.size else idx
+    if idx.size and not np.array_equal(distinct, np.arange(distinct.size)):
         missing = sorted(set(range(int(idx.max()) + 1)) - set(idx.tolist()))
         out.append("pairing skipped model mode(s) " + ", ".join(str(k + 1) for k in missing)
                    + f" (paired model modes {', '.join(str(int(k) + 1) for k in idx)})")

@@ -32,10 +32,12 @@ from dataclasses import dataclass, replace
 import numpy as np
 import scipy.stats
 
+from ema.shapes.mac import mac
 from updating.correlate.measured import MeasuredModes
 from updating.correlate.pairing import pair_modes
 from updating.diagnose.fit import DiagnosisFit, Observations, fit_model, shape_sigma
 from updating.diagnose.model import (
+    BOUNDS,
     CAUSES,
     Setup,
     State,
@@ -98,8 +100,10 @@ class Diagnosis:
         min_gain_pct: naming threshold, percentage points.
         reference: the calibrated reference (updating.model.reference.BatReference).
         fine_element_m: element length of the 'geometry' extension, m.
-        warnings: pairing problems (``updating.diagnose.pairing_check``); when one makes the
-            pairing untrustworthy no cause is named.
+        warnings: what the diagnosis could not establish, one sentence each: pairing problems
+            (``updating.diagnose.pairing_check``; when one makes the pairing untrustworthy no
+            cause is named) and the limits of the calibration.
+        n_split: measured bending pairs with both planes' members seen.
     """
 
     measured_hz: np.ndarray
@@ -113,6 +117,7 @@ class Diagnosis:
     reference: BatReference
     fine_element_m: float = FINE_ELEMENT_IN * IN_TO_M
     warnings: tuple[str, ...] = ()
+    n_split: int = 0
 
     @property
     def causes(self) -> tuple[Step, ...]:
@@ -145,6 +150,17 @@ class Diagnosis:
         if name == "geometry":
             return ({"element_length_in": self.fine_element_m / IN_TO_M,
                      "nodes_at_test_points": True}, {})
+        if name == "shear_coefficient":
+            return {"formula": ref.shear_coefficient}, {}
+        if name == "two_planes":
+            eg2 = ref.e_over_g_plane2
+            return ({"E_over_G_plane2": eg2, "E_over_G": ref.e_over_g,
+                     "tap_angle_deg": ref.tap_angle_deg, "pairs_split": self.n_split},
+                    {"E_over_G_plane2": eg2 * rel_std("ln_g_ratio"),
+                     "tap_angle_deg": float(np.degrees(rel_std("theta")))})
+        if name == "beam_theory":
+            c = np.atleast_2d(np.asarray(ref.beam_theory_corrections or (), dtype=float))
+            return {"corrections_pct": (100 * c).tolist()}, {}
         return {}, {}
 
     def to_json_dict(self) -> dict:
@@ -166,7 +182,11 @@ class Diagnosis:
             "causes": causes,
             "calibrated": {"E_psi": ref.E_pa / PSI_TO_PA, "E_over_G": ref.e_over_g,
                            "weight_density_lbf_in3": ref.rho_kg_m3 / LBF_IN3_TO_KG_M3,
-                           "sensor_mass_g": 1e3 * ref.sensor_mass_kg},
+                           "sensor_mass_g": 1e3 * ref.sensor_mass_kg,
+                           "shear_coefficient": ref.shear_coefficient,
+                           **({"E_over_G_plane2": ref.e_over_g_plane2,
+                               "tap_angle_deg": ref.tap_angle_deg}
+                              if ref.e_over_g_plane2 is not None else {})},
             "not_named": [{"name": s.name, "gain_pct": s.gain_pct,
                            "in_reference": s.role == "calibration"}
                           for s in self.steps if not s.named],
@@ -179,27 +199,60 @@ class Diagnosis:
 
 def observations(
     setup: Setup, measured: MeasuredModes, suspension_hz, min_mac: float,
+    max_split: float = 0.12,
 ) -> tuple[Observations, np.ndarray, np.ndarray, list[str]]:
-    """Pair measured modes with the nominal model's (by MAC, or in frequency order when the
-    shapes are unreliable: ``pairing_check``); (observations, measured index, unpaired,
-    pairing notes)."""
+    """Pair measured modes with the nominal model's; (observations, measured index, unpaired,
+    pairing notes).
+
+    One-to-one pairing by MAC first (or in frequency order when the shapes are unreliable:
+    ``pairing_check``); with a MAC pairing, a measured mode left over whose shape matches an
+    already paired model mode (MAC >= min_mac) within ``max_split`` in frequency of its
+    partner is the other bending plane's member of that pair (a split pair).
+    """
     m = measured.freq_hz.size
     nominal = modal_sensitivities(setup, frozenset(), start_state(setup, suspension_hz), m + 4)
-    meas_idx, model_idx, macs = pair_modes(measured.shapes, nominal.shapes, min_mac=min_mac)
+    meas_idx, model_idx, pair_macs = pair_modes(measured.shapes, nominal.shapes, min_mac=min_mac)
     meas_idx, model_idx, notes = checked_pairing(measured.freq_hz, measured.x_m.size, meas_idx,
-                                                 model_idx, macs, nominal.shapes.shape[1])
-    order = np.argsort(measured.freq_hz[meas_idx])
-    meas_idx, model_idx = meas_idx[order], model_idx[order]
+                                                 model_idx, pair_macs, nominal.shapes.shape[1])
     if meas_idx.size == 0:
         raise ValueError("no measured mode matches a model mode (MAC below "
                          f"{min_mac}): check the test points and the profile")
+    partner = dict(zip(model_idx.tolist(), meas_idx.tolist(), strict=True))
+    macs = mac(measured.shapes, nominal.shapes)
+    extra_meas, extra_model = [], []
+    leftover = np.setdiff1d(np.arange(m), meas_idx) if not notes else np.zeros(0, int)
+    for j in leftover:  # split pairs need trustworthy shapes
+        for r in np.argsort(-macs[j]):
+            if macs[j, r] < min_mac:
+                break
+            i = partner.get(int(r))
+            if (i is not None and int(r) not in extra_model
+                    and abs(measured.freq_hz[j] / measured.freq_hz[i] - 1) < max_split):
+                extra_meas.append(int(j))
+                extra_model.append(int(r))
+                break
+    meas_idx = np.concatenate([meas_idx, np.array(extra_meas, dtype=int)])
+    model_idx = np.concatenate([model_idx, np.array(extra_model, dtype=int)])
+    order = np.argsort(measured.freq_hz[meas_idx])
+    meas_idx, model_idx = meas_idx[order], model_idx[order]
     f = measured.freq_hz[meas_idx]
+    y = measured.shapes[:, meas_idx]
+    code = np.full(meas_idx.size, 2)
+    combined = y.copy()
+    norm = np.linalg.norm(y, axis=0)
+    for r in np.unique(model_idx):
+        both = np.flatnonzero(model_idx == r)
+        if both.size == 2:
+            big, small = both[np.argsort(-norm[both])]
+            code[big], code[small] = 0, 1
+            if norm[big] > 0:
+                combined[:, big] = y[:, big] * np.hypot(norm[big], norm[small]) / norm[big]
     sigma_f = 5e-4
     if measured.freq_std_hz is not None and np.all(np.isfinite(measured.freq_std_hz)):
         sigma_f = max(1e-4, float(np.median(measured.freq_std_hz[meas_idx] / f)))
     susp = np.sort(np.asarray([] if suspension_hz is None else suspension_hz, dtype=float))
-    obs = Observations(f, measured.shapes[:, meas_idx], model_idx, sigma_f,
-                       suspension_hz=susp[susp > 0][:2])
+    obs = Observations(f, y, model_idx, sigma_f, suspension_hz=susp[susp > 0][:2], code=code,
+                       combined=combined)
     unpaired = np.setdiff1d(np.arange(m), meas_idx)
     return obs, meas_idx, measured.freq_hz[unpaired], notes
 
@@ -276,10 +329,64 @@ def backward_check(
     return path, final, dropped
 
 
+PARAMETER_LABELS = {"ln_E": "E", "ln_rho": "density", "ln_e_over_g": "E/G",
+                    "sensor_g": "sensor mass", "bungee_kn_per_m": "bungee stiffness",
+                    "ln_g_ratio": "the second plane's E/G", "theta": "the tapping angle"}
+# relative (ln parameters), grams, kN/m, radians: above this standard uncertainty a parameter
+# is reported as poorly identified
+POOR = {"ln_E": 0.01, "ln_rho": 0.02, "ln_e_over_g": 0.05, "sensor_g": 0.5,
+        "bungee_kn_per_m": 0.1, "ln_g_ratio": 0.05, "theta": 0.1}
+
+
+def limits(obs: Observations, final: DiagnosisFit, solid_tried: bool) -> tuple[str, ...]:
+    """What the calibrated model could not establish, in words (Diagnosis.warnings)."""
+    out = []
+    code = obs.codes
+    if obs.n_split == 0:
+        out.append("each bending mode was seen once: the two bending planes are not resolved "
+                   "(tapped in a grain plane, or a split below the frequency resolution); "
+                   "two_planes not assessed")
+    elif np.any(code == 2):
+        hz = ", ".join(f"{f:.0f}" for f in obs.freq_hz[code == 2])
+        out.append(f"modes at {hz} Hz were seen once (the other bending plane's member was "
+                   "not found); they are compared with the first plane's model at full "
+                   "amplitude")
+    for name, v in zip(final.names, final.x, strict=True):
+        lo, hi = BOUNDS[name]
+        label = PARAMETER_LABELS[name]
+        if min(v - lo, hi - v) < 1e-4 * (hi - lo):
+            out.append(f"{label} ended at its bound ({v:.4g} in fit units): not identified "
+                       "by the data, fixed by the bound")
+        elif final.std(name) > POOR[name]:
+            out.append(f"{label} is poorly identified (standard uncertainty {final.std(name):.3g}"
+                       f" in fit units, above {POOR[name]})")
+    if "sensor_mass" not in final.active:
+        out.append("no accelerometer mass in the calibrated model: the data did not show one. "
+                   "A mass near a free end lowers every mode by about the same fraction, as a "
+                   "lower E does, so frequencies alone cannot separate them; only the absolute "
+                   "scale of the mass-normalised shapes can. If an accelerometer was mounted, "
+                   "E is low by about its share")
+    if "ln_E" in final.names and "ln_e_over_g" in final.names:
+        i, j = final.names.index("ln_E"), final.names.index("ln_e_over_g")
+        c = final.cov[i, j] / np.sqrt(max(final.cov[i, i] * final.cov[j, j], 1e-300))
+        if abs(c) > 0.95:
+            out.append(f"E and E/G are strongly correlated in the fit (r = {c:.2f}): an error "
+                       "the model family cannot represent moves both")
+    floor = 100 * obs.sigma_f
+    if final.rms_pct > 3 * floor:
+        hint = ("" if solid_tried else
+                " (batlab diagnose --solid measures what a 1D beam cannot represent)")
+        out.append(f"residual floor: the calibrated model misses the frequencies by "
+                   f"{final.rms_pct:.3f} % RMS, {final.rms_pct / floor:.0f} x their "
+                   f"uncertainty ({floor:.3f} %): the model family lacks something{hint}")
+    return tuple(out)
+
+
 def diagnose(
     profile: Profile, meta: BatMeta, measured: MeasuredModes, suspension_hz=None,
     min_gain_pct: float = MIN_GAIN_PCT, min_mac: float = 0.5,
     fine_element_m: float = FINE_ELEMENT_IN * IN_TO_M, shape_sigma_floor: float = 0.002,
+    solid_corrections: np.ndarray | None = None,
 ) -> Diagnosis:
     """Diagnose a baseline test against the nominal model and calibrate the bat's reference.
 
@@ -292,13 +399,16 @@ def diagnose(
         min_mac: pairing threshold.
         fine_element_m: element length of the 'geometry' extension.
         shape_sigma_floor: least relative uncertainty of a measured shape entry.
+        solid_corrections: per-mode corrections c_r of the 1D beam against a 3D solid
+            (updating.solid.compare); 'beam_theory' is tried only with them.
     """
     if measured.shapes.shape[0] != measured.x_m.size:
         raise ValueError("measured shapes do not match the number of test points")
     if np.any(measured.x_m < -1e-9) or np.any(measured.x_m > profile.length_m + 1e-9):
         raise ValueError("a test point lies outside the bat's profile")
     setup = Setup(profile, meta.material, meta.weight_kg, np.asarray(measured.x_m, dtype=float),
-                  float(measured.sensor_x_m), fine_element_m)
+                  float(measured.sensor_x_m), fine_element_m,
+                  None if solid_corrections is None else np.asarray(solid_corrections, float))
     obs, meas_idx, unpaired, warnings = observations(setup, measured, suspension_hz, min_mac)
     nominal = fit_model(setup, frozenset(), obs, start_state(setup, suspension_hz))
     crit = scipy.stats.chi2.ppf(CONFIDENCE, np.arange(8))
@@ -307,7 +417,9 @@ def diagnose(
         return s.gain_pct >= min_gain_pct and s.chi2_drop_freq >= crit[s.new_params]
 
     remaining = [c for c in CAUSES if not (c == "density" and meta.weight_kg is None
-                                           and not np.any(measured.shapes))]
+                                           and not np.any(measured.shapes))
+                 and not (c == "two_planes" and obs.n_split == 0)
+                 and not (c == "beam_theory" and setup.solid_corrections is None)]
     # 1. causes: extensions that lower the frequency error measurably and significantly
     named, current, _, _ = forward_select(setup, obs, nominal, remaining, "cause",
                                           accept=nameable, key=lambda s: s.gain_pct)
@@ -342,9 +454,11 @@ def diagnose(
     rejected = [replace(s, role="rejected") for s in dropped + rejected]
     reference = reference_of(setup, final.active, final.state)
     warnings += pairing_warnings(final, obs.model_index, by_mac=not warnings)
-    if refuse_causes(warnings):  # 6. no cause is named from a pairing that cannot be trusted
+    refuse = refuse_causes(warnings)
+    warnings += limits(obs, final, setup.solid_corrections is not None)
+    if refuse:  # 6. no cause is named from a pairing that cannot be trusted
         warnings.append("causes not named: the pairing or the calibration cannot be trusted")
         path = [replace(s, role="calibration") if s.named else s for s in path]
     return Diagnosis(obs.freq_hz, meas_idx, obs.model_index, nominal, final,
                      tuple(path + rejected), unpaired, min_gain_pct, reference,
-                     fine_element_m, tuple(warnings))
+                     fine_element_m, tuple(warnings), obs.n_split)

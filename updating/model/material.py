@@ -18,13 +18,16 @@ class Material:
         E_pa: Young's modulus along the axis, Pa.
         rho_kg_m3: mass density, kg/m^3.
         e_over_g: E / G_LT (isotropic 2.6; wood 9-16).
-        nu: Poisson's ratio used in Cowper's shear coefficient.
+        nu: Poisson's ratio used in the shear coefficient.
+        shear_coefficient: "cowper" (default, the paper's era) or "hutchinson"
+            (updating.model.sections).
     """
 
     E_pa: float
     rho_kg_m3: float
     e_over_g: float = ISOTROPIC_E_OVER_G
     nu: float = 0.3
+    shear_coefficient: str = "cowper"
 
     @property
     def G_pa(self) -> float:

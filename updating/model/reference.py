@@ -28,6 +28,13 @@ class BatReference:
         bungee_k_n_per_m: each of two bungees 1 in from either end (0: free-free).
         element_length_m: the mesh the parameters were calibrated on (nodes also at the test
             points); None: the default ~1 in grid.
+        shear_coefficient: "cowper" or "hutchinson" (updating.model.sections).
+        e_over_g_plane2, tap_angle_deg: the second bending plane's E/G and the tapping angle
+            from the first plane, when diagnose resolved both planes (else None); the model
+            built here is the first plane's.
+        beam_theory_corrections: per-mode frequency corrections c_r measured against a 3D
+            solid (f_3D = f_1D (1 + c_r)), one row per bending plane, when diagnose used them
+            (else None). Carried for the record; inspect does not apply them yet.
     """
 
     E_pa: float
@@ -40,9 +47,14 @@ class BatReference:
     sensor_x_m: float = 0.0
     bungee_k_n_per_m: float = 0.0
     element_length_m: float | None = None
+    shear_coefficient: str = "cowper"
+    e_over_g_plane2: float | None = None
+    tap_angle_deg: float | None = None
+    beam_theory_corrections: tuple[tuple[float, ...], ...] | None = None
 
     def material(self) -> Material:
-        return Material(self.E_pa, self.rho_kg_m3, self.e_over_g, self.nu)
+        return Material(self.E_pa, self.rho_kg_m3, self.e_over_g, self.nu,
+                        self.shear_coefficient)
 
     def attachments(self, length_m: float) -> tuple[Attachment, ...]:
         out = []
@@ -71,4 +83,7 @@ class BatReference:
 
     @staticmethod
     def from_dict(d: dict) -> BatReference:
-        return BatReference(**{k: d[k] for k in BatReference.__dataclass_fields__ if k in d})
+        kw = {k: d[k] for k in BatReference.__dataclass_fields__ if k in d}
+        if kw.get("beam_theory_corrections") is not None:
+            kw["beam_theory_corrections"] = tuple(tuple(r) for r in kw["beam_theory_corrections"])
+        return BatReference(**kw)

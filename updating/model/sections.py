@@ -6,8 +6,15 @@ of a circular tube (Cowper 1966, J. Appl. Mech. 33:335), m = d/D:
 
     k = 6 (1 + nu) (1 + m^2)^2 / ((7 + 6 nu) (1 + m^2)^2 + (20 + 12 nu) m^2)
 
-(solid section: m = 0, k = 6(1+nu)/(7+6nu)). Because transverse shear stress peaks at the
-centre, a cored section loses more shear stiffness kGA than area.
+(solid section: m = 0, k = 6(1+nu)/(7+6nu)), or Hutchinson's (2001, J. Appl. Mech. 68:87;
+identical to Stephen & Levinson's), derived for long-wavelength flexural vibration:
+
+    k = 6 (1 + m^2)^2 (1 + nu)^2 / (7 + 34 m^2 + 7 m^4 + nu (12 + 48 m^2 + 12 m^4)
+                                    + nu^2 (4 + 16 m^2 + 4 m^4))
+
+(solid: k = 6 (1+nu)^2 / (7 + 12 nu + 4 nu^2)). Against a 3D solid Hutchinson's value matches
+the bending modes of a cylinder better (docs/model.md). Because transverse shear stress peaks
+at the centre, a cored section loses more shear stiffness kGA than area.
 """
 
 from __future__ import annotations
@@ -48,6 +55,27 @@ def cowper_k(m: np.ndarray, nu: float) -> np.ndarray:
     return 6 * (1 + nu) * (1 + m2) ** 2 / ((7 + 6 * nu) * (1 + m2) ** 2 + (20 + 12 * nu) * m2)
 
 
+def hutchinson_k(m: np.ndarray, nu: float) -> np.ndarray:
+    """Hutchinson's shear coefficient of a circular tube with inner/outer diameter ratio m."""
+    m2 = np.asarray(m, dtype=float) ** 2
+    m4 = m2 * m2
+    den = (7 + 34 * m2 + 7 * m4 + nu * (12 + 48 * m2 + 12 * m4)
+           + nu**2 * (4 + 16 * m2 + 4 * m4))
+    return 6 * (1 + m2) ** 2 * (1 + nu) ** 2 / den
+
+
+SHEAR_COEFFICIENTS = {"cowper": cowper_k, "hutchinson": hutchinson_k}
+
+
+def shear_k(m: np.ndarray, nu: float, formula: str = "cowper") -> np.ndarray:
+    """Shear coefficient of a circular tube by the named formula (cowper or hutchinson)."""
+    try:
+        return SHEAR_COEFFICIENTS[formula](m, nu)
+    except KeyError:
+        raise ValueError(f"unknown shear coefficient {formula!r} "
+                         f"({' or '.join(SHEAR_COEFFICIENTS)})") from None
+
+
 @dataclass(frozen=True)
 class SectionProps:
     """Beam section properties at sample points (arrays of one shape)."""
@@ -73,9 +101,10 @@ def section_props(
     i_fill = np.pi / 64 * d**4
     E, rho, G, nu = material.E_pa, material.rho_kg_m3, material.G_pa, material.nu
     s, r = fill_modulus_ratio, fill_density_ratio
+    k = material.shear_coefficient
     return SectionProps(
         ei=E * (i_wood + s * i_fill),
-        kga=G * (cowper_k(d / D, nu) * a_wood + s * cowper_k(0.0, nu) * a_fill),
+        kga=G * (shear_k(d / D, nu, k) * a_wood + s * shear_k(0.0, nu, k) * a_fill),
         rhoa=rho * (a_wood + r * a_fill),
         rhoi=rho * (i_wood + r * i_fill),
     )
