@@ -8,6 +8,8 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 from scipy.optimize import brentq
 
 from batlab.cli import main
@@ -54,3 +56,24 @@ def test_shapes_agree_between_subsets(full):
     two = fit_test(read_test(REAL / "two_nodes.uff"))
     np.testing.assert_allclose(two.real_shapes, full.real_shapes[:2], rtol=0.05, atol=0.02 *
                                np.abs(full.real_shapes).max())
+
+
+@settings(max_examples=8, deadline=None, derandomize=True)
+@given(lo_hz=st.floats(20.0, 750.0), width_hz=st.floats(150.0, 500.0))
+def test_sub_band_modes_are_the_full_band_modes(full, lo_hz, width_hz):
+    """Band consistency on measured data: every mode fitted in a sub-band is a mode of the
+    full-band fit (0.05 %), and every full-band mode at least 5 % inside the sub-band's edges
+    is found in the sub-band."""
+    hi_hz = min(lo_hz + width_hz, 1000.0)
+    sub = fit_test(read_test(REAL / "test.uff"), band_hz=(lo_hz, hi_hz))
+    for f in sub.freq_hz:
+        assert np.min(np.abs(full.freq_hz / f - 1)) < 5e-4, (lo_hz, hi_hz, f)
+    inner = full.freq_hz[(full.freq_hz > 1.05 * lo_hz) & (full.freq_hz < hi_hz / 1.05)]
+    for f in inner:
+        assert sub.freq_hz.size and np.min(np.abs(sub.freq_hz / f - 1)) < 5e-4, (lo_hz, hi_hz, f)
+
+
+def test_band_past_the_data_is_clipped_with_a_note(full):
+    wide = fit_test(read_test(REAL / "test.uff"), band_hz=(20.0, 1200.0))
+    assert any("clipped to 20-1000 Hz" in n for n in wide.notes)
+    np.testing.assert_allclose(wide.freq_hz, full.freq_hz, rtol=1e-6)
