@@ -12,6 +12,7 @@ import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from scipy.io import loadmat
 from scipy.optimize import brentq
 
 from batlab.cli import main
@@ -122,3 +123,16 @@ def test_vibration_toolbox_case2_empty_fit_says_why_and_where(capsys):
     code, low, _ = _fit_json(capsys, str(VTB / "case2.uff"), "--min-snr", "2")
     f = np.array([m["frequency_hz"] for m in low["modes"]])
     assert code == 0 and np.min(np.abs(f / 192.59 - 1)) < 1e-3
+
+
+@pytest.mark.parametrize("name", ["case1", "case2"])
+def test_vibration_toolbox_uff_keeps_the_source_values(name):
+    """convert.py's UFF holds the source's FRF and coherence as they are (coherence above 1,
+    an estimator artefact in 5 lines of case1, written as 1)."""
+    mat = loadmat(VTB / f"{name}.mat")
+    test = read_test(VTB / f"{name}.uff", require_driving=False)
+    np.testing.assert_array_equal(test.freq_hz, mat["Freq_domain"].ravel().astype(float))
+    np.testing.assert_allclose(test.frf[:, 0, 0], mat["Hf_chan_2"].ravel(), rtol=1e-12, atol=0)
+    np.testing.assert_allclose(test.coherence[:, 0, 0],
+                               np.clip(mat["Hf_coh_chan_2"].ravel().astype(float), 0, 1),
+                               rtol=1e-7)
