@@ -412,18 +412,28 @@ def _rigid(
     return rigid_body_from_mass_line(ml_row, x_m, float(x_m[lay.d_index]), known_mass_kg)
 
 
+_EMPTY_NOTE_PEAKS = 8  # sum-MIF peaks named in a 'no mode' note
+
+
 def _empty_notes(p: _Poles, peaks: PeakPick, method: str) -> list[str]:
-    """Why a fit found no mode (stderr and --json say it)."""
-    if method == "peak":
-        return ["no mode: no sum-MIF peak with prominence x4 and a half-power width in the band"]
+    """Why a fit found no mode (stderr and --json say it), naming the highest sum-MIF peaks
+    (the lines a user would look at first: on noisy data the peaks are many and the
+    resonances are the tallest, not the first in frequency)."""
     counts: dict[str, int] = {}
     for r in p.rejected:
         counts[r.reason] = counts.get(r.reason, 0) + 1
-    why = ", ".join(f"{n} {k}" for k, n in counts.items()) or "no pole stable over the orders"
-    hint = (f"; the sum MIF has {peaks.freq_hz.size} peak(s) at "
-            + ", ".join(f"{f:.4g}" for f in peaks.freq_hz[:8]) + " Hz: try --method peak"
-            if peaks.freq_hz.size else "")
-    return [f"no mode: candidates rejected ({why}){hint}"]
+    why = ", ".join(f"{n} {k}" for k, n in counts.items())
+    top = np.sort(peaks.freq_hz[np.argsort(peaks.height)[::-1][:_EMPTY_NOTE_PEAKS]])
+    tallest = ", ".join(f"{f:.4g}" for f in top)
+    if method == "peak":
+        if not why:
+            return ["no mode: no sum-MIF peak with prominence x4 and a half-power width in the "
+                    "band"]
+        return [f"no mode: every sum-MIF peak rejected ({why}); the highest at {tallest} Hz: "
+                "a lower --min-snr accepts weaker peaks"]
+    hint = (f"; the sum MIF has {peaks.freq_hz.size} peak(s), the highest at {tallest} Hz: "
+            "try --method peak or a lower --min-snr" if peaks.freq_hz.size else "")
+    return [f"no mode: candidates rejected ({why or 'no pole stable over the orders'}){hint}"]
 
 
 def fit_test(
