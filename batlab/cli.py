@@ -12,6 +12,7 @@ from __future__ import annotations
 import argparse
 import importlib
 import os
+import sqlite3
 import sys
 
 # batlab's matrices are small (tens to hundreds of DOFs): BLAS threads cost more than they
@@ -26,6 +27,9 @@ COMMANDS: tuple[str, ...] = (
     "bats",
     "history",
     "inspect",
+    "report",
+    "export",
+    "registry",
     "demo",
     "diagnose",
     "rig",
@@ -56,6 +60,11 @@ def main(argv: list[str] | None = None) -> int:
     except (ValueError, OSError) as exc:
         message = " ".join(str(exc).split()) or type(exc).__name__
         print(f"batlab {args.command}: error: {message}", file=sys.stderr)
+        return 2
+    except sqlite3.DatabaseError as exc:  # damage found after the registry opened
+        db = getattr(args, "db", None) or "the registry"
+        print(f"batlab {args.command}: error: {db}: registry damaged ({exc}); "
+              "`batlab registry check` says where", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
         print(f"batlab {args.command}: interrupted", file=sys.stderr)

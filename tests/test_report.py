@@ -4,6 +4,7 @@ renders (headless Chromium screenshot, when Chromium is installed)."""
 from __future__ import annotations
 
 import base64
+import os
 import re
 import shutil
 import subprocess
@@ -14,7 +15,7 @@ import numpy as np
 import pytest
 
 from batlab import pipeline
-from batlab.report import element_mass_change, mass_rows, write_report
+from batlab.report import check_destination, element_mass_change, mass_rows, write_report
 from tests.inspect_standins import use_standins
 from updating.model.mass_properties import mass_properties
 from updating.model.units import IN_TO_M, LB_TO_KG
@@ -22,11 +23,18 @@ from updating.model.units import IN_TO_M, LB_TO_KG
 SAMPLE = Path("data_samples/smooth_bat")
 
 
+def _inputs(res):
+    meta = pipeline.read_meta_dict(SAMPLE / "meta.json")
+    prov = pipeline.provenance(baseline_sha256=pipeline.file_sha256(SAMPLE / "baseline.uff"),
+                               retest_sha256=pipeline.file_sha256(SAMPLE / "retest_corked.uff"))
+    return pipeline.report_inputs(res, meta, prov)
+
+
 @pytest.fixture
 def result(monkeypatch):
     use_standins(monkeypatch)
-    return pipeline.inspect_files(SAMPLE / "profile.csv", SAMPLE / "meta.json",
-                                  SAMPLE / "baseline.uff", SAMPLE / "retest_corked.uff")
+    return _inputs(pipeline.inspect_files(SAMPLE / "profile.csv", SAMPLE / "meta.json",
+                                          SAMPLE / "baseline.uff", SAMPLE / "retest_corked.uff"))
 
 
 def test_report_is_self_contained(result, tmp_path):
@@ -35,8 +43,13 @@ def test_report_is_self_contained(result, tmp_path):
     assert path == out / "index.html"
     assert sorted(p.name for p in out.iterdir()) == ["index.html"]  # no temporary left over
     page = path.read_text()
-    assert "Inspection of bat HX-2001" in page and "ALTERED" in page
-    assert "confidence 0.999" in page
+    assert "Inspection of bat HX-2001" in page
+    assert "Bat HX-2001 has been altered: a bore about 1.00 in across from 24.0 to 33.0 in" in page
+    assert "less than once in 1,000 re-tests" not in page  # p = 0.001 exactly
+    assert "about 1 times in 1,000 re-tests" in page
+    assert "confidence" not in page.lower()
+    assert pipeline.file_sha256(SAMPLE / "retest_corked.uff") in page  # provenance
+    assert "<td>Species</td><td>white ash</td>" in page
     imgs = re.findall(r'<img src="data:image/png;base64,([A-Za-z0-9+/=]+)"', page)
     assert len(imgs) >= 3  # element bars over the bat, FRF overlay, MAC
     for b64 in imgs:
@@ -47,11 +60,17 @@ def test_report_is_self_contained(result, tmp_path):
 
 def test_report_with_real_fits_has_stabilisation_diagrams(monkeypatch, tmp_path):
     use_standins(monkeypatch, fit=False)
-    res = pipeline.inspect_files(SAMPLE / "profile.csv", SAMPLE / "meta.json",
-                                 SAMPLE / "baseline.uff", SAMPLE / "retest_corked.uff")
-    page = write_report(tmp_path, res).read_text()
+    res = _inputs(pipeline.inspect_files(SAMPLE / "profile.csv", SAMPLE / "meta.json",
+                                         SAMPLE / "baseline.uff", SAMPLE / "retest_corked.uff"))
+    page = write_report(tmp_path, res, plots_dir=tmp_path / "plots").read_text()
     assert page.count("<h3>Stabilisation diagram: ") == 2
     assert len(re.findall(r'<img src="data:image/png;base64,', page)) == 5
+    pngs = sorted(p.name for p in (tmp_path / "plots").iterdir())
+    assert pngs == ["elements.png", "frf.png", "mac.png", "stabilisation_baseline.png",
+                    "stabilisation_retest.png"]
+    for name in pngs:  # the same figures as in the page
+        b64 = base64.b64encode((tmp_path / "plots" / name).read_bytes()).decode()
+        assert b64 in page
 
 
 def test_report_destination_is_a_file(result, tmp_path):
@@ -60,12 +79,28 @@ def test_report_destination_is_a_file(result, tmp_path):
         write_report(tmp_path / "f", result)
 
 
+def test_unwritable_destination_fails_before_work(result, tmp_path):
+    (tmp_path / "file").write_text("x")
+    with pytest.raises(ValueError, match="file/rep: report destination not writable"):
+        check_destination(tmp_path / "file" / "rep")  # (as root too)
+    locked = tmp_path / "locked"
+    locked.mkdir()
+    locked.chmod(0o555)
+    try:
+        if os.access(locked, os.W_OK):
+            pytest.skip("running as root: a read-only directory is writable")
+        with pytest.raises(ValueError, match="locked: report destination not writable"):
+            check_destination(locked / "rep")
+    finally:
+        locked.chmod(0o755)
+
+
 def test_element_mass_change_uniform_factor(result):
     """alpha = c everywhere scales the whole mass distribution: dm = c m, same centre of mass,
     dI_knob = c I_knob (against the FE model's own section quadrature)."""
     c = -0.05
-    v = replace(result.verdict, alpha=np.full(result.verdict.alpha.size, c))
-    d = element_mass_change(replace(result, verdict=v))
+    els = [{**e, "alpha": c} for e in result.verdict["elements"]]
+    d = element_mass_change(replace(result, verdict={**result.verdict, "elements": els}))
     ref = mass_properties(result.reference.build(result.profile))
     assert d.mass_kg == pytest.approx(c * ref.mass_kg, rel=1e-4)
     assert d.cg_m == pytest.approx(ref.cg_m, rel=1e-4)

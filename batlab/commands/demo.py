@@ -75,15 +75,13 @@ def simulate_pair(work: Path, seed: int, progress) -> tuple[Path, Path, Path, Pa
 
 def run(args) -> int:
     from batlab import pipeline
-    from batlab.commands.inspect import readable
+    from batlab.formatting import readable
     from batlab.registry import open_registry
-    from batlab.report import write_report
+    from batlab.report import check_destination, write_report
 
     progress = progress_printer("demo")
     work = Path(args.out) if args.out else Path(tempfile.mkdtemp(prefix="batlab-demo-"))
-    if work.exists() and not work.is_dir():
-        raise ValueError(f"{work}: --out is not a directory")
-    work.mkdir(parents=True, exist_ok=True)
+    check_destination(work, "--out")
     db = Path(args.db) if args.db else work / "registry.sqlite"
     profile, meta, baseline, retest = simulate_pair(work, args.seed, progress)
     with open_registry(db) as conn:
@@ -92,8 +90,11 @@ def run(args) -> int:
         serial = done.record.serial
         result = pipeline.inspect_registered(conn, serial, retest, refit_baseline=True,
                                              progress=progress, baseline_fit=done.baseline.fit)
-        report = write_report(work / "report", result)
-        pipeline.store_inspection(conn, result, retest, str(report))
+        stored = pipeline.store_inspection(conn, result, retest)
+        inputs = pipeline.report_inputs(result, done.record.meta,
+                                        pipeline.provenance(conn, stored=stored))
+        report = write_report(work / "report", inputs)
+        pipeline.note_report(conn, stored, str(report))
     out = pipeline.contract_dict(serial, result.verdict)
     progress(f"wrote the tests, registry and report under {work}; report: {report}")
     if args.json:
