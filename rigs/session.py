@@ -18,7 +18,7 @@ import numpy as np
 from rigs import protocol as p
 from rigs.capture import CaptureSettings, HitCapture, HitRecord, check_hit
 from rigs.driver import DeviceError
-from rigs.frf_estimate import estimate_frf
+from rigs.frf_estimate import FrfEstimate, estimate_frf
 
 
 @dataclass(frozen=True)
@@ -112,24 +112,102 @@ def acquire_point(source, capture: HitCapture, point: int, hits_per_point: int,
 def run_session(source, points: list[int], hits_per_point: int,
                 settings: CaptureSettings | None = None,
                 exp_window_tau_s: float | None = None, fmax_hz: float | None = None,
-                progress: Callable[[str], None] = _quiet, max_rejects: int = 20
+                progress: Callable[[str], None] = _quiet, max_rejects: int = 20,
+                done: dict[int, FrfEstimate] | None = None,
+                on_point: Callable[[int, FrfEstimate], None] | None = None,
                 ) -> SessionResult:
-    """Run the roving-hammer test on a source that has completed its handshake."""
+    """Run the roving-hammer test on a source that has completed its handshake.
+
+    ``done``: points already measured (a resumed session), skipped and used as they are;
+    ``on_point(point, estimate)`` is called as each point completes (the caller saves it, so a
+    killed session keeps its completed points). A stream that ends raises
+    :class:`SessionInterrupted` carrying the completed points.
+    """
     if hits_per_point < 1 or not points:
         raise ValueError("need at least one point and one hit per point")
     settings = settings or CaptureSettings()
     info = source.info
     capture = HitCapture(info, settings)
     log: list[HitLog] = []
-    estimates = []
+    estimates: dict[int, FrfEstimate] = dict(done or {})
     for k, point in enumerate(points):
-        recs = acquire_point(source, capture, point, hits_per_point, settings, log,
-                             f"point {k + 1}/{len(points)} (#{point})", progress, max_rejects)
-        estimates.append(estimate_frf(np.array([r.force_n for r in recs]),
-                                      np.array([r.accel_ms2 for r in recs]),
-                                      info.sample_rate_hz, exp_window_tau_s, fmax_hz=fmax_hz))
-    stack = {name: np.stack([getattr(e, name) for e in estimates], axis=-1)[:, None, :]
+        if point in estimates:
+            progress(f"point {k + 1}/{len(points)} (#{point}): already measured")
+            continue
+        try:
+            recs = acquire_point(source, capture, point, hits_per_point, settings, log,
+                                 f"point {k + 1}/{len(points)} (#{point})", progress,
+                                 max_rejects)
+        except (DeviceError, EOFError, OSError) as exc:
+            raise SessionInterrupted(str(exc), estimates, log, info) from exc
+        est = estimate_frf(np.array([r.force_n for r in recs]),
+                           np.array([r.accel_ms2 for r in recs]),
+                           info.sample_rate_hz, exp_window_tau_s, fmax_hz=fmax_hz)
+        estimates[point] = est
+        if on_point is not None:
+            on_point(point, est)
+    return combine(points, estimates, exp_window_tau_s, log, info)
+
+
+def combine(points: list[int], estimates: dict[int, FrfEstimate],
+            exp_window_tau_s: float | None, log: list[HitLog], info) -> SessionResult:
+    """The session's FRFs from per-point estimates, in ``points`` order."""
+    ests = [estimates[n] for n in points]
+    stack = {name: np.stack([getattr(e, name) for e in ests], axis=-1)[:, None, :]
              for name in ("h1", "h2", "coherence")}
-    return SessionResult(estimates[0].freq_hz, stack["h1"], stack["h2"], stack["coherence"],
+    return SessionResult(ests[0].freq_hz, stack["h1"], stack["h2"], stack["coherence"],
                          np.asarray(points, dtype=int), exp_window_tau_s, log, info,
-                         np.array([e.n_averages for e in estimates]))
+                         np.array([e.n_averages for e in ests]))
+
+
+class SessionInterrupted(OSError):
+    """The stream ended (device lost, recording cut) before every point was measured.
+
+    Attributes: ``completed`` {point: FrfEstimate} measured so far, ``log`` the hit log,
+    ``info`` the device description."""
+
+    def __init__(self, message: str, completed: dict, log: list[HitLog], info) -> None:
+        super().__init__(message)
+        self.completed, self.log, self.info = dict(completed), log, info
+
+
+# --- completed points on disk ------------------------------------------------------------------
+
+
+def save_points(path, estimates: dict[int, FrfEstimate]) -> None:
+    """Every completed point's FRF estimate in one NPZ (atomic: temporary name, rename), so a
+    killed session keeps what it measured: ``point_N_{h1,h2,coherence}``, ``freq_hz``,
+    ``n_averages`` and ``points`` (in completion order)."""
+    from ema.io.atomic_write import atomic_write
+
+    order = list(estimates)
+    arrays = {"points": np.asarray(order, dtype=int),
+              "n_averages": np.asarray([estimates[n].n_averages for n in order], dtype=int)}
+    if order:
+        arrays["freq_hz"] = estimates[order[0]].freq_hz
+    for n in order:
+        for name in ("h1", "h2", "coherence"):
+            arrays[f"point_{n}_{name}"] = getattr(estimates[n], name)
+
+    def write(tmp):
+        with open(tmp, "wb") as fh:
+            np.savez(fh, **arrays)
+
+    atomic_write(path, write)
+
+
+def load_points(path, exp_window_tau_s: float | None) -> dict[int, FrfEstimate]:
+    """The completed points saved by :func:`save_points` (empty when there is no file)."""
+    from pathlib import Path
+
+    if not Path(path).exists():
+        return {}
+    try:
+        with np.load(path) as z:
+            out = {}
+            for n, navg in zip(z["points"].tolist(), z["n_averages"].tolist(), strict=True):
+                out[int(n)] = FrfEstimate(z["freq_hz"], z[f"point_{n}_h1"], z[f"point_{n}_h2"],
+                                          z[f"point_{n}_coherence"], int(navg), exp_window_tau_s)
+            return out
+    except (OSError, KeyError, ValueError) as exc:
+        raise ValueError(f"{path}: unreadable saved points ({exc})") from None
