@@ -2,7 +2,6 @@
 against the simulated structure, and replay of recorded streams."""
 
 import json
-import os
 import select
 import subprocess
 import sys
