@@ -1,10 +1,14 @@
-"""The inspection report: one self-contained HTML page (figures embedded as base64 PNG).
+"""The inspection report: one self-contained HTML page (figures embedded as base64 PNG) for a
+lab manager.
 
-Contents: the verdict and its confidence; driving-point FRFs of the baseline and the re-test
-with the re-test's modal synthesis; stabilisation diagrams of both fits; MAC of baseline vs
-re-test modes; element mass (alpha) and stiffness (beta) factors as bars over a to-scale drawing
-of the bat (the paper's Figures 2 and 3 for this bat); and the mass-property change implied by
-the element factors and by the fitted core. Layout: docs/report.md.
+Drawn from ``ReportInputs`` (the verdict as the registry stores it, the model, both fitted
+tests, meta.json, provenance), so a stored inspection's page can be rebuilt from the registry.
+Contents: one plain sentence (what, where, how much, how sure); the evidence in readable rows;
+element mass (alpha) and stiffness (beta) factors of the core fit and of the MSSO map on one
+shared symmetric scale with the map's noise band, over a to-scale drawing of the bat, and a
+sentence reconciling the two localisations; mass properties; paired modes; driving-point FRFs,
+MAC and stabilisation diagrams; provenance (date, version, species, weight, file hashes,
+custody records). Layout: docs/report.md.
 """
 
 from __future__ import annotations
@@ -119,10 +123,10 @@ SCALE_FLOOR = 0.05
 
 def element_figure(r: ReportInputs):
     """alpha and beta per element as bars, over the bat's profile drawn to scale (inches):
-    the physical fit's factors (how much; left half of each element, left axis) beside the
-    MSSO map (where; right half, hatched, right axis) with its +-2 sigma noise band. Both
-    panels share one symmetric scale per axis, so alpha and beta compare by eye and zero
-    lines align."""
+    the physical fit's factors (how much; left half of each element) beside the MSSO map
+    (where; right half, hatched) with its +-2 sigma noise band. One symmetric scale, shared
+    by both panels and both kinds of bar, at least +-SCALE_FLOOR: the bars compare by eye and
+    noise never fills a clean bat's plot."""
     import matplotlib.pyplot as plt
 
     v, prof = r.verdict, r.profile
@@ -139,44 +143,36 @@ def element_figure(r: ReportInputs):
     region = v.get("region_in") if _status(v) == "altered" else None
     msso = (v.get("details") or {}).get("msso") or {}
     has_map = "alpha" in msso and len(msso["alpha"]) == len(x0)
-    lim_fit = _symmetric_limit([fit["alpha"], fit["beta"]], SCALE_FLOOR)
+    shown = [fit["alpha"], fit["beta"]]
     if has_map:
         band = {k: 2 * np.asarray(msso.get(f"{k}_std") or np.zeros(len(x0)), dtype=float)
                 for k in ("alpha", "beta")}
-        lim_map = _symmetric_limit([msso["alpha"], msso["beta"], band["alpha"], band["beta"]],
-                                   SCALE_FLOOR)
+        shown += [msso["alpha"], msso["beta"], band["alpha"], band["beta"]]
+    lim = _symmetric_limit(shown, SCALE_FLOOR)
     for ax, key, name, color in ((axes[0], "alpha", "mass change, alpha", "C0"),
                                  (axes[1], "beta", "stiffness change, beta", "C1")):
-        ax.bar(x0, fit[key], width=w / 2 if has_map else w, align="edge", color=color,
-               edgecolor="k", lw=0.4, label="core fit (how much)")
-        ax.axhline(0, color="k", lw=0.6)
-        ax.set_ylim(-lim_fit, lim_fit)
-        ax.set_ylabel(name)
-        ax.grid(alpha=0.3, axis="y")
-        if region is not None:
-            ax.axvspan(region[0], region[1], color="C3", alpha=0.12, label="fitted core region")
         if has_map:
-            ax2 = ax.twinx()
             edges = np.append(x0, x1[-1])
             b = np.append(band[key], band[key][-1])
-            ax2.fill_between(edges, -b, b, step="post", color="0.6", alpha=0.25, lw=0,
-                             label="map noise band (±2σ)")
-            ax2.bar(x0 + w / 2, np.asarray(msso[key], dtype=float), width=w / 2, align="edge",
-                    color="none", edgecolor="C2", hatch="////", lw=0.6,
-                    label="element map (where)")
-            ax2.set_ylim(-lim_map, lim_map)
-            ax2.set_ylabel(f"{key}, element map", color="C2")
-            ax2.tick_params(axis="y", colors="C2")
+            ax.fill_between(edges, -b, b, step="post", color="0.6", alpha=0.3, lw=0,
+                            label="map noise band (±2σ)")
+        ax.bar(x0, fit[key], width=w / 2 if has_map else w, align="edge", color=color,
+               edgecolor="k", lw=0.4, label="core fit (how much)")
+        if has_map:
+            ax.bar(x0 + w / 2, np.asarray(msso[key], dtype=float), width=w / 2, align="edge",
+                   color="none", edgecolor="C2", hatch="////", lw=0.6,
+                   label="element map (where)")
             if msso.get("region_m"):
                 a, b2 = msso["region_m"]
-                ax2.axvspan(a / IN_TO_M, b2 / IN_TO_M, fill=False, hatch="..", color="C2",
-                            alpha=0.25, lw=0, label="map region")
-            if key == "alpha":
-                h1, l1 = ax.get_legend_handles_labels()
-                h2, l2 = ax2.get_legend_handles_labels()
-                ax.legend(h1 + h2, l1 + l2, fontsize=7, loc="upper left", ncol=3)
-        elif key == "alpha":
-            ax.legend(fontsize=7, loc="upper left")
+                ax.axvspan(a / IN_TO_M, b2 / IN_TO_M, fill=False, hatch="..", color="C2",
+                           alpha=0.25, lw=0, label="map region")
+        if region is not None:
+            ax.axvspan(region[0], region[1], color="C3", alpha=0.12, label="fitted core region")
+        ax.axhline(0, color="k", lw=0.6)
+        ax.set_ylim(-lim, lim)
+        ax.set_ylabel(name)
+        ax.grid(alpha=0.3, axis="y")
+    axes[0].legend(fontsize=7, loc="upper left", ncol=3)
     axes[0].set_title("Element changes along the bat (knob at 0)")
     ax = axes[2]
     x = prof.x_m / IN_TO_M
@@ -267,12 +263,19 @@ def p_value(v: dict) -> float | None:
 
 
 def _chance(p: float) -> str:
-    """A probability in words a non-specialist reads correctly."""
+    """How often, in words a non-specialist reads correctly ("in about 97 of 100 re-tests")."""
     if p < 0.001:
-        return "less than once in 1,000 re-tests"
-    if p < 0.1:
-        return f"about {max(1, round(p * 1000))} times in 1,000 re-tests"
+        return "in fewer than 1 of 1,000 re-tests"
+    if p < 0.01:
+        return f"in about {round(p * 1000)} of 1,000 re-tests"
     return f"in about {round(p * 100)} of 100 re-tests"
+
+
+def _one_in(p: float) -> str:
+    """A rate as "1 in 100", "5 in 100", "1 in 1,000"."""
+    if p >= 0.01:
+        return f"{round(p * 100):g} in 100"
+    return f"{round(p * 1000):g} in 1,000" if p >= 0.001 else f"{p:.1g}"
 
 
 def headline(r: ReportInputs) -> str:
@@ -308,8 +311,8 @@ def headline(r: ReportInputs) -> str:
     if p is not None:
         text += f" Unaltered bats differ at least this much {_chance(p)}"
         if alpha:
-            text += f"; a bat is called altered only when that falls below {alpha:g}"
-            text += f" ({_chance(float(alpha)).replace('re-tests', 'unaltered bats')})"
+            text += (f"; a bat is called altered only when that chance falls below "
+                     f"{_one_in(float(alpha))}")
         text += "."
     return text
 
@@ -368,7 +371,7 @@ h1{margin-bottom:4px}.verdict{font-size:1.25em;padding:12px 16px;border-radius:6
 table{border-collapse:collapse;margin:8px 0;width:100%;table-layout:fixed;font-size:.9em}
 td,th{border:1px solid #ccc;padding:3px 6px;text-align:right;overflow-wrap:anywhere}
 th{background:#f3f3f3;font-weight:600}td:first-child,th:first-child{text-align:left}
-table.facts td:first-child{width:45%}
+table.facts td:first-child{width:45%}table.facts td{text-align:left}
 img{max-width:100%;display:block;margin:8px 0}.note{color:#555;font-size:.9em}
 code{font-size:.85em;overflow-wrap:anywhere}
 """
@@ -412,11 +415,12 @@ def _mode_cell(key: str, v) -> str:
     return f"{v:.3f}" if key.startswith("mac") else _fmt(v)
 
 
-def _table(header: list[str], rows: list[list], cls: str = "") -> str:
-    head = "".join(f"<th>{html.escape(h)}</th>" for h in header)
+def _table(header: list[str] | None, rows: list[list], cls: str = "") -> str:
+    head = "" if not header else (
+        "<tr>" + "".join(f"<th>{html.escape(h)}</th>" for h in header) + "</tr>")
     body = "".join("<tr>" + "".join(
         f"<td>{c if isinstance(c, _Raw) else _fmt(c)}</td>" for c in r) + "</tr>" for r in rows)
-    return f"<table class='{cls}'><tr>{head}</tr>{body}</table>"
+    return f"<table class='{cls}'>{head}{body}</table>"
 
 
 class _Raw(str):
@@ -436,9 +440,12 @@ def _facts(r: ReportInputs) -> list[list]:
                                             "no verdict (inconclusive)"}[status])]]
     for reason in v.get("reasons") or []:
         facts.append(["Reason", reason])
+    if status == "inconclusive":  # the two tests cannot be compared: no statistic means much
+        return facts
     if p is not None:
+        shown = "< 0.000001" if p < 1e-6 else f"{p:.3g}"
         facts.append(["Chance an unaltered bat differs this much (p-value)",
-                      _Raw(f"{p:.3g} ({html.escape(_chance(p))})")])
+                      _Raw(f"{shown} ({html.escape(_chance(p))})")])
     if v.get("false_alarm_rate") is not None:
         facts.append(["Called altered when that chance is below (false-alarm rate)",
                       v["false_alarm_rate"]])
@@ -479,8 +486,8 @@ def _provenance(r: ReportInputs, generated_at: str) -> list[list]:
     rows: list[list] = [["Report generated (UTC)", generated_at[:19].replace("T", " ")],
                         ["batlab version", pv.get("batlab_version")]]
     if pv.get("inspection_id") is not None:
-        rows.append(["Inspection", _Raw(f"#{pv['inspection_id']}, "
-                                        f"{html.escape(pv['inspected_at'][:19])} UTC")])
+        when = pv["inspected_at"][:19].replace("T", " ")
+        rows.append(["Inspection", f"#{pv['inspection_id']}, {when} UTC"])
     rows.append(["Species", meta.get("species")])
     if meta.get("weight_lb") is not None:
         rows.append(["Weight at registration (lb)", _Raw(f"{float(meta['weight_lb']):.4f}")])
@@ -507,20 +514,20 @@ def render_html(r: ReportInputs, generated_at: str, figures: dict[str, bytes]) -
              f"<p class='note'>baseline {html.escape(r.baseline.name)}, re-test "
              f"{html.escape(r.retest.name)}</p>",
              f"<div class='verdict {status}'>{html.escape(headline(r))}</div>",
-             "<h2>The evidence</h2>", _table(["", ""], _facts(r), "facts")]
+             "<h2>The evidence</h2>", _table(None, _facts(r), "facts")]
     parts.append("<h2>Where the bat changed</h2>")
     parts.append(_img(_data_uri(figures["elements"]), "element changes over the bat profile"))
     note = regions_note(r)
     if note:
         parts.append(f"<p>{html.escape(note)}</p>")
-    parts.append("<p class='note'>Solid bars, left axis: the fitted core's change of each "
-                 "element's mass (alpha) and bending stiffness (beta), as fractions "
-                 "(M = M_S + Σ alpha_i m_i, K = K_S + Σ beta_i k_i). Hatched bars, right axis: "
-                 "the element map (MSSO) of the re-test against the baseline-updated model "
-                 "with the whole-bat drift and sensor shift removed; its stiffness bars also "
-                 "carry a bore's shear loss, so they are larger than the bending ratio. Grey: "
-                 "the map's ±2σ noise band; a bar inside it is not a change. Both panels share "
-                 "one symmetric scale per axis, at least ±5 %.</p>")
+    parts.append("<p class='note'>Solid bars: the fitted core's change of each element's "
+                 "mass (alpha) and bending stiffness (beta), as fractions "
+                 "(M = M_S + Σ alpha_i m_i, K = K_S + Σ beta_i k_i). Hatched bars: the element "
+                 "map (MSSO) of the re-test against the baseline-updated model with the "
+                 "whole-bat drift and sensor shift removed; its stiffness bars also carry a "
+                 "bore's shear loss, so they are larger than the bending ratio. Grey: the "
+                 "map's ±2σ noise band; a bar inside it is not a change. One symmetric scale "
+                 "for every bar of both panels, at least ±5 %.</p>")
     parts.append("<h2>Mass properties</h2>")
     rows = mass_rows(r)
     w0, cg0, i0 = rows[0][1:]
@@ -546,7 +553,7 @@ def render_html(r: ReportInputs, generated_at: str, figures: dict[str, bytes]) -
             parts.append(f"<h3>Stabilisation diagram: {html.escape(name)}</h3>")
             parts.append(_img(_data_uri(figures[key]), f"stabilisation {name}"))
     parts.append("<h2>Provenance</h2>")
-    parts.append(_table(["", ""], _provenance(r, generated_at), "facts"))
+    parts.append(_table(None, _provenance(r, generated_at), "facts"))
     if r.provenance.get("verdict_record") is not None:
         parts.append("<p class='note'>To verify: <code>batlab registry check</code> on the "
                      "registry confirms every record is unchanged, and <code>batlab history "

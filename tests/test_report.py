@@ -15,7 +15,15 @@ import numpy as np
 import pytest
 
 from batlab import pipeline
-from batlab.report import check_destination, element_mass_change, mass_rows, write_report
+from batlab.report import (
+    check_destination,
+    element_mass_change,
+    figures_png,
+    headline,
+    mass_rows,
+    render_html,
+    write_report,
+)
 from tests.inspect_standins import use_standins
 from updating.model.mass_properties import mass_properties
 from updating.model.units import IN_TO_M, LB_TO_KG
@@ -45,8 +53,7 @@ def test_report_is_self_contained(result, tmp_path):
     page = path.read_text()
     assert "Inspection of bat HX-2001" in page
     assert "Bat HX-2001 has been altered: a bore about 1.00 in across from 24.0 to 33.0 in" in page
-    assert "less than once in 1,000 re-tests" not in page  # p = 0.001 exactly
-    assert "about 1 times in 1,000 re-tests" in page
+    assert "from its baseline in about 1 of 1,000 re-tests." in page  # p = 1 - 0.999
     assert "confidence" not in page.lower()
     assert pipeline.file_sha256(SAMPLE / "retest_corked.uff") in page  # provenance
     assert "<td>Species</td><td>white ash</td>" in page
@@ -140,3 +147,78 @@ def test_report_renders_in_headless_chromium(result, tmp_path):
     assert (gray < 0.5).mean() > 0.002  # some dark text/lines drawn
     reds = (img[..., 0] > 0.6) & (img[..., 1] < 0.5) & (img[..., 2] < 0.5)
     assert reds.sum() > 50  # the red verdict border is on screen
+
+
+def _with_verdict(inputs, **changes):
+    return replace(inputs, verdict={**inputs.verdict, **changes})
+
+
+def test_plain_sentence_for_clean_and_inconclusive(result):
+    """A clean bat at confidence 0.075 reads as p = 0.925, never as "7.5 % sure"; an
+    inconclusive verdict gives its reasons and no p-value; status derives from ``altered``
+    when the verdict has none."""
+    clean = _with_verdict(result, altered=False, confidence=0.075, region_in=None,
+                          core_diameter_in=None, fill_density_ratio=None)
+    text = headline(clean)
+    assert text.startswith("Bat HX-2001 shows no sign of alteration")
+    assert "in about 92 of 100 re-tests" in text and "below 1 in 100" in text
+    assert "0.075" not in text and "7.5" not in text
+    odd = _with_verdict(result, status="inconclusive", altered=None,
+                        reasons=["too few modes pair (2 of 6): re-test with more hits"])
+    assert headline(odd) == ("No verdict is possible for bat HX-2001: too few modes pair (2 of "
+                             "6): re-test with more hits. The bat is not called altered.")
+    page = render_html(odd, "2026-01-01T00:00:00", figures_png(odd))
+    assert "p-value" not in page and "<div class='verdict inconclusive'>" in page
+
+
+OVERFLOW_PROBE = """<script>
+const bad = [];
+const body = document.body.getBoundingClientRect();
+document.querySelectorAll('table, img').forEach((el, i) => {
+  const r = el.getBoundingClientRect();
+  if (r.right > body.right + 1 || el.scrollWidth > el.clientWidth + 1) bad.push(i);
+  el.querySelectorAll('td, th').forEach(c => {
+    if (c.scrollWidth > c.clientWidth + 1) bad.push(i + ':' + c.textContent.slice(0, 30));
+  });
+});
+document.body.setAttribute('data-overflow', bad.join('|'));
+</script>"""
+
+
+def overflowing(page: str, tmp_path: Path, width: int = 1100) -> str:
+    """What overflows the page body when headless Chromium lays it out at ``width`` px (the
+    report itself has no script: the probe is added to a copy)."""
+    probe = tmp_path / "probe.html"
+    probe.write_text(page.replace("</body>", OVERFLOW_PROBE + "</body>"))
+    dom = subprocess.run(
+        ["chromium", "--headless", "--no-sandbox", "--disable-gpu",
+         f"--window-size={width},1200", "--dump-dom", probe.resolve().as_uri()],
+        check=True, capture_output=True, text=True, timeout=90).stdout
+    found = re.search(r'data-overflow="([^"]*)"', dom)
+    assert found, "the probe did not run"
+    return found.group(1)
+
+
+@pytest.mark.skipif(shutil.which("chromium") is None,
+                    reason="chromium not installed (apt-get install chromium) - layout check "
+                           "skipped")
+def test_no_table_overflows_in_chromium(monkeypatch, tmp_path):
+    """Every table and figure fits the page, the paired-modes table with all its columns too
+    (its headers wrap); and the check fails on a table that does not fit."""
+    use_standins(monkeypatch)
+    res = pipeline.inspect_files(SAMPLE / "profile.csv", SAMPLE / "meta.json",
+                                 SAMPLE / "baseline.uff", SAMPLE / "retest_corked.uff")
+    inputs = _inputs(res)
+    keys = ["baseline_hz", "retest_hz", "mac", "reference_hz", "mac_reference", "change_pct",
+            "moisture_fit_change_pct", "core_fit_change_pct"]
+    modes = [{k: 1234.5678 * (i + 1) for k in keys} for i in range(6)]
+    inputs = _with_verdict(inputs, modes=modes)
+    page = render_html(inputs, "2026-01-01T00:00:00", figures_png(inputs))
+    assert "Explained by moisture + core (%)" in page and "core_fit_change_pct" not in page
+    for width in (1100, 800):
+        assert overflowing(page, tmp_path, width) == "", width
+    # a table laid out as the old report did (automatic widths, cells that never wrap)
+    wide = page.replace("</body>", "<table style='table-layout:auto;width:auto'><tr>"
+                        + "<td style='white-space:nowrap'>moisture_fit_change_pct</td>" * 12
+                        + "</tr></table></body>")
+    assert overflowing(wide, tmp_path) != ""

@@ -39,8 +39,10 @@ def builtin_dir() -> Path:
     return Path(__file__).resolve().parent.parent / "builtin"
 
 
-def simulate_pair(work: Path, seed: int, progress) -> tuple[Path, Path, Path, Path]:
-    """Copy the built-in bat to ``work`` and write its baseline and corked re-test as UFF."""
+def simulate_pair(work: Path, seed: int, progress,
+                  alteration: str | None = RETEST["alteration"]) -> tuple[Path, Path, Path, Path]:
+    """Copy the built-in bat to ``work`` and write its baseline and re-test as UFF (the re-test
+    after moisture and a re-mounted sensor, and ``alteration`` unless None)."""
     import numpy as np
 
     from ema.io.frf_io import write_test
@@ -61,14 +63,15 @@ def simulate_pair(work: Path, seed: int, progress) -> tuple[Path, Path, Path, Pa
                      bungee_k_n_per_m=TRUTH["bungee_k_n_per_m"],
                      rel_noise=TRUTH["noise_pct"] / 100)
     freq = np.arange(0.0, TRUTH["fmax_hz"] + TRUTH["df_hz"] / 2, TRUTH["df_hz"])
-    retest_bat = with_changes(bat, core=parse_core_spec(RETEST["alteration"]),
+    core = None if alteration is None else parse_core_spec(alteration)
+    retest_bat = with_changes(bat, core=core,
                               moisture_pct=RETEST["moisture_pct"],
                               sensor_offset_m=RETEST["sensor_offset_in"] * IN_TO_M)
     baseline_path, retest_path = work / "baseline.uff", work / "retest.uff"
     progress(f"simulating the baseline test of {meta.serial} on the virtual rig")
     write_test(baseline_path, simulate_test(bat, freq, seed=seed))
     progress("simulating the re-test weeks later: moisture +0.8 points, accelerometer "
-             "re-mounted, corked")
+             "re-mounted" + ("" if alteration is None else f", altered ({alteration})"))
     write_test(retest_path, simulate_test(retest_bat, freq, seed=seed + 1))
     return profile_path, meta_path, baseline_path, retest_path
 
