@@ -1,6 +1,7 @@
 """The `batlab` command line: one sub-command per module `batlab/commands/<name>.py`.
 
-Each command module defines ``HELP`` (one line), ``add_arguments(parser)`` and
+Each command module defines ``HELP`` (one line), ``EXAMPLE`` (one command line, shown
+under its ``--help``), ``add_arguments(parser)`` and
 ``run(args) -> int``. Modules import heavy dependencies inside ``run`` so that
 ``batlab --help`` stays fast. Bad input raises ``ValueError`` or ``OSError`` with a
 message that names the file and the problem; it is printed as one line on stderr and
@@ -40,14 +41,20 @@ COMMANDS: tuple[str, ...] = (
 
 
 def build_parser() -> argparse.ArgumentParser:
+    from batlab import __version__
+
     parser = argparse.ArgumentParser(
         prog="batlab",
         description="Detect altered wooden baseball bats from impact-hammer vibration tests.",
+        epilog="example: batlab demo --out demo/   (then: batlab <command> --help)",
     )
+    parser.add_argument("--version", action="version", version=f"batlab {__version__}")
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
     for name in COMMANDS:
         module = importlib.import_module(f"batlab.commands.{name}")
-        p = sub.add_parser(name, help=module.HELP, description=module.HELP)
+        p = sub.add_parser(name, help=module.HELP, description=module.HELP,
+                           epilog=f"example:\n  {module.EXAMPLE}",
+                           formatter_class=argparse.RawDescriptionHelpFormatter)
         module.add_arguments(p)
         p.set_defaults(_run=module.run)
     return parser

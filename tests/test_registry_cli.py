@@ -172,3 +172,10 @@ def test_damaged_and_read_only_registries(lab, capsys):
         assert sorted(p.name for p in ro.iterdir()) == ["reg.sqlite"]
     finally:
         os.chmod(ro, 0o755)
+
+
+def test_register_speaks_lab_units(lab, capsys):
+    code, out, _ = run_cli(["register", "--profile", lab / "profile.csv", "--meta",
+                            lab / "meta.json", "--baseline", lab / "baseline.uff"], capsys)
+    assert code == 0 and " psi, weight density " in out and "lbf/in^3" in out
+    assert "GPa" not in out and "kg/m^3" not in out

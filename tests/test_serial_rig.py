@@ -10,8 +10,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from batlab.commands.rig import DEFAULT_POINTS_IN, IN_TO_M, uniform_beam_modes
 from rigs.frf_estimate import added_damping_ratio
+from rigs.modal_model import uniform_beam_modes
+from rigs.session import DEFAULT_POINTS_IN
+from updating.model.units import IN_TO_M
 
 ROOT = Path(__file__).resolve().parents[1]
 SAMPLE = ROOT / "data_samples" / "serial" / "beam_two_points.raw.bin"

@@ -17,6 +17,8 @@ from pathlib import Path
 from ema.io.atomic_write import atomic_write
 
 HELP = "run a roving-hammer impact test over a serial port (or replay a recorded stream)"
+EXAMPLE = ("batlab acquire --port /dev/ttyACM0 --points 1,3,5,7,9,11,13,15,16 "
+           "--driving-point 16 --hits 3 --meta meta.json -o test.uff")
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -33,9 +35,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--points-in", help="positions of points 1..n from the knob end, in")
     parser.add_argument("--meta", help="meta.json whose points_in gives the positions")
     parser.add_argument("--sample-rate", type=float, help="configure the box to this rate, Hz")
-    parser.add_argument("--baud", type=int, default=921600)
+    parser.add_argument("--baud", type=int, default=921600,
+                        help="serial speed, baud (ignored by USB CDC boards)")
     parser.add_argument("--record-s", type=float, default=2.0, help="record length, s")
-    parser.add_argument("--pretrigger-s", type=float, default=0.01)
+    parser.add_argument("--pretrigger-s", type=float, default=0.01,
+                        help="record kept before the trigger, s")
     parser.add_argument("--trigger-n", type=float, default=20.0, help="trigger level, N")
     parser.add_argument("--min-force-n", type=float, default=50.0,
                         help="weaker hits are rejected, N")
@@ -64,7 +68,8 @@ def _positions_m(args: argparse.Namespace, points: list[int], side: dict) -> dic
     recorded session's sidecar, else the default marks (every 2 in from 1 in)."""
     import numpy as np
 
-    from batlab.commands.rig import DEFAULT_POINTS_IN, IN_TO_M
+    from rigs.session import DEFAULT_POINTS_IN
+    from updating.model.units import IN_TO_M
 
     where = "default marks"
     if args.meta:
@@ -116,11 +121,12 @@ def _resume_raw(raw: Path) -> Path:
 def run(args: argparse.Namespace) -> int:
     import numpy as np
 
-    from batlab.commands.rig import IN_TO_M
+    from batlab.session_files import load_points, save_points
     from rigs.capture import CaptureSettings
     from rigs.driver import ReplaySource, SerialDevice, open_port
     from rigs.protocol import device_info_from_dict
-    from rigs.session import SessionInterrupted, combine, load_points, run_session, save_points
+    from rigs.session import SessionInterrupted, combine, run_session
+    from updating.model.units import IN_TO_M
 
     def progress(msg: str) -> None:
         print(msg, file=sys.stderr, flush=True)

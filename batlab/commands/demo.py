@@ -18,6 +18,7 @@ from pathlib import Path
 from batlab.cli_support import add_db_argument, progress_printer
 
 HELP = "simulate a baseline and a corked re-test of a built-in bat, register and inspect them"
+EXAMPLE = "batlab demo --out demo/"
 
 TRUTH = {"E_scale": 1.04, "density_scale": 0.97, "e_over_g": 13.0, "sensor_mass_g": 3.0,
          "bungee_k_n_per_m": 150.0, "noise_pct": 0.5, "df_hz": 1.0, "fmax_hz": 3200.0}

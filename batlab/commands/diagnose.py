@@ -6,6 +6,7 @@ import json
 import sys
 
 HELP = "compare a baseline test with the nominal model, rank the causes, calibrate the reference"
+EXAMPLE = "batlab diagnose --profile profile.csv --meta meta.json --frf baseline.uff --plot plots/"
 
 
 def add_arguments(p) -> None:
@@ -53,8 +54,10 @@ def run(args) -> int:
 
     profile = read_profile_csv(args.profile)
     meta = read_meta(args.meta)
-    if args.plot and not Path(args.plot).is_dir():
-        raise OSError(f"{args.plot}: --plot needs an existing directory")
+    if args.plot:  # created like every other output directory, and proved writable first
+        from batlab.report import check_destination
+
+        check_destination(args.plot, "--plot")
     test = read_test(args.frf)
     fit_test = modal_fitter()
     print(f"batlab diagnose: fitting the modes of {args.frf} ...", file=sys.stderr)
