@@ -1,4 +1,6 @@
-"""The pipeline behind `register`, `inspect` and `demo`, in one place.
+"""The pipeline behind `register`, `inspect`, `report`, `export`, `diagnose` and `demo`, in one
+place: the seam between those commands and the stages (ema, updating) and the registry. The
+registry's storage (SQL, hashes, custody records) stays behind ``batlab.registry``'s API.
 
     FRF file -> FrfTest -> modal fit -> MeasuredModes (sensor at the driving point)
     baseline modes + profile + meta -> diagnose -> calibrated BatReference
@@ -218,6 +220,29 @@ def calibrate(profile: Profile, meta: BatMeta, baseline: FittedTest):
     susp = getattr(baseline.fit, "suspension_freq_hz", None)
     susp = None if susp is None or len(susp) == 0 else np.asarray(susp)
     return diagnose(profile, meta, baseline.modes, suspension_hz=susp)
+
+
+def diagnose_files(
+    profile_path, meta_path, frf_path, method: str = "lscf", min_gain_pct: float | None = None,
+    progress: Progress = _quiet,
+):
+    """`batlab diagnose`: (meta, Diagnosis) of a baseline test file against the nominal model
+    (``updating.diagnose.run.diagnose``), its modes fitted by ``ema.fit.fit_test`` with
+    ``method``."""
+    from ema.fit import fit_test
+    from updating.diagnose.run import MIN_GAIN_PCT, diagnose
+
+    profile, meta = read_bat_files(profile_path, meta_path)
+    test = read_frf(frf_path)
+    progress(f"fitting the modes of {frf_path} ...")
+    fit = fit_test(test, method=method)
+    measured = from_fit(fit, sensor_x_m(test))
+    if measured.freq_hz.size == 0:
+        raise ValueError(f"{frf_path}: the fitter found no elastic mode above 20 Hz")
+    progress(f"{measured.freq_hz.size} elastic modes; ranking the causes ...")
+    susp = getattr(fit, "suspension_freq_hz", None)
+    gain = MIN_GAIN_PCT if min_gain_pct is None else min_gain_pct
+    return meta, diagnose(profile, meta, measured, susp, min_gain_pct=gain)
 
 
 def inspect_modes(
