@@ -73,6 +73,9 @@ class InspectionResult:
     reference_seq: int | None = None
     """The registration (custody record) a registered inspection was judged against."""
     weight_kg: float | None = None
+    retest_content: bytes | None = None
+    """The re-test file's bytes as judged (stored as they are: the registry keeps exactly the
+    file that was read, even if the file on disk changes afterwards)."""
 
 
 @dataclass(frozen=True)
@@ -110,12 +113,16 @@ def read_frf(path: str | os.PathLike) -> FrfTest:
         raise ValueError(f"{path}: unreadable FRF file ({type(exc).__name__}: {exc})") from None
 
 
-def frf_from_bytes(content: bytes, name: str) -> FrfTest:
-    """Read a stored FRF file (its format from ``name``'s extension)."""
+def frf_from_bytes(content: bytes, name: str, label: str | None = None) -> FrfTest:
+    """Read an FRF file's bytes (its format from ``name``'s extension); errors name ``label``
+    (default ``name``), not the temporary copy."""
     with tempfile.TemporaryDirectory(prefix="batlab-") as tmp:
         path = Path(tmp) / Path(name).name
         path.write_bytes(content)
-        return read_frf(path)
+        try:
+            return read_frf(path)
+        except ValueError as exc:
+            raise ValueError(str(exc).replace(str(path), label or name)) from None
 
 
 def read_bat_files(profile_path, meta_path) -> tuple[Profile, BatMeta]:
@@ -395,7 +402,10 @@ def inspect_registered(
     bat = reg.get_bat(conn, serial)
     content = reg.baseline_file(conn, bat)
     base_test = frf_from_bytes(content, bat.baseline_name)
-    re_test = read_frf(retest_path)
+    if not Path(retest_path).is_file():
+        raise ValueError(f"{retest_path}: no such file")
+    retest_content = Path(retest_path).read_bytes()
+    re_test = frf_from_bytes(retest_content, Path(retest_path).name, str(retest_path))
     base_modes = modes_from_dict(bat.modes)
     order = match_points(base_modes.x_m, point_positions_m(re_test), str(retest_path))
     profile = make_profile(bat.profile_x_m, bat.profile_diameter_m, f"registry bat {serial}")
@@ -410,7 +420,7 @@ def inspect_registered(
     progress("inspecting the re-test against the registered reference")
     verdict = inspect_modes(profile, reference, base_modes, retest.modes, false_alarm)
     return InspectionResult(serial, profile, reference, baseline, retest, verdict,
-                            bat.reference_seq, weight_kg)
+                            bat.reference_seq, weight_kg, retest_content)
 
 
 def store_inspection(
@@ -419,9 +429,11 @@ def store_inspection(
     """Record an inspection of a registered bat: its verdict, a copy of the re-test file, the
     registration it was judged against and the inputs its report needs."""
     path = Path(retest_path)
+    content = result.retest_content if result.retest_content is not None else \
+        path.read_bytes()
     return reg.add_inspection(
         conn, result.serial, verdict_record(result.serial, result.verdict), path.name,
-        path.read_bytes(), reference_seq=result.reference_seq,
+        content, reference_seq=result.reference_seq,
         inputs={"false_alarm": float(false_alarm), "batlab_version": __version__})
 
 

@@ -117,14 +117,14 @@ def run_session(source, points: list[int], hits_per_point: int,
                 exp_window_tau_s: float | None = None, fmax_hz: float | None = None,
                 progress: Callable[[str], None] = _quiet, max_rejects: int = 20,
                 done: dict[int, FrfEstimate] | None = None,
-                on_point: Callable[[int, FrfEstimate], None] | None = None,
+                on_point: Callable[[int, FrfEstimate, list[HitLog]], None] | None = None,
                 ) -> SessionResult:
     """Run the roving-hammer test on a source that has completed its handshake.
 
     ``done``: points already measured (a resumed session), skipped and used as they are;
-    ``on_point(point, estimate)`` is called as each point completes (the caller saves it, so a
-    killed session keeps its completed points). A stream that ends raises
-    :class:`SessionInterrupted` carrying the completed points.
+    ``on_point(point, estimate, log)`` is called as each point completes with the hit log so
+    far (the caller saves them, so a killed session keeps its completed points and their log).
+    A stream that ends raises :class:`SessionInterrupted` carrying the completed points.
     """
     if hits_per_point < 1 or not points:
         raise ValueError("need at least one point and one hit per point")
@@ -148,7 +148,7 @@ def run_session(source, points: list[int], hits_per_point: int,
                            info.sample_rate_hz, exp_window_tau_s, fmax_hz=fmax_hz)
         estimates[point] = est
         if on_point is not None:
-            on_point(point, est)
+            on_point(point, est, log)
     return combine(points, estimates, exp_window_tau_s, log, info)
 
 

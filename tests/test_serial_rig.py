@@ -206,6 +206,7 @@ def test_killed_session_resumes_with_its_completed_points(tmp_path):
         host.stderr.close()
         side = json.loads((tmp_path / "t.raw.bin.json").read_text())
         assert side["completed"] == [1, 4] and not out.exists()
+        assert [(h["point"], h["accepted"]) for h in side["log"]] == [(1, True), (4, True)]
         assert side["points_in"][:2] == [1.0, 3.0]
         res = _batlab("acquire", "--port", rig.path, "--resume", "-o", str(out), "--json")
         assert res.returncode == 0, res.stderr
@@ -213,6 +214,7 @@ def test_killed_session_resumes_with_its_completed_points(tmp_path):
         rig.close()
     summary = json.loads(res.stdout)
     assert summary["resumed_points"] == [1, 4] and summary["points"] == [1, 4, 7, 16]
+    assert summary["accepted"] == 4  # the first run's two hits and the resumed run's two
     assert "point 1/4 (#1): already measured" in res.stderr
     assert "tap point 1\n" not in res.stderr and "tap point 7\n" in res.stderr
     assert (tmp_path / "t.raw.bin.resume1").stat().st_size > 0

@@ -193,11 +193,12 @@ def run(args: argparse.Namespace) -> int:
     else:
         source = ReplaySource(raw, csv_info)
 
-    def on_point(point: int, est) -> None:
+    def on_point(point: int, est, log) -> None:
         done[point] = est
-        if args.port:  # completed points are on disk as they complete
+        if args.port:  # completed points and their hit log are on disk as they complete
             save_points(points_file, done)
-            _write_json_atomic(side_path, side | {"completed": sorted(done)})
+            _write_json_atomic(side_path, side | {"completed": sorted(done), "log": log_before
+                                                  + [asdict(h) for h in log]})
 
     interrupted: SessionInterrupted | None = None
     try:
