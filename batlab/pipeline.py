@@ -202,21 +202,6 @@ def fit_file(
     return FittedTest(name, test, fit, modes)
 
 
-def modes_to_dict(m: MeasuredModes) -> dict:
-    return {"freq_hz": m.freq_hz.tolist(), "damping_ratio": m.damping_ratio.tolist(),
-            "shapes": np.asarray(m.shapes).tolist(), "x_m": np.asarray(m.x_m).tolist(),
-            "sensor_x_m": float(m.sensor_x_m),
-            "freq_std_hz": None if m.freq_std_hz is None else np.asarray(m.freq_std_hz).tolist()}
-
-
-def modes_from_dict(d: dict) -> MeasuredModes:
-    std = d.get("freq_std_hz")
-    return MeasuredModes(np.asarray(d["freq_hz"], float),
-                         np.asarray(d["shapes"], float).reshape(len(d["x_m"]), -1),
-                         np.asarray(d["x_m"], float), np.asarray(d["damping_ratio"], float),
-                         float(d["sensor_x_m"]), None if std is None else np.asarray(std, float))
-
-
 # --- the updating stage ----------------------------------------------------------------------
 
 
@@ -350,7 +335,7 @@ def prepare_registration(
     record = reg.BatRecord(
         serial=meta.serial, profile_x_m=profile.x_m.tolist(),
         profile_diameter_m=profile.diameter_m.tolist(), meta=meta.extra, species=meta.species,
-        reference=diagnosis.reference.to_dict(), modes=modes_to_dict(baseline.modes))
+        reference=diagnosis.reference.to_dict(), modes=reg.encode_modes(baseline.modes))
     return Registration(record, baseline, diagnosis)
 
 
@@ -406,7 +391,7 @@ def inspect_registered(
         raise ValueError(f"{retest_path}: no such file")
     retest_content = Path(retest_path).read_bytes()
     re_test = frf_from_bytes(retest_content, Path(retest_path).name, str(retest_path))
-    base_modes = modes_from_dict(bat.modes)
+    base_modes = reg.decode_modes(bat.modes)
     order = match_points(base_modes.x_m, point_positions_m(re_test), str(retest_path))
     profile = make_profile(bat.profile_x_m, bat.profile_diameter_m, f"registry bat {serial}")
     weight = bat.meta.get("weight_lb")
@@ -516,7 +501,7 @@ def stored_report_inputs(
                                         f"inspection #{stored.id} re-test")
     base_test = frf_from_bytes(base_bytes, bat.baseline_name or base_name)
     re_test = frf_from_bytes(re_bytes, stored.retest_name or re_name)
-    base_modes = modes_from_dict(bat.modes)
+    base_modes = reg.decode_modes(bat.modes)
     order = match_points(base_modes.x_m, point_positions_m(re_test), stored.retest_name)
     weight = bat.meta.get("weight_lb")
     weight_kg = None if weight is None else float(weight) * LB_TO_KG

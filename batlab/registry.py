@@ -593,6 +593,31 @@ class Inspection:
     record_sha256: str | None = None
 
 
+def encode_modes(m) -> dict:
+    """Fitted modes (``updating.correlate.measured.MeasuredModes``) as the registry stores them
+    (``modes_json``): plain lists, SI."""
+    import numpy as np
+
+    return {"freq_hz": np.asarray(m.freq_hz).tolist(),
+            "damping_ratio": np.asarray(m.damping_ratio).tolist(),
+            "shapes": np.asarray(m.shapes).tolist(), "x_m": np.asarray(m.x_m).tolist(),
+            "sensor_x_m": float(m.sensor_x_m),
+            "freq_std_hz": None if m.freq_std_hz is None else np.asarray(m.freq_std_hz).tolist()}
+
+
+def decode_modes(d: dict):
+    """The stored modes back as ``MeasuredModes`` (shapes points x modes)."""
+    import numpy as np
+
+    from updating.correlate.measured import MeasuredModes
+
+    std = d.get("freq_std_hz")
+    return MeasuredModes(np.asarray(d["freq_hz"], float),
+                         np.asarray(d["shapes"], float).reshape(len(d["x_m"]), -1),
+                         np.asarray(d["x_m"], float), np.asarray(d["damping_ratio"], float),
+                         float(d["sensor_x_m"]), None if std is None else np.asarray(std, float))
+
+
 def has_bat(conn: sqlite3.Connection, serial: str) -> bool:
     return conn.execute("SELECT 1 FROM bats WHERE serial = ?", (serial,)).fetchone() is not None
 
