@@ -17,22 +17,31 @@ STATUS_WORDS = {"altered": "ALTERED", "not_altered": "not altered",
                 "inconclusive": "INCONCLUSIVE (no verdict)"}
 
 
-def p_value_words(verdict: dict) -> str | None:
-    """"an unaltered bat differs this much in 93 of 100 re-tests" style, from 1 - confidence
-    (a confidence of 0.075 is not "7.5 % sure": it means p = 0.925)."""
-    conf = verdict.get("confidence")
+def p_value(verdict: dict) -> float | None:
+    """The chance that an unaltered bat differs at least this much from its baseline: the
+    verdict's ``details.p_value``, else 1 - ``confidence`` (None when it has neither)."""
     p = (verdict.get("details") or {}).get("p_value")
-    if p is None and conf is not None:
-        p = 1.0 - float(conf)
+    if p is None and verdict.get("confidence") is not None:
+        p = 1.0 - float(verdict["confidence"])
+    return None if p is None else min(max(float(p), 0.0), 1.0)
+
+
+def chance_words(p: float) -> str:
+    """How often, in words a non-specialist reads correctly ("in about 97 of 100 re-tests")."""
+    if p < 0.001:
+        return "in fewer than 1 of 1,000 re-tests"
+    if p < 0.01:
+        return f"in about {round(p * 1000)} of 1,000 re-tests"
+    return f"in about {round(p * 100)} of 100 re-tests"
+
+
+def p_value_words(verdict: dict) -> str | None:
+    """"p = 0.925: an unaltered bat differs this much in about 92 of 100 re-tests" (a
+    confidence of 0.075 is not "7.5 % sure")."""
+    p = p_value(verdict)
     if p is None:
         return None
-    if p < 0.001:
-        words = "less than once in 1,000"
-    elif p < 0.1:
-        words = f"about {max(1, round(p * 1000))} times in 1,000"
-    else:
-        words = f"in about {round(p * 100)} of 100"
-    return f"p = {p:.3g}: an unaltered bat differs this much {words} re-tests"
+    return f"p = {p:.3g}: an unaltered bat differs this much {chance_words(p)}"
 
 
 def readable(out: dict) -> str:

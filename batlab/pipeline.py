@@ -519,6 +519,8 @@ def history_table(conn: sqlite3.Connection, serial: str | None = None):
     `batlab export` writes."""
     import pandas as pd
 
+    from batlab.formatting import p_value
+
     species = {b.serial: b.species for b in reg.list_bats(conn)}
     rows = []
     for i in reg.all_inspections(conn, serial):
@@ -530,7 +532,7 @@ def history_table(conn: sqlite3.Connection, serial: str | None = None):
             "region_start_in": region[0], "region_end_in": region[1],
             "core_diameter_in": v.get("core_diameter_in"),
             "fill_density_ratio": v.get("fill_density_ratio"),
-            "p_value": None if v.get("confidence") is None else 1.0 - v["confidence"],
+            "p_value": p_value(v),
             "false_alarm_rate": v.get("false_alarm_rate"),
             "reasons": "; ".join(v.get("reasons") or []),
             "retest_file": i.retest_name, "retest_sha256": i.retest_sha256,

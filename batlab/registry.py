@@ -24,6 +24,8 @@ from dataclasses import dataclass
 from datetime import datetime, timezone
 from pathlib import Path
 
+from batlab.formatting import status_of
+
 BUSY_TIMEOUT_S = 60.0
 
 
@@ -149,15 +151,6 @@ def _canonical(obj) -> str:
     return json.dumps(obj, sort_keys=True, separators=(",", ":"), allow_nan=False)
 
 
-def _status_of(verdict: dict) -> str:
-    """The verdict's status: its own ``status``, else derived from ``altered``."""
-    status = verdict.get("status")
-    if status:
-        return str(status)
-    altered = verdict.get("altered")
-    return "inconclusive" if altered is None else ("altered" if altered else "not_altered")
-
-
 def _migrate_3(conn: sqlite3.Connection) -> None:
     """Version 3: every judged file kept (``baseline_files`` becomes ``files``: re-tests too),
     inspections name the reference record they were judged against, their report inputs and
@@ -188,7 +181,7 @@ def _migrate_3(conn: sqlite3.Connection) -> None:
         _append_record(conn, "reference", serial, None, _canonical(_bat_payload(conn, serial)))
     for row in conn.execute("SELECT id, verdict_json FROM inspections ORDER BY id").fetchall():
         conn.execute("UPDATE inspections SET status = ? WHERE id = ?",
-                     (_status_of(json.loads(row[1])), row[0]))
+                     (status_of(json.loads(row[1])), row[0]))
         seq = _append_record(conn, "verdict", str(row[0]), None,
                              _canonical(_inspection_payload(conn, row[0])))
         conn.execute("UPDATE inspections SET record_seq = ? WHERE id = ?", (seq, row[0]))
@@ -752,7 +745,7 @@ def add_inspection(
             raise ValueError(f"registration record #{reference_seq} is of bat {ref.serial!r}, "
                              f"not {serial!r}")
         digest = store_file(conn, retest_name, retest)
-        status = _status_of(verdict)
+        status = status_of(verdict)
         altered = None if status == "inconclusive" else status == "altered"
         cur = conn.execute(
             "INSERT INTO inspections (serial, altered, status, verdict_json, retest_name, "
@@ -781,7 +774,7 @@ _INSPECTION_COLUMNS = ("i.id, i.serial, i.status, i.verdict_json, i.retest_name,
 
 
 def _inspection(r) -> Inspection:
-    status = r[2] or _status_of(json.loads(r[3]))
+    status = r[2] or status_of(json.loads(r[3]))
     altered = None if status == "inconclusive" else status == "altered"
     return Inspection(r[0], r[1], altered, status, json.loads(r[3]), r[4], r[5], r[6], r[7],
                       r[8], r[9], None if r[10] is None else json.loads(r[10]), r[11], r[12])

@@ -22,6 +22,7 @@ from pathlib import Path
 
 import numpy as np
 
+from batlab.formatting import chance_words, p_value, status_of
 from batlab.pipeline import ReportInputs
 from batlab.registry import now_utc
 from ema.io.atomic_write import atomic_write
@@ -140,7 +141,7 @@ def element_figure(r: ReportInputs):
     d_max = float(prof.diameter_m.max()) / IN_TO_M
     fig, axes = plt.subplots(3, 1, sharex=True, figsize=(10, 6.8),
                              gridspec_kw={"height_ratios": [2.2, 2.2, 1.0]})
-    region = v.get("region_in") if _status(v) == "altered" else None
+    region = v.get("region_in") if status_of(v) == "altered" else None
     msso = (v.get("details") or {}).get("msso") or {}
     has_map = "alpha" in msso and len(msso["alpha"]) == len(x0)
     shown = [fit["alpha"], fit["beta"]]
@@ -233,7 +234,7 @@ def mass_rows(r: ReportInputs) -> list[tuple[str, float, float, float]]:
     v = r.verdict
     region, core_in, fill = v.get("region_in"), v.get("core_diameter_in"), \
         v.get("fill_density_ratio")
-    if _status(v) == "altered" and region and core_in and fill is not None:
+    if status_of(v) == "altered" and region and core_in and fill is not None:
         length = r.profile.length_m
         a, b = region[0] * IN_TO_M, region[1] * IN_TO_M
         core = Core(core_in * IN_TO_M, length - a, fill, plug_m=max(length - b, 0.0))
@@ -246,31 +247,6 @@ def mass_rows(r: ReportInputs) -> list[tuple[str, float, float, float]]:
 # --- words -----------------------------------------------------------------------------------
 
 
-def _status(v: dict) -> str:
-    """The verdict's status: its own ``status``, else derived from ``altered``."""
-    if v.get("status"):
-        return str(v["status"])
-    altered = v.get("altered")
-    return "inconclusive" if altered is None else ("altered" if altered else "not_altered")
-
-
-def p_value(v: dict) -> float | None:
-    """The chance that an unaltered bat differs at least this much from its baseline."""
-    p = (v.get("details") or {}).get("p_value")
-    if p is None and v.get("confidence") is not None:
-        p = 1.0 - float(v["confidence"])
-    return None if p is None else min(max(float(p), 0.0), 1.0)
-
-
-def _chance(p: float) -> str:
-    """How often, in words a non-specialist reads correctly ("in about 97 of 100 re-tests")."""
-    if p < 0.001:
-        return "in fewer than 1 of 1,000 re-tests"
-    if p < 0.01:
-        return f"in about {round(p * 1000)} of 1,000 re-tests"
-    return f"in about {round(p * 100)} of 100 re-tests"
-
-
 def _one_in(p: float) -> str:
     """A rate as "1 in 100", "5 in 100", "1 in 1,000"."""
     if p >= 0.01:
@@ -281,7 +257,7 @@ def _one_in(p: float) -> str:
 def headline(r: ReportInputs) -> str:
     """One plain sentence (or two): what was found, where, how much and how sure."""
     v, serial = r.verdict, r.serial
-    status, p = _status(v), p_value(v)
+    status, p = status_of(v), p_value(v)
     alpha = v.get("false_alarm_rate")
     if status == "inconclusive":
         reasons = v.get("reasons") or ["the two tests cannot be compared"]
@@ -304,12 +280,12 @@ def headline(r: ReportInputs) -> str:
         text += "."
         if p is not None:
             text += (f" The evidence is strong: an unaltered bat would differ this much from "
-                     f"its baseline {_chance(p)}.")
+                     f"its baseline {chance_words(p)}.")
         return text
     text = (f"Bat {serial} shows no sign of alteration: the re-test differs from the baseline "
             "no more than moisture, temperature and re-mounting the sensor explain.")
     if p is not None:
-        text += f" Unaltered bats differ at least this much {_chance(p)}"
+        text += f" Unaltered bats differ at least this much {chance_words(p)}"
         if alpha:
             text += (f"; a bat is called altered only when that chance falls below "
                      f"{_one_in(float(alpha))}")
@@ -320,7 +296,7 @@ def headline(r: ReportInputs) -> str:
 def regions_note(r: ReportInputs) -> str:
     """The two localisations side by side, reconciled or their difference explained."""
     v = r.verdict
-    fit = v.get("region_in") if _status(v) == "altered" else None
+    fit = v.get("region_in") if status_of(v) == "altered" else None
     msso = (v.get("details") or {}).get("msso") or {}
     if "error" in msso:
         return f"The element map could not be computed ({msso['error']})."
@@ -433,7 +409,7 @@ def _img(uri: str, alt: str) -> str:
 
 def _facts(r: ReportInputs) -> list[list]:
     v = r.verdict
-    status = _status(v)
+    status = status_of(v)
     p = p_value(v)
     facts: list[list] = [["Decision", _Raw({"altered": "<b>altered</b>", "not_altered":
                                             "not altered", "inconclusive":
@@ -445,7 +421,7 @@ def _facts(r: ReportInputs) -> list[list]:
     if p is not None:
         shown = "< 0.000001" if p < 1e-6 else f"{p:.3g}"
         facts.append(["Chance an unaltered bat differs this much (p-value)",
-                      _Raw(f"{shown} ({html.escape(_chance(p))})")])
+                      _Raw(f"{shown} ({html.escape(chance_words(p))})")])
     if v.get("false_alarm_rate") is not None:
         facts.append(["Called altered when that chance is below (false-alarm rate)",
                       v["false_alarm_rate"]])
@@ -509,7 +485,7 @@ def _provenance(r: ReportInputs, generated_at: str) -> list[list]:
 def render_html(r: ReportInputs, generated_at: str, figures: dict[str, bytes]) -> str:
     """The report page as a string (``figures``: name -> PNG bytes, see ``figures_png``)."""
     v = r.verdict
-    status = _status(v)
+    status = status_of(v)
     parts = [f"<h1>Inspection of bat {html.escape(r.serial)}</h1>",
              f"<p class='note'>baseline {html.escape(r.baseline.name)}, re-test "
              f"{html.escape(r.retest.name)}</p>",
