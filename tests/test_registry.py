@@ -10,6 +10,8 @@ import sqlite3
 import time
 
 import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
 
 from batlab import registry as reg
 
@@ -387,3 +389,29 @@ def test_read_only_registry_is_readable_and_refuses_writes(tmp_path):
     finally:
         os.chmod(path.parent, 0o755)
         os.chmod(path, 0o644)
+
+
+@settings(max_examples=12, deadline=None,
+          suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(n_bats=st.integers(1, 3), n_insp=st.integers(0, 4), pick=st.floats(0, 0.999),
+       how=st.sampled_from(["content", "stamp", "subject"]))
+def test_chain_names_whichever_record_was_changed(tmp_path, n_bats, n_insp, pick, how):
+    """Whatever the history and whichever record is changed (its content hash, its time stamp
+    or its subject), `check` names that record as the first changed one."""
+    path = tmp_path / f"h{n_bats}{n_insp}{pick}{how}.sqlite"
+    with reg.open_registry(path) as conn:
+        for b in range(n_bats):
+            reg.add_bat(conn, make_bat(f"P{b}"), f"b{b}.uff", f"base {b}".encode())
+        for k in range(n_insp):
+            reg.add_inspection(conn, f"P{k % n_bats}", {"altered": k % 2 == 0}, f"r{k}.uff",
+                               f"retest {k}".encode())
+        assert reg.check(conn).ok
+        n = conn.execute("SELECT count(*) FROM custody").fetchone()[0]
+    seq = 1 + int(pick * n)
+    column, value = {"content": ("content_sha256", "f" * 64),
+                     "stamp": ("recorded_at", "2000-01-01T00:00:00+00:00"),
+                     "subject": ("subject", "someone else")}[how]
+    _raw(path, f"UPDATE custody SET {column} = ? WHERE seq = ?", (value, seq))
+    res = _check(path)
+    assert not res.ok and res.first_changed == seq, res.problems
+    path.unlink()
