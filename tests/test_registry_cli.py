@@ -140,7 +140,8 @@ def test_verdict_stored_and_printed_before_the_report_fails(lab, capsys, monkeyp
     monkeypatch.setattr(report, "figures_png", broken)
     code, out, err = run_cli(["inspect", "--serial", "HX-2001", lab / "retest_corked.uff",
                               "--report", lab / "rep", "--json"], capsys)
-    assert code == 2 and "disk full" in err
+    assert code == 2 and "disk full" in err and "the verdict is stored (inspection #1)" in err
+    assert "batlab report HX-2001 --inspection 1" in err
     assert json.loads(out)["altered"] is True  # printed
     code, out, _ = run_cli(["history", "HX-2001", "--json"], capsys)
     (insp,) = json.loads(out)["inspections"]  # stored

@@ -74,7 +74,14 @@ def run(args) -> int:
             if args.report or args.plots:
                 bat = pipeline.stored_bat(conn, stored)
                 prov = pipeline.provenance(conn, stored=stored)
-                path = _report(args, pipeline.report_inputs(result, bat.meta, prov), progress)
+                try:
+                    path = _report(args, pipeline.report_inputs(result, bat.meta, prov),
+                                   progress)
+                except (OSError, ValueError) as exc:
+                    raise ValueError(
+                        f"the verdict is stored (inspection #{stored.id}) but the report failed "
+                        f"({exc}); draw it again with: batlab report {result.serial} "
+                        f"--inspection {stored.id}") from None
                 if path is not None:
                     pipeline.note_report(conn, stored, path)
     else:
