@@ -52,8 +52,9 @@ def build_parser() -> argparse.ArgumentParser:
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
     for name in COMMANDS:
         module = importlib.import_module(f"batlab.commands.{name}")
+        example = getattr(module, "EXAMPLE", None)  # (tests/test_cli_consistency.py: required)
         p = sub.add_parser(name, help=module.HELP, description=module.HELP,
-                           epilog=f"example:\n  {module.EXAMPLE}",
+                           epilog=f"example:\n  {example}" if example else None,
                            formatter_class=argparse.RawDescriptionHelpFormatter)
         module.add_arguments(p)
         p.set_defaults(_run=module.run)
