@@ -611,6 +611,10 @@ def decode_modes(d: dict):
                          float(d["sensor_x_m"]), None if std is None else np.asarray(std, float))
 
 
+def has_file(conn: sqlite3.Connection, sha256: str) -> bool:
+    return conn.execute("SELECT 1 FROM files WHERE sha256 = ?", (sha256,)).fetchone() is not None
+
+
 def has_bat(conn: sqlite3.Connection, serial: str) -> bool:
     return conn.execute("SELECT 1 FROM bats WHERE serial = ?", (serial,)).fetchone() is not None
 

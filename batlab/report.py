@@ -482,6 +482,25 @@ def _provenance(r: ReportInputs, generated_at: str) -> list[list]:
     return rows
 
 
+def provenance_hashes(page: str) -> dict:
+    """The hashes a report page carries (its Provenance rows, as ``_provenance`` writes them):
+    {"baseline_sha256", "retest_sha256", "verdict_record", "verdict_record_sha256",
+    "reference_record", "reference_record_sha256"} (missing keys absent)."""
+    import re
+
+    out: dict = {}
+    for label, key in (("Baseline file", "baseline_sha256"), ("Re-test file", "retest_sha256")):
+        m = re.search(rf"<td>{label}</td><td>[^<]*<br><code>sha256 ([0-9a-f]{{64}})</code>", page)
+        if m:
+            out[key] = m.group(1)
+    for label, key in (("Verdict record", "verdict_record"),
+                       ("Registration record", "reference_record")):
+        m = re.search(rf"<td>{label}</td><td>#(\d+)<br><code>sha256 ([0-9a-f]{{64}})</code>", page)
+        if m:
+            out[key], out[key + "_sha256"] = int(m.group(1)), m.group(2)
+    return out
+
+
 def render_html(r: ReportInputs, generated_at: str, figures: dict[str, bytes]) -> str:
     """The report page as a string (``figures``: name -> PNG bytes, see ``figures_png``)."""
     v = r.verdict
@@ -531,10 +550,11 @@ def render_html(r: ReportInputs, generated_at: str, figures: dict[str, bytes]) -
     parts.append("<h2>Provenance</h2>")
     parts.append(_table(None, _provenance(r, generated_at), "facts"))
     if r.provenance.get("verdict_record") is not None:
-        parts.append("<p class='note'>To verify: <code>batlab registry check</code> on the "
-                     "registry confirms every record is unchanged, and <code>batlab history "
-                     f"{html.escape(r.serial)} --json</code> shows these hashes; a file's "
-                     "<code>sha256sum</code> must equal its hash above.</p>")
+        parts.append("<p class='note'>To verify: <code>batlab registry check --report "
+                     "index.html</code> on the registry confirms every record is unchanged and "
+                     "that this page's records and files are the registry's; <code>batlab "
+                     f"history {html.escape(r.serial)} --json</code> shows these hashes; a "
+                     "file's <code>sha256sum</code> must equal its hash above.</p>")
     return ("<!DOCTYPE html><html lang='en'><head><meta charset='utf-8'>"
             f"<title>batlab inspection {html.escape(r.serial)}</title>"
             f"<style>{CSS}</style></head><body>" + "\n".join(parts) + "</body></html>\n")

@@ -69,6 +69,14 @@ def test_report_regenerated_from_the_registry_alone(lab, capsys):
     (insp,) = json.loads(out)["inspections"]
     assert insp["record_sha256"] in again and insp["retest_sha256"] in again
     assert insp["report_path"] == str(lab / "rep" / "index.html")
+    # the report verifies against the registry; a forged one does not
+    code, out, _ = run_cli(["registry", "check", "--report", lab / "again" / "index.html"],
+                           capsys)
+    assert code == 0 and "intact" in out
+    forged = again.replace(insp["record_sha256"], "0" * 64)
+    (lab / "forged.html").write_text(forged)
+    code, out, _ = run_cli(["registry", "check", "--report", lab / "forged.html"], capsys)
+    assert code == 1 and f"custody record #{insp['record_seq']} has hash" in out
 
 
 def test_report_of_an_unknown_inspection(lab, capsys):

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import json
-from dataclasses import asdict
+from dataclasses import asdict, replace
 
 from batlab.cli_support import add_db_argument, db_path
 
@@ -13,6 +13,9 @@ EXAMPLE = "batlab registry check --db lab.sqlite"
 
 def add_arguments(p) -> None:
     p.add_argument("action", choices=["check"], help="check: verify everything stored")
+    p.add_argument("--report", default=None, metavar="INDEX.html",
+                   help="also verify a report page against the registry: its verdict and "
+                        "registration records and file hashes must be there, unchanged")
     add_db_argument(p)
     p.add_argument("--json", action="store_true", help="print the result as JSON on stdout")
 
@@ -23,6 +26,8 @@ def run(args) -> int:
     path = db_path(args)
     with open_registry(path, create=False) as conn:
         res = check(conn)
+        if args.report:
+            res = replace(res, problems=res.problems + _check_report(conn, args.report))
     if args.json:
         print(json.dumps({**asdict(res), "ok": res.ok}))
     else:
@@ -37,3 +42,37 @@ def run(args) -> int:
         if res.first_changed is not None:
             print(f"  first changed record: #{res.first_changed}")
     return 0 if res.ok else 1
+
+
+def _check_report(conn, page_path: str) -> list[str]:
+    """Problems of a report page against the registry (empty: it matches)."""
+    from pathlib import Path
+
+    from batlab.registry import custody_record, has_file
+    from batlab.report import provenance_hashes
+
+    try:
+        page = Path(page_path).read_text(encoding="utf-8")
+    except (OSError, UnicodeDecodeError) as exc:
+        raise ValueError(f"{page_path}: cannot read the report ({exc})") from None
+    hashes = provenance_hashes(page)
+    if "verdict_record" not in hashes:
+        return [f"{page_path}: carries no verdict record (not a report of a stored inspection)"]
+    problems = []
+    for key in ("verdict_record", "reference_record"):
+        if key not in hashes:
+            continue
+        try:
+            rec = custody_record(conn, hashes[key])
+        except ValueError as exc:
+            problems.append(f"{page_path}: {exc}")
+            continue
+        if rec.record_sha256 != hashes[key + "_sha256"]:
+            problems.append(f"{page_path}: custody record #{rec.seq} has hash "
+                            f"{rec.record_sha256[:12]}, the report says "
+                            f"{hashes[key + '_sha256'][:12]}")
+    for key in ("baseline_sha256", "retest_sha256"):
+        sha = hashes.get(key)
+        if sha and not has_file(conn, sha):
+            problems.append(f"{page_path}: file {sha[:12]} ({key[:-7]}) not in the registry")
+    return problems
