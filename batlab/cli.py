@@ -1,6 +1,7 @@
 """The `batlab` command line: one sub-command per module `batlab/commands/<name>.py`.
 
-Each command module defines ``HELP`` (one line), ``add_arguments(parser)`` and
+Each command module defines ``HELP`` (one line), ``EXAMPLE`` (one command line, shown
+under its ``--help``), ``add_arguments(parser)`` and
 ``run(args) -> int``. Modules import heavy dependencies inside ``run`` so that
 ``batlab --help`` stays fast. Bad input raises ``ValueError`` or ``OSError`` with a
 message that names the file and the problem; it is printed as one line on stderr and
@@ -12,6 +13,7 @@ from __future__ import annotations
 import argparse
 import importlib
 import os
+import sqlite3
 import sys
 
 # batlab's matrices are small (tens to hundreds of DOFs): BLAS threads cost more than they
@@ -26,6 +28,9 @@ COMMANDS: tuple[str, ...] = (
     "bats",
     "history",
     "inspect",
+    "report",
+    "export",
+    "registry",
     "demo",
     "diagnose",
     "rig",
@@ -37,14 +42,21 @@ COMMANDS: tuple[str, ...] = (
 
 
 def build_parser() -> argparse.ArgumentParser:
+    from batlab import __version__
+
     parser = argparse.ArgumentParser(
         prog="batlab",
         description="Detect altered wooden baseball bats from impact-hammer vibration tests.",
+        epilog="example: batlab demo --out demo/   (then: batlab <command> --help)",
     )
+    parser.add_argument("--version", action="version", version=f"batlab {__version__}")
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
     for name in COMMANDS:
         module = importlib.import_module(f"batlab.commands.{name.replace('-', '_')}")
-        p = sub.add_parser(name, help=module.HELP, description=module.HELP)
+        example = getattr(module, "EXAMPLE", None)  # (tests/test_cli_consistency.py: required)
+        p = sub.add_parser(name, help=module.HELP, description=module.HELP,
+                           epilog=f"example:\n  {example}" if example else None,
+                           formatter_class=argparse.RawDescriptionHelpFormatter)
         module.add_arguments(p)
         p.set_defaults(_run=module.run)
     return parser
@@ -57,6 +69,11 @@ def main(argv: list[str] | None = None) -> int:
     except (ValueError, OSError) as exc:
         message = " ".join(str(exc).split()) or type(exc).__name__
         print(f"batlab {args.command}: error: {message}", file=sys.stderr)
+        return 2
+    except sqlite3.DatabaseError as exc:  # damage found after the registry opened
+        db = getattr(args, "db", None) or "the registry"
+        print(f"batlab {args.command}: error: {db}: registry damaged ({exc}); "
+              "`batlab registry check` says where", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
         print(f"batlab {args.command}: interrupted", file=sys.stderr)

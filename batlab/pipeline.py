@@ -1,4 +1,6 @@
-"""The pipeline behind `register`, `inspect` and `demo`, in one place.
+"""The pipeline behind `register`, `inspect`, `report`, `export`, `diagnose` and `demo`, in one
+place: the seam between those commands and the stages (ema, updating) and the registry. The
+registry's storage (SQL, hashes, custody records) stays behind ``batlab.registry``'s API.
 
     FRF file -> FrfTest -> modal fit -> MeasuredModes (sensor at the driving point)
     baseline modes + profile + meta -> diagnose -> calibrated BatReference
@@ -20,6 +22,7 @@ from pathlib import Path
 
 import numpy as np
 
+from batlab import __version__
 from batlab import registry as reg
 from ema.io.frf_data import FrfTest
 from updating.correlate.measured import MeasuredModes, from_fit
@@ -67,6 +70,29 @@ class InspectionResult:
     baseline: FittedTest
     retest: FittedTest
     verdict: Verdict
+    reference_seq: int | None = None
+    """The registration (custody record) a registered inspection was judged against."""
+    weight_kg: float | None = None
+    retest_content: bytes | None = None
+    """The re-test file's bytes as judged (stored as they are: the registry keeps exactly the
+    file that was read, even if the file on disk changes afterwards)."""
+
+
+@dataclass(frozen=True)
+class ReportInputs:
+    """What a report is drawn from: the verdict as stored (``verdict_record``: the contract
+    JSON with the verdict's evidence), the model and both fitted tests, the bat's meta.json
+    and the provenance (file hashes, custody record hashes, inspection number and time).
+    Stored inspections rebuild it from the registry alone (``stored_report_inputs``)."""
+
+    serial: str
+    profile: Profile
+    reference: BatReference
+    baseline: FittedTest
+    retest: FittedTest
+    verdict: dict
+    meta: dict
+    provenance: dict
 
 
 # --- files -----------------------------------------------------------------------------------
@@ -87,12 +113,16 @@ def read_frf(path: str | os.PathLike) -> FrfTest:
         raise ValueError(f"{path}: unreadable FRF file ({type(exc).__name__}: {exc})") from None
 
 
-def frf_from_bytes(content: bytes, name: str) -> FrfTest:
-    """Read a stored FRF file (its format from ``name``'s extension)."""
+def frf_from_bytes(content: bytes, name: str, label: str | None = None) -> FrfTest:
+    """Read an FRF file's bytes (its format from ``name``'s extension); errors name ``label``
+    (default ``name``), not the temporary copy."""
     with tempfile.TemporaryDirectory(prefix="batlab-") as tmp:
         path = Path(tmp) / Path(name).name
         path.write_bytes(content)
-        return read_frf(path)
+        try:
+            return read_frf(path)
+        except ValueError as exc:
+            raise ValueError(str(exc).replace(str(path), label or name)) from None
 
 
 def read_bat_files(profile_path, meta_path) -> tuple[Profile, BatMeta]:
@@ -172,21 +202,6 @@ def fit_file(
     return FittedTest(name, test, fit, modes)
 
 
-def modes_to_dict(m: MeasuredModes) -> dict:
-    return {"freq_hz": m.freq_hz.tolist(), "damping_ratio": m.damping_ratio.tolist(),
-            "shapes": np.asarray(m.shapes).tolist(), "x_m": np.asarray(m.x_m).tolist(),
-            "sensor_x_m": float(m.sensor_x_m),
-            "freq_std_hz": None if m.freq_std_hz is None else np.asarray(m.freq_std_hz).tolist()}
-
-
-def modes_from_dict(d: dict) -> MeasuredModes:
-    std = d.get("freq_std_hz")
-    return MeasuredModes(np.asarray(d["freq_hz"], float),
-                         np.asarray(d["shapes"], float).reshape(len(d["x_m"]), -1),
-                         np.asarray(d["x_m"], float), np.asarray(d["damping_ratio"], float),
-                         float(d["sensor_x_m"]), None if std is None else np.asarray(std, float))
-
-
 # --- the updating stage ----------------------------------------------------------------------
 
 
@@ -197,6 +212,68 @@ def calibrate(profile: Profile, meta: BatMeta, baseline: FittedTest):
     susp = getattr(baseline.fit, "suspension_freq_hz", None)
     susp = None if susp is None or len(susp) == 0 else np.asarray(susp)
     return diagnose(profile, meta, baseline.modes, suspension_hz=susp)
+
+
+def diagnose_files(
+    profile_path, meta_path, frf_path, method: str = "lscf", min_gain_pct: float | None = None,
+    progress: Progress = _quiet, solid: bool = False,
+):
+    """`batlab diagnose`: (meta, Diagnosis) of a baseline test file against the nominal model
+    (``updating.diagnose.run.diagnose``), its modes fitted by ``ema.fit.fit_test`` with
+    ``method``; with ``solid``, a second pass tries the 3D solid's per-mode corrections
+    (``updating.diagnose.solid.diagnose_with_solid``, about a minute)."""
+    from ema.fit import fit_test
+    from updating.diagnose.run import MIN_GAIN_PCT, diagnose
+
+    profile, meta = read_bat_files(profile_path, meta_path)
+    test = read_frf(frf_path)
+    progress(f"fitting the modes of {frf_path} ...")
+    fit = fit_test(test, method=method)
+    measured = from_fit(fit, sensor_x_m(test))
+    if measured.freq_hz.size == 0:
+        raise ValueError(f"{frf_path}: the fitter found no elastic mode above 20 Hz")
+    progress(f"{measured.freq_hz.size} elastic modes; ranking the causes ...")
+    susp = getattr(fit, "suspension_freq_hz", None)
+    gain = MIN_GAIN_PCT if min_gain_pct is None else min_gain_pct
+    if not solid:
+        return meta, diagnose(profile, meta, measured, susp, min_gain_pct=gain)
+    from updating.diagnose.solid import diagnose_with_solid
+
+    result, corr = diagnose_with_solid(profile, meta, measured, susp, progress=True,
+                                       min_gain_pct=gain)
+    progress("3D/1D corrections per plane, %: "
+             + "; ".join(" ".join(f"{100 * c:+.2f}" for c in row) for row in corr))
+    return meta, result
+
+
+def check_rig_files(
+    bar_path, frf_path, method: str = "lscf", freq_tol: float | None = None,
+    max_damping: float | None = None, scale_tol: float | None = None,
+    progress: Progress = _quiet,
+):
+    """`batlab check-rig`: a reference bar's test against the bar's model
+    (``updating.diagnose.rig_check.check_rig``); tolerances as fractions, None for the
+    defaults."""
+    from ema.fit import fit_test
+    from updating.diagnose.rig_check import FREQ_TOL, MAX_DAMPING, SCALE_TOL, check_rig
+    from updating.model.bar import read_bar_json
+
+    bar = read_bar_json(bar_path)
+    test = read_frf(frf_path)
+    progress(f"fitting the modes of {frf_path} ...")
+    fit = fit_test(test, method=method)
+    measured = from_fit(fit, sensor_x_m(test))
+    if measured.freq_hz.size == 0:
+        raise ValueError(f"{frf_path}: the fitter found no elastic mode above 20 Hz")
+    ml = getattr(fit, "mass_line", None)
+    ml_dp = None
+    if ml is not None and np.size(ml) and fit.driving_frf is not None:
+        ml_dp = float(np.real(np.asarray(ml)[fit.driving_frf]))
+    return check_rig(
+        bar, measured, ml_dp if ml_dp and ml_dp > 0 else None,
+        freq_tol=FREQ_TOL if freq_tol is None else freq_tol,
+        max_damping=MAX_DAMPING if max_damping is None else max_damping,
+        scale_tol=SCALE_TOL if scale_tol is None else scale_tol)
 
 
 def inspect_modes(
@@ -297,7 +374,7 @@ def prepare_registration(
     record = reg.BatRecord(
         serial=meta.serial, profile_x_m=profile.x_m.tolist(),
         profile_diameter_m=profile.diameter_m.tolist(), meta=meta.extra, species=meta.species,
-        reference=diagnosis.reference.to_dict(), modes=modes_to_dict(baseline.modes))
+        reference=diagnosis.reference.to_dict(), modes=reg.encode_modes(baseline.modes))
     return Registration(record, baseline, diagnosis)
 
 
@@ -308,7 +385,7 @@ def register_files(
     """Register a bat: fit, calibrate, store with a copy of the baseline file."""
     if not replace:  # fail fast, before the fit (add_bat checks again, under the lock)
         _, meta = read_bat_files(profile_path, meta_path)
-        if conn.execute("SELECT 1 FROM bats WHERE serial = ?", (meta.serial,)).fetchone():
+        if reg.has_bat(conn, meta.serial):
             raise ValueError(f"bat {meta.serial!r} is already registered (use --replace)")
     done = prepare_registration(profile_path, meta_path, baseline_path, serial, progress)
     content = Path(baseline_path).read_bytes()
@@ -332,7 +409,8 @@ def inspect_files(
     retest = fit_file(Path(retest_path).name, re_test, meta.weight_kg, order, progress)
     progress("inspecting the re-test against the reference")
     verdict = inspect_modes(profile, reference, baseline.modes, retest.modes, false_alarm)
-    return InspectionResult(meta.serial, profile, reference, baseline, retest, verdict)
+    return InspectionResult(meta.serial, profile, reference, baseline, retest, verdict,
+                            None, meta.weight_kg)
 
 
 def inspect_registered(
@@ -348,8 +426,11 @@ def inspect_registered(
     bat = reg.get_bat(conn, serial)
     content = reg.baseline_file(conn, bat)
     base_test = frf_from_bytes(content, bat.baseline_name)
-    re_test = read_frf(retest_path)
-    base_modes = modes_from_dict(bat.modes)
+    if not Path(retest_path).is_file():
+        raise ValueError(f"{retest_path}: no such file")
+    retest_content = Path(retest_path).read_bytes()
+    re_test = frf_from_bytes(retest_content, Path(retest_path).name, str(retest_path))
+    base_modes = reg.decode_modes(bat.modes)
     order = match_points(base_modes.x_m, point_positions_m(re_test), str(retest_path))
     profile = make_profile(bat.profile_x_m, bat.profile_diameter_m, f"registry bat {serial}")
     weight = bat.meta.get("weight_lb")
@@ -362,16 +443,144 @@ def inspect_registered(
     reference = BatReference.from_dict(bat.reference)
     progress("inspecting the re-test against the registered reference")
     verdict = inspect_modes(profile, reference, base_modes, retest.modes, false_alarm)
-    return InspectionResult(serial, profile, reference, baseline, retest, verdict)
+    return InspectionResult(serial, profile, reference, baseline, retest, verdict,
+                            bat.reference_seq, weight_kg, retest_content)
 
 
 def store_inspection(
-    conn: sqlite3.Connection, result: InspectionResult, retest_path,
-    report_path: str | None = None,
+    conn: sqlite3.Connection, result: InspectionResult, retest_path, false_alarm: float = 0.01,
 ) -> reg.Inspection:
-    """Record an inspection of a registered bat."""
-    bat = reg.get_bat(conn, result.serial)
+    """Record an inspection of a registered bat: its verdict, a copy of the re-test file, the
+    registration it was judged against and the inputs its report needs."""
+    path = Path(retest_path)
+    content = result.retest_content if result.retest_content is not None else \
+        path.read_bytes()
     return reg.add_inspection(
-        conn, result.serial, verdict_record(result.serial, result.verdict),
-        Path(retest_path).name, reg.sha256_bytes(Path(retest_path).read_bytes()),
-        bat.baseline_sha256, report_path)
+        conn, result.serial, verdict_record(result.serial, result.verdict), path.name,
+        content, reference_seq=result.reference_seq,
+        inputs={"false_alarm": float(false_alarm), "batlab_version": __version__})
+
+
+def provenance(
+    conn: sqlite3.Connection | None = None, stored: reg.Inspection | None = None,
+    baseline_sha256: str | None = None, retest_sha256: str | None = None,
+) -> dict:
+    """The facts a report prints to be verified: file hashes, and for a stored inspection its
+    number, time and custody records (the verdict's and the registration's)."""
+    out = {"batlab_version": __version__, "baseline_sha256": baseline_sha256,
+           "retest_sha256": retest_sha256}
+    if stored is not None and conn is not None:
+        out.update({"inspection_id": stored.id, "inspected_at": stored.inspected_at,
+                    "baseline_sha256": stored.baseline_sha256,
+                    "retest_sha256": stored.retest_sha256,
+                    "verdict_record": stored.record_seq, "verdict_record_sha256":
+                    stored.record_sha256,
+                    "verdict_sha256": reg.custody_record(conn, stored.record_seq).content_sha256})
+        if stored.reference_seq is not None:
+            ref = reg.custody_record(conn, stored.reference_seq)
+            out.update({"reference_record": ref.seq, "reference_record_sha256":
+                        ref.record_sha256})
+        if stored.inputs:
+            out["batlab_version"] = stored.inputs.get("batlab_version", __version__)
+    return out
+
+
+def report_inputs(result: InspectionResult, meta: dict, prov: dict) -> ReportInputs:
+    """A fresh inspection's report inputs (the verdict as it is stored)."""
+    return ReportInputs(result.serial, result.profile, result.reference, result.baseline,
+                        result.retest, verdict_record(result.serial, result.verdict), meta, prov)
+
+
+def file_sha256(path) -> str:
+    return reg.sha256_bytes(Path(path).read_bytes())
+
+
+def read_meta_dict(path) -> dict:
+    """meta.json as read (for the report's provenance)."""
+    return dict(read_meta(path).extra)
+
+
+def stored_bat(conn: sqlite3.Connection, stored: reg.Inspection) -> reg.BatRecord:
+    """The registration a stored inspection was judged against."""
+    return reg.bat_as_registered(conn, stored.reference_seq)
+
+
+def note_report(conn: sqlite3.Connection, stored: reg.Inspection, path: str) -> None:
+    """Record where the inspection's report was written."""
+    reg.set_report_path(conn, stored.id, path)
+
+
+def stored_report_inputs(
+    conn: sqlite3.Connection, serial: str, inspection_id: int | None = None,
+    progress: Progress = _quiet,
+) -> ReportInputs:
+    """Rebuild a past inspection's report inputs from the registry alone: the verdict as
+    stored, the registration it was judged against (custody record, also after
+    ``register --replace``), and both test files read back (checksums verified) and refitted
+    for the figures. ``inspection_id`` None: the bat's latest inspection."""
+    rows = reg.history(conn, serial)
+    if not rows:
+        raise ValueError(f"bat {serial!r} has no inspection in the registry")
+    if inspection_id is None:
+        stored = rows[-1]
+    else:
+        match = [r for r in rows if r.id == inspection_id]
+        if not match:
+            raise ValueError(f"inspection #{inspection_id} is not one of bat {serial!r}'s "
+                             f"(its inspections: {', '.join(str(r.id) for r in rows)})")
+        stored = match[0]
+    if stored.reference_seq is None:
+        raise ValueError(f"inspection #{stored.id} of {serial!r} predates registry schema 3: "
+                         "its re-test file and model were not kept, its report cannot be "
+                         "rebuilt")
+    bat = reg.bat_as_registered(conn, stored.reference_seq)
+    base_name, base_bytes = reg.stored_file(conn, stored.baseline_sha256,
+                                            f"inspection #{stored.id} baseline")
+    re_name, re_bytes = reg.stored_file(conn, stored.retest_sha256,
+                                        f"inspection #{stored.id} re-test")
+    base_test = frf_from_bytes(base_bytes, bat.baseline_name or base_name)
+    re_test = frf_from_bytes(re_bytes, stored.retest_name or re_name)
+    base_modes = reg.decode_modes(bat.modes)
+    order = match_points(base_modes.x_m, point_positions_m(re_test), stored.retest_name)
+    weight = bat.meta.get("weight_lb")
+    weight_kg = None if weight is None else float(weight) * LB_TO_KG
+    base_fit = fit_file(bat.baseline_name, base_test, weight_kg, None, progress).fit
+    retest = fit_file(stored.retest_name, re_test, weight_kg, order, progress)
+    profile = make_profile(bat.profile_x_m, bat.profile_diameter_m, f"registry bat {serial}")
+    return ReportInputs(
+        serial, profile, BatReference.from_dict(bat.reference),
+        FittedTest(bat.baseline_name, base_test, base_fit, base_modes), retest,
+        stored.verdict, bat.meta, provenance(conn, stored=stored))
+
+
+def history_table(conn: sqlite3.Connection, serial: str | None = None):
+    """Every inspection (of one bat) as a pandas DataFrame, one row each, lab units: what
+    `batlab export` writes."""
+    import pandas as pd
+
+    from batlab.formatting import p_value
+
+    species = {b.serial: b.species for b in reg.list_bats(conn)}
+    rows = []
+    for i in reg.all_inspections(conn, serial):
+        v = i.verdict
+        region = v.get("region_in") or [None, None]
+        rows.append({
+            "serial": i.serial, "species": species.get(i.serial, ""), "inspection": i.id,
+            "inspected_at": i.inspected_at, "status": i.status, "altered": i.altered,
+            "region_start_in": region[0], "region_end_in": region[1],
+            "core_diameter_in": v.get("core_diameter_in"),
+            "fill_density_ratio": v.get("fill_density_ratio"),
+            "p_value": p_value(v),
+            "false_alarm_rate": v.get("false_alarm_rate"),
+            "reasons": "; ".join(v.get("reasons") or []),
+            "retest_file": i.retest_name, "retest_sha256": i.retest_sha256,
+            "baseline_sha256": i.baseline_sha256, "registration_record": i.reference_seq,
+            "verdict_record": i.record_seq, "verdict_record_sha256": i.record_sha256,
+            "report_path": i.report_path})
+    columns = ["serial", "species", "inspection", "inspected_at", "status", "altered",
+               "region_start_in", "region_end_in", "core_diameter_in", "fill_density_ratio",
+               "p_value", "false_alarm_rate", "reasons", "retest_file", "retest_sha256",
+               "baseline_sha256", "registration_record", "verdict_record",
+               "verdict_record_sha256", "report_path"]
+    return pd.DataFrame(rows, columns=columns)

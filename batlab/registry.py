@@ -24,6 +24,8 @@ from dataclasses import dataclass
 from datetime import datetime, timezone
 from pathlib import Path
 
+from batlab.formatting import status_of
+
 BUSY_TIMEOUT_S = 60.0
 
 
@@ -144,7 +146,49 @@ def _migrate_2(conn: sqlite3.Connection) -> None:
              for i, (x, d) in enumerate(zip(prof["x_m"], prof["diameter_m"], strict=True))])
 
 
-MIGRATIONS: dict[int, Callable[[sqlite3.Connection], None]] = {1: _migrate_1, 2: _migrate_2}
+def _canonical(obj) -> str:
+    """Canonical JSON (sorted keys, no spaces): the bytes a custody record hashes."""
+    return json.dumps(obj, sort_keys=True, separators=(",", ":"), allow_nan=False)
+
+
+def _migrate_3(conn: sqlite3.Connection) -> None:
+    """Version 3: every judged file kept (``baseline_files`` becomes ``files``: re-tests too),
+    inspections name the reference record they were judged against, their report inputs and
+    their status, and the hash-chained custody log (``custody``) covering every stored file,
+    reference and verdict. Existing content is chained in the order files, bats, inspections;
+    an inspection made before version 3 has no re-test file and no reference record."""
+    _script(conn, """
+        ALTER TABLE baseline_files RENAME TO files;
+        ALTER TABLE inspections ADD COLUMN status TEXT;
+        ALTER TABLE inspections ADD COLUMN reference_seq INTEGER;
+        ALTER TABLE inspections ADD COLUMN inputs_json TEXT;
+        ALTER TABLE inspections ADD COLUMN record_seq INTEGER;
+        CREATE TABLE custody (
+            seq INTEGER PRIMARY KEY,
+            kind TEXT NOT NULL CHECK (kind IN ('file', 'reference', 'verdict')),
+            subject TEXT NOT NULL,
+            payload TEXT,
+            content_sha256 TEXT NOT NULL,
+            prev_sha256 TEXT NOT NULL,
+            record_sha256 TEXT NOT NULL,
+            recorded_at TEXT NOT NULL
+        );
+        CREATE INDEX custody_by_subject ON custody (kind, subject)
+    """)
+    for sha, name in conn.execute("SELECT sha256, name FROM files ORDER BY rowid").fetchall():
+        _append_record(conn, "file", sha, sha, _canonical({"name": name}))
+    for (serial,) in conn.execute("SELECT serial FROM bats ORDER BY serial").fetchall():
+        _append_record(conn, "reference", serial, None, _canonical(_bat_payload(conn, serial)))
+    for row in conn.execute("SELECT id, verdict_json FROM inspections ORDER BY id").fetchall():
+        conn.execute("UPDATE inspections SET status = ? WHERE id = ?",
+                     (status_of(json.loads(row[1])), row[0]))
+        seq = _append_record(conn, "verdict", str(row[0]), None,
+                             _canonical(_inspection_payload(conn, row[0])))
+        conn.execute("UPDATE inspections SET record_seq = ? WHERE id = ?", (seq, row[0]))
+
+
+MIGRATIONS: dict[int, Callable[[sqlite3.Connection], None]] = {
+    1: _migrate_1, 2: _migrate_2, 3: _migrate_3}
 SCHEMA_VERSION = max(MIGRATIONS)
 
 
@@ -186,16 +230,35 @@ def migrate(conn: sqlite3.Connection, target: int = SCHEMA_VERSION) -> int:
 # Connections and transactions
 
 
+def _writable(path: Path) -> bool:
+    """Whether this process can write the registry file and its directory (WAL needs both)."""
+    return os.access(path, os.W_OK) and os.access(path.parent, os.W_OK)
+
+
 def connect(
     path: str | os.PathLike, target: int = SCHEMA_VERSION, create: bool = True,
+    readonly: bool = False,
 ) -> sqlite3.Connection:
-    """Open the registry at ``path`` (creating it if ``create``) and migrate it to ``target``."""
+    """Open the registry at ``path`` (creating it if ``create``) and migrate it to ``target``.
+
+    ``readonly`` (or a file this process may not write) opens it read-only: nothing is
+    migrated, so an older schema is refused with a message saying what to do. Every failure is
+    a ValueError naming the file.
+    """
     path = Path(path)
     if path.exists() and path.is_dir():
         raise ValueError(f"{path}: registry path is a directory")
     if not create and not path.exists():
         raise ValueError(f"{path}: no registry there (register a bat first, or give --db)")
-    path.parent.mkdir(parents=True, exist_ok=True)
+    if path.exists() and not os.access(path, os.R_OK):
+        raise ValueError(f"{path}: registry not readable (permission denied)")
+    if readonly or (path.exists() and not _writable(path)):
+        return _connect_readonly(path)
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise ValueError(f"{path}: cannot create the registry's directory ({exc.strerror})") \
+            from None
     try:
         conn = sqlite3.connect(path, timeout=BUSY_TIMEOUT_S, isolation_level=None)
         conn.execute(f"PRAGMA busy_timeout = {int(BUSY_TIMEOUT_S * 1000)}")
@@ -208,27 +271,251 @@ def connect(
     return conn
 
 
+def _connect_readonly(path: Path) -> sqlite3.Connection:
+    """A read-only connection: ``mode=ro``, else (a directory where SQLite cannot create the
+    WAL index) ``immutable=1``; the schema must already be this batlab's."""
+    last = None
+    for flags in ("mode=ro", "mode=ro&immutable=1"):
+        try:
+            conn = sqlite3.connect(f"{path.resolve().as_uri()}?{flags}", uri=True,
+                                   timeout=BUSY_TIMEOUT_S, isolation_level=None)
+            version = schema_version(conn)
+            break
+        except sqlite3.DatabaseError as exc:
+            last = exc
+    else:
+        raise ValueError(f"{path}: not a usable batlab registry ({last})")
+    if version != SCHEMA_VERSION:
+        conn.close()
+        raise ValueError(f"{path}: read-only registry at schema version {version}, this batlab "
+                         f"reads {SCHEMA_VERSION} (open it once with write access to migrate)")
+    return conn
+
+
 @contextmanager
 def transaction(conn: sqlite3.Connection) -> Iterator[sqlite3.Connection]:
     """``BEGIN IMMEDIATE`` ... ``COMMIT``; rolled back on any exception (or never committed
-    if the process dies)."""
-    conn.execute("BEGIN IMMEDIATE")
+    if the process dies). A read-only registry is a one-line ValueError."""
     try:
-        yield conn
-    except BaseException:
-        conn.execute("ROLLBACK")
+        conn.execute("BEGIN IMMEDIATE")
+        try:
+            yield conn
+        except BaseException:
+            conn.execute("ROLLBACK")
+            raise
+        conn.execute("COMMIT")
+    except sqlite3.OperationalError as exc:
+        if "readonly" in str(exc) or "read-only" in str(exc):
+            raise ValueError(f"registry is read-only ({exc}): nothing can be stored in it") \
+                from None
         raise
-    conn.execute("COMMIT")
 
 
 @contextmanager
-def open_registry(path: str | os.PathLike, create: bool = True) -> Iterator[sqlite3.Connection]:
+def open_registry(
+    path: str | os.PathLike, create: bool = True, readonly: bool = False,
+) -> Iterator[sqlite3.Connection]:
     """``connect`` as a context manager that closes the connection."""
-    conn = connect(path, create=create)
+    conn = connect(path, create=create, readonly=readonly)
     try:
         yield conn
     finally:
         conn.close()
+
+
+# ---------------------------------------------------------------------------------------------
+# The custody chain
+
+GENESIS_SHA256 = "0" * 64
+
+
+def record_hash(seq: int, kind: str, subject: str, content_sha256: str, prev_sha256: str,
+                recorded_at: str) -> str:
+    """sha256 of ``seq|kind|subject|content_sha256|prev_sha256|recorded_at`` (newline-joined):
+    a record's hash covers its content's hash and the previous record's hash, so changing any
+    record changes every later record's expected hash."""
+    text = "\n".join((str(seq), kind, subject, content_sha256, prev_sha256, recorded_at))
+    return sha256_bytes(text.encode("utf-8"))
+
+
+def _append_record(conn: sqlite3.Connection, kind: str, subject: str,
+                   content_sha256: str | None, payload: str | None) -> int:
+    """Append a custody record (inside the caller's transaction); returns its sequence number.
+    ``content_sha256`` defaults to the hash of ``payload``."""
+    if content_sha256 is None:
+        content_sha256 = sha256_bytes(payload.encode("utf-8"))
+    last = conn.execute("SELECT seq, record_sha256 FROM custody ORDER BY seq DESC LIMIT 1"
+                        ).fetchone()
+    seq, prev = (1, GENESIS_SHA256) if last is None else (last[0] + 1, last[1])
+    stamp = now_utc()
+    conn.execute("INSERT INTO custody (seq, kind, subject, payload, content_sha256, prev_sha256, "
+                 "record_sha256, recorded_at) VALUES (?, ?, ?, ?, ?, ?, ?, ?)",
+                 (seq, kind, subject, payload, content_sha256, prev,
+                  record_hash(seq, kind, subject, content_sha256, prev, stamp), stamp))
+    return seq
+
+
+def _bat_payload(conn: sqlite3.Connection, serial: str) -> dict:
+    """What a reference record holds: the bat's row and profile as stored now."""
+    row = conn.execute("SELECT serial, species, meta_json, reference_json, modes_json, "
+                       "baseline_sha256, registered_at FROM bats WHERE serial = ?",
+                       (serial,)).fetchone()
+    stations = conn.execute("SELECT x_m, diameter_m FROM stations WHERE serial = ? ORDER BY idx",
+                            (serial,)).fetchall()
+    name = conn.execute("SELECT name FROM files WHERE sha256 = ?", (row[5],)).fetchone()
+    return {"serial": row[0], "species": row[1], "meta": json.loads(row[2]),
+            "reference": json.loads(row[3]), "modes": json.loads(row[4]),
+            "baseline_sha256": row[5], "baseline_name": name[0] if name else "",
+            "registered_at": row[6], "profile_x_m": [s[0] for s in stations],
+            "profile_diameter_m": [s[1] for s in stations]}
+
+
+def _inspection_payload(conn: sqlite3.Connection, inspection_id: int) -> dict:
+    """What a verdict record holds: the inspection's row as stored now (but ``report_path``,
+    a note of where a copy of the report was written, and ``record_seq``)."""
+    row = conn.execute("SELECT id, serial, status, verdict_json, retest_name, retest_sha256, "
+                       "baseline_sha256, reference_seq, inputs_json, inspected_at "
+                       "FROM inspections WHERE id = ?", (inspection_id,)).fetchone()
+    return {"id": row[0], "serial": row[1], "status": row[2], "verdict": json.loads(row[3]),
+            "retest_name": row[4], "retest_sha256": row[5], "baseline_sha256": row[6],
+            "reference_seq": row[7], "inputs": None if row[8] is None else json.loads(row[8]),
+            "inspected_at": row[9]}
+
+
+@dataclass(frozen=True)
+class CustodyRecord:
+    seq: int
+    kind: str
+    subject: str
+    content_sha256: str
+    prev_sha256: str
+    record_sha256: str
+    recorded_at: str
+
+
+def custody_record(conn: sqlite3.Connection, seq: int) -> CustodyRecord:
+    row = conn.execute("SELECT seq, kind, subject, content_sha256, prev_sha256, record_sha256, "
+                       "recorded_at FROM custody WHERE seq = ?", (seq,)).fetchone()
+    if row is None:
+        raise ValueError(f"custody record #{seq} not in the registry")
+    return CustodyRecord(*row)
+
+
+def chain_head(conn: sqlite3.Connection) -> CustodyRecord | None:
+    """The last custody record (its hash seals everything before it)."""
+    row = conn.execute("SELECT max(seq) FROM custody").fetchone()
+    return None if row[0] is None else custody_record(conn, int(row[0]))
+
+
+@dataclass(frozen=True)
+class CheckResult:
+    """``registry check``: ``problems`` is empty when the registry is intact; ``first_changed``
+    is the first custody record that no longer verifies (None if none)."""
+
+    n_records: int
+    n_files: int
+    problems: list[str]
+    notes: list[str]
+    first_changed: int | None
+    head_sha256: str | None
+
+    @property
+    def ok(self) -> bool:
+        return not self.problems
+
+
+def check(conn: sqlite3.Connection) -> CheckResult:
+    """Verify the registry: SQLite's integrity and foreign keys, every stored file against its
+    SHA-256, every file an inspection or bat names is present, and the custody chain (each
+    record's hash, its link to the previous one, its content hash, and the live bat and
+    inspection rows against their latest records). Names the first changed record; a
+    registry too damaged to read is one problem naming SQLite's complaint."""
+    try:
+        return _check(conn)
+    except sqlite3.DatabaseError as exc:
+        try:
+            integrity = "; ".join(r[0] for r in conn.execute("PRAGMA integrity_check")
+                                  .fetchall()[:3])
+        except sqlite3.DatabaseError:
+            integrity = "integrity check failed too"
+        return CheckResult(0, 0, [f"registry damaged, unreadable ({exc}): {integrity}"], [],
+                           None, None)
+
+
+def _check(conn: sqlite3.Connection) -> CheckResult:
+    problems: list[str] = []
+    notes: list[str] = []
+    first: int | None = None
+    integrity = conn.execute("PRAGMA integrity_check").fetchall()
+    if [r[0] for r in integrity] != ["ok"]:
+        problems.append("SQLite integrity check: " + "; ".join(r[0] for r in integrity[:3]))
+    if conn.execute("PRAGMA foreign_key_check").fetchall():
+        problems.append("foreign keys: rows refer to missing rows")
+    files = {}
+    for sha, name, content in conn.execute("SELECT sha256, name, content FROM files"):
+        files[sha] = name
+        if sha256_bytes(bytes(content)) != sha:
+            problems.append(f"file {name} ({sha[:12]}): content fails its SHA-256")
+    for serial, sha in conn.execute("SELECT serial, baseline_sha256 FROM bats"):
+        if sha not in files:
+            problems.append(f"bat {serial!r}: baseline file {sha[:12]} missing")
+    for iid, sha, bsha, ref in conn.execute(
+            "SELECT id, retest_sha256, baseline_sha256, reference_seq FROM inspections"):
+        if sha not in files:
+            if ref is None:
+                notes.append(f"inspection #{iid}: re-test file not kept (inspected before "
+                             "schema 3)")
+            else:
+                problems.append(f"inspection #{iid}: re-test file {sha[:12]} missing")
+        if bsha not in files:
+            problems.append(f"inspection #{iid}: baseline file {bsha[:12]} missing")
+
+    prev = GENESIS_SHA256
+    latest_ref: dict[str, tuple[int, str]] = {}
+    verdicts: dict[str, tuple[int, str]] = {}
+    rows = conn.execute("SELECT seq, kind, subject, payload, content_sha256, prev_sha256, "
+                        "record_sha256, recorded_at FROM custody ORDER BY seq").fetchall()
+    expect_seq = 1
+    for seq, kind, subject, payload, content, prev_rec, rec, stamp in rows:
+        why = None
+        if seq != expect_seq:
+            why = f"records #{expect_seq}..#{seq - 1} removed"
+        elif prev_rec != prev:
+            why = "its link to the previous record is broken"
+        elif rec != record_hash(seq, kind, subject, content, prev_rec, stamp):
+            why = "its hash does not match its fields"
+        elif kind != "file" and sha256_bytes((payload or "").encode("utf-8")) != content:
+            why = "its content does not match its content hash"
+        elif kind == "file" and subject != content:
+            why = "its file hash was changed"
+        if why and first is None:
+            first = seq
+            problems.append(f"custody record #{seq} ({kind} {subject}) changed: {why}")
+        prev, expect_seq = rec, seq + 1
+        if kind == "reference":
+            latest_ref[subject] = (seq, payload)
+        elif kind == "verdict":
+            verdicts[subject] = (seq, payload)
+        elif kind == "file" and subject not in files:
+            problems.append(f"custody record #{seq}: file {subject[:12]} missing from the "
+                            "registry")
+    for (serial,) in conn.execute("SELECT serial FROM bats ORDER BY serial").fetchall():
+        have = latest_ref.get(serial)
+        if have is None:
+            problems.append(f"bat {serial!r}: no custody record")
+        elif _canonical(_bat_payload(conn, serial)) != have[1]:
+            problems.append(f"bat {serial!r}: stored bat differs from custody record #{have[0]}")
+            first = have[0] if first is None else min(first, have[0])
+    for (iid,) in conn.execute("SELECT id FROM inspections ORDER BY id").fetchall():
+        have = verdicts.get(str(iid))
+        if have is None:
+            problems.append(f"inspection #{iid}: no custody record")
+        elif _canonical(_inspection_payload(conn, iid)) != have[1]:
+            problems.append(f"inspection #{iid}: stored verdict differs from custody record "
+                            f"#{have[0]}")
+            first = have[0] if first is None else min(first, have[0])
+    return CheckResult(len(rows), len(files), problems, notes, first,
+                       None if not rows else rows[-1][6])
 
 
 # ---------------------------------------------------------------------------------------------
@@ -250,6 +537,7 @@ class BatRecord:
         baseline_name: the baseline file's original name (its extension says its format).
         baseline_sha256: checksum of the stored baseline file.
         registered_at: UTC time stamp.
+        reference_seq: the custody record of this registration (0 before it is stored).
     """
 
     serial: str
@@ -262,6 +550,7 @@ class BatRecord:
     baseline_name: str = ""
     baseline_sha256: str = ""
     registered_at: str = ""
+    reference_seq: int = 0
 
 
 @dataclass(frozen=True)
@@ -272,19 +561,73 @@ class BatSummary:
     n_inspections: int
     last_inspected_at: str | None
     last_altered: bool | None
+    last_status: str | None = None
 
 
 @dataclass(frozen=True)
 class Inspection:
+    """A stored inspection. ``altered`` is None when the verdict was inconclusive;
+    ``reference_seq`` the custody record of the registration it was judged against (None
+    before schema 3); ``record_seq``/``record_sha256`` its own custody record."""
+
     id: int
     serial: str
-    altered: bool
+    altered: bool | None
+    status: str
     verdict: dict
     retest_name: str
     retest_sha256: str
     baseline_sha256: str
     report_path: str | None
     inspected_at: str
+    reference_seq: int | None = None
+    inputs: dict | None = None
+    record_seq: int | None = None
+    record_sha256: str | None = None
+
+
+def encode_modes(m) -> dict:
+    """Fitted modes (``updating.correlate.measured.MeasuredModes``) as the registry stores them
+    (``modes_json``): plain lists, SI."""
+    import numpy as np
+
+    return {"freq_hz": np.asarray(m.freq_hz).tolist(),
+            "damping_ratio": np.asarray(m.damping_ratio).tolist(),
+            "shapes": np.asarray(m.shapes).tolist(), "x_m": np.asarray(m.x_m).tolist(),
+            "sensor_x_m": float(m.sensor_x_m),
+            "freq_std_hz": None if m.freq_std_hz is None else np.asarray(m.freq_std_hz).tolist()}
+
+
+def decode_modes(d: dict):
+    """The stored modes back as ``MeasuredModes`` (shapes points x modes)."""
+    import numpy as np
+
+    from updating.correlate.measured import MeasuredModes
+
+    std = d.get("freq_std_hz")
+    return MeasuredModes(np.asarray(d["freq_hz"], float),
+                         np.asarray(d["shapes"], float).reshape(len(d["x_m"]), -1),
+                         np.asarray(d["x_m"], float), np.asarray(d["damping_ratio"], float),
+                         float(d["sensor_x_m"]), None if std is None else np.asarray(std, float))
+
+
+def has_file(conn: sqlite3.Connection, sha256: str) -> bool:
+    return conn.execute("SELECT 1 FROM files WHERE sha256 = ?", (sha256,)).fetchone() is not None
+
+
+def has_bat(conn: sqlite3.Connection, serial: str) -> bool:
+    return conn.execute("SELECT 1 FROM bats WHERE serial = ?", (serial,)).fetchone() is not None
+
+
+def store_file(conn: sqlite3.Connection, name: str, content: bytes) -> str:
+    """Keep a test file (inside the caller's transaction), once per content: returns its
+    SHA-256. A new file gets a custody record."""
+    digest = sha256_bytes(content)
+    cur = conn.execute("INSERT OR IGNORE INTO files (sha256, name, size, content) "
+                       "VALUES (?, ?, ?, ?)", (digest, name, len(content), content))
+    if cur.rowcount:
+        _append_record(conn, "file", digest, digest, _canonical({"name": name}))
+    return digest
 
 
 def add_bat(
@@ -292,17 +635,16 @@ def add_bat(
     replace: bool = False,
 ) -> BatRecord:
     """Store a bat with a copy of its baseline file; ValueError if the serial exists and not
-    ``replace``. Replacing keeps the bat's inspections (each names its own baseline)."""
+    ``replace``. Replacing keeps the bat's inspections, each naming the registration (custody
+    record) it was judged against, and every file ever stored."""
     if not bat.serial.strip():
         raise ValueError("serial number is empty")
-    digest = sha256_bytes(baseline)
     stamp = now_utc()
     with transaction(conn):
-        exists = conn.execute("SELECT 1 FROM bats WHERE serial = ?", (bat.serial,)).fetchone()
+        exists = has_bat(conn, bat.serial)
         if exists and not replace:
             raise ValueError(f"bat {bat.serial!r} is already registered (use --replace)")
-        conn.execute("INSERT OR IGNORE INTO baseline_files (sha256, name, size, content) "
-                     "VALUES (?, ?, ?, ?)", (digest, baseline_name, len(baseline), baseline))
+        digest = store_file(conn, baseline_name, baseline)
         row = (bat.species, json.dumps(bat.meta), json.dumps(bat.reference),
                json.dumps(bat.modes), digest, stamp, bat.serial)
         if exists:
@@ -318,83 +660,154 @@ def add_bat(
             "INSERT INTO stations (serial, idx, x_m, diameter_m) VALUES (?, ?, ?, ?)",
             [(bat.serial, i, float(x), float(d)) for i, (x, d) in
              enumerate(zip(bat.profile_x_m, bat.profile_diameter_m, strict=True))])
-        conn.execute("DELETE FROM baseline_files WHERE sha256 NOT IN "
-                     "(SELECT baseline_sha256 FROM bats) AND sha256 NOT IN "
-                     "(SELECT baseline_sha256 FROM inspections)")
+        payload = _bat_payload(conn, bat.serial)
+        _append_record(conn, "reference", bat.serial, None, _canonical(payload))
     return get_bat(conn, bat.serial)
 
 
-def get_bat(conn: sqlite3.Connection, serial: str) -> BatRecord:
-    """The registered bat; ValueError naming the serial if it is unknown."""
-    row = conn.execute(
-        "SELECT b.serial, b.meta_json, b.species, b.reference_json, b.modes_json, f.name, "
-        "b.baseline_sha256, b.registered_at FROM bats b "
-        "JOIN baseline_files f ON f.sha256 = b.baseline_sha256 WHERE b.serial = ?",
-        (serial,)).fetchone()
-    if row is None:
-        raise ValueError(f"unknown serial {serial!r}: no such bat in the registry")
-    stations = conn.execute("SELECT x_m, diameter_m FROM stations WHERE serial = ? ORDER BY idx",
-                            (serial,)).fetchall()
+def _bat_from_payload(p: dict, seq: int) -> BatRecord:
     return BatRecord(
-        serial=row[0], profile_x_m=[s[0] for s in stations],
-        profile_diameter_m=[s[1] for s in stations], meta=json.loads(row[1]), species=row[2],
-        reference=json.loads(row[3]), modes=json.loads(row[4]), baseline_name=row[5],
-        baseline_sha256=row[6], registered_at=row[7])
+        serial=p["serial"], profile_x_m=p["profile_x_m"],
+        profile_diameter_m=p["profile_diameter_m"], meta=p["meta"], species=p["species"],
+        reference=p["reference"], modes=p["modes"], baseline_name=p["baseline_name"],
+        baseline_sha256=p["baseline_sha256"], registered_at=p["registered_at"],
+        reference_seq=seq)
+
+
+def get_bat(conn: sqlite3.Connection, serial: str) -> BatRecord:
+    """The registered bat as it is now; ValueError naming the serial if it is unknown."""
+    if not has_bat(conn, serial):
+        raise ValueError(f"unknown serial {serial!r}: no such bat in the registry")
+    seq = conn.execute("SELECT max(seq) FROM custody WHERE kind = 'reference' AND subject = ?",
+                       (serial,)).fetchone()[0]
+    return _bat_from_payload(_bat_payload(conn, serial), int(seq or 0))
+
+
+def bat_as_registered(conn: sqlite3.Connection, reference_seq: int) -> BatRecord:
+    """The bat as registration record ``reference_seq`` stored it (after a ``--replace`` the
+    bat's current row differs; this is what an earlier inspection was judged against). The
+    record's content is checked against its hash."""
+    row = conn.execute("SELECT payload, content_sha256 FROM custody WHERE seq = ? AND "
+                       "kind = 'reference'", (reference_seq,)).fetchone()
+    if row is None:
+        raise ValueError(f"registration record #{reference_seq} not in the registry")
+    if sha256_bytes(row[0].encode("utf-8")) != row[1]:
+        raise ValueError(f"registration record #{reference_seq} fails its SHA-256 checksum "
+                         "(registry tampered with or damaged; run `batlab registry check`)")
+    return _bat_from_payload(json.loads(row[0]), reference_seq)
+
+
+def stored_file(conn: sqlite3.Connection, sha256: str, what: str) -> tuple[str, bytes]:
+    """(name, bytes) of a stored file after checking its SHA-256; ValueError naming ``what``
+    when it is missing or changed."""
+    row = conn.execute("SELECT name, content FROM files WHERE sha256 = ?", (sha256,)).fetchone()
+    if row is None:
+        raise ValueError(f"{what}: file {sha256[:12]} missing from the registry")
+    content = bytes(row[1])
+    if sha256_bytes(content) != sha256:
+        raise ValueError(f"{what}: stored {row[0]} fails its SHA-256 checksum (registry "
+                         "tampered with or damaged)")
+    return row[0], content
 
 
 def baseline_file(conn: sqlite3.Connection, bat: BatRecord) -> bytes:
     """The stored baseline file of ``bat``, after checking its SHA-256; ValueError on mismatch."""
-    row = conn.execute("SELECT content FROM baseline_files WHERE sha256 = ?",
-                       (bat.baseline_sha256,)).fetchone()
-    if row is None:
-        raise ValueError(f"bat {bat.serial!r}: baseline file {bat.baseline_sha256[:12]} missing "
-                         "from the registry")
-    content = bytes(row[0])
-    if sha256_bytes(content) != bat.baseline_sha256:
-        raise ValueError(f"bat {bat.serial!r}: stored baseline {bat.baseline_name} fails its "
-                         "SHA-256 checksum (registry tampered with or damaged)")
-    return content
+    return stored_file(conn, bat.baseline_sha256, f"bat {bat.serial!r} baseline")[1]
 
 
 def list_bats(conn: sqlite3.Connection) -> list[BatSummary]:
     """All bats by serial, with their inspection count and latest decision."""
     rows = conn.execute("""
         SELECT b.serial, b.species, b.registered_at, count(i.id), max(i.inspected_at),
-               (SELECT altered FROM inspections j WHERE j.serial = b.serial
+               (SELECT status FROM inspections j WHERE j.serial = b.serial
                 ORDER BY j.inspected_at DESC, j.id DESC LIMIT 1)
         FROM bats b LEFT JOIN inspections i ON i.serial = b.serial
         GROUP BY b.serial ORDER BY b.serial
     """).fetchall()
-    return [BatSummary(r[0], r[1], r[2], int(r[3]), r[4], None if r[5] is None else bool(r[5]))
+    return [BatSummary(r[0], r[1], r[2], int(r[3]), r[4],
+                       None if r[5] in (None, "inconclusive") else r[5] == "altered", r[5])
             for r in rows]
 
 
 def add_inspection(
-    conn: sqlite3.Connection, serial: str, verdict: dict, retest_name: str, retest_sha256: str,
-    baseline_sha256: str, report_path: str | None = None,
+    conn: sqlite3.Connection, serial: str, verdict: dict, retest_name: str, retest: bytes,
+    reference_seq: int | None = None, inputs: dict | None = None,
+    report_path: str | None = None,
 ) -> Inspection:
-    """Store one inspection of a registered bat (``verdict`` holds at least ``altered``)."""
+    """Store one inspection of a registered bat with its re-test file, the registration
+    (custody record ``reference_seq``, default: the bat's current one) it was judged against
+    and the report's other inputs; appends its verdict record to the custody chain.
+    ``verdict`` holds ``status`` or ``altered``."""
     stamp = now_utc()
     with transaction(conn):
-        if not conn.execute("SELECT 1 FROM bats WHERE serial = ?", (serial,)).fetchone():
+        if not has_bat(conn, serial):
             raise ValueError(f"unknown serial {serial!r}: no such bat in the registry")
+        if reference_seq is None:
+            reference_seq = get_bat(conn, serial).reference_seq
+        ref = bat_as_registered(conn, reference_seq)
+        if ref.serial != serial:
+            raise ValueError(f"registration record #{reference_seq} is of bat {ref.serial!r}, "
+                             f"not {serial!r}")
+        digest = store_file(conn, retest_name, retest)
+        status = status_of(verdict)
+        altered = None if status == "inconclusive" else status == "altered"
         cur = conn.execute(
-            "INSERT INTO inspections (serial, altered, verdict_json, retest_name, retest_sha256, "
-            "baseline_sha256, report_path, inspected_at) VALUES (?, ?, ?, ?, ?, ?, ?, ?)",
-            (serial, int(bool(verdict["altered"])), json.dumps(verdict), retest_name,
-             retest_sha256, baseline_sha256, report_path, stamp))
+            "INSERT INTO inspections (serial, altered, status, verdict_json, retest_name, "
+            "retest_sha256, baseline_sha256, reference_seq, inputs_json, report_path, "
+            "inspected_at) VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)",
+            (serial, int(bool(altered)), status, json.dumps(verdict), retest_name, digest,
+             ref.baseline_sha256, reference_seq, None if inputs is None else json.dumps(inputs),
+             report_path, stamp))
         new_id = int(cur.lastrowid)
-    return Inspection(new_id, serial, bool(verdict["altered"]), verdict, retest_name,
-                      retest_sha256, baseline_sha256, report_path, stamp)
+        seq = _append_record(conn, "verdict", str(new_id), None,
+                             _canonical(_inspection_payload(conn, new_id)))
+        conn.execute("UPDATE inspections SET record_seq = ? WHERE id = ?", (seq, new_id))
+    return get_inspection(conn, new_id)
+
+
+def set_report_path(conn: sqlite3.Connection, inspection_id: int, report_path: str) -> None:
+    """Note where the inspection's report was written (not part of its custody record)."""
+    with transaction(conn):
+        conn.execute("UPDATE inspections SET report_path = ? WHERE id = ?",
+                     (report_path, inspection_id))
+
+
+_INSPECTION_COLUMNS = ("i.id, i.serial, i.status, i.verdict_json, i.retest_name, "
+                       "i.retest_sha256, i.baseline_sha256, i.report_path, i.inspected_at, "
+                       "i.reference_seq, i.inputs_json, i.record_seq, c.record_sha256")
+
+
+def _inspection(r) -> Inspection:
+    status = r[2] or status_of(json.loads(r[3]))
+    altered = None if status == "inconclusive" else status == "altered"
+    return Inspection(r[0], r[1], altered, status, json.loads(r[3]), r[4], r[5], r[6], r[7],
+                      r[8], r[9], None if r[10] is None else json.loads(r[10]), r[11], r[12])
+
+
+def get_inspection(conn: sqlite3.Connection, inspection_id: int) -> Inspection:
+    row = conn.execute(f"SELECT {_INSPECTION_COLUMNS} FROM inspections i LEFT JOIN custody c "
+                       "ON c.seq = i.record_seq WHERE i.id = ?", (inspection_id,)).fetchone()
+    if row is None:
+        raise ValueError(f"no inspection #{inspection_id} in the registry")
+    return _inspection(row)
 
 
 def history(conn: sqlite3.Connection, serial: str) -> list[Inspection]:
     """The bat's inspections, oldest first; ValueError if the serial is unknown."""
-    if not conn.execute("SELECT 1 FROM bats WHERE serial = ?", (serial,)).fetchone():
+    if not has_bat(conn, serial):
         raise ValueError(f"unknown serial {serial!r}: no such bat in the registry")
     rows = conn.execute(
-        "SELECT id, serial, altered, verdict_json, retest_name, retest_sha256, baseline_sha256, "
-        "report_path, inspected_at FROM inspections WHERE serial = ? "
-        "ORDER BY inspected_at, id", (serial,)).fetchall()
-    return [Inspection(r[0], r[1], bool(r[2]), json.loads(r[3]), r[4], r[5], r[6], r[7], r[8])
-            for r in rows]
+        f"SELECT {_INSPECTION_COLUMNS} FROM inspections i LEFT JOIN custody c "
+        "ON c.seq = i.record_seq WHERE i.serial = ? ORDER BY i.inspected_at, i.id",
+        (serial,)).fetchall()
+    return [_inspection(r) for r in rows]
+
+
+def all_inspections(conn: sqlite3.Connection, serial: str | None = None) -> list[Inspection]:
+    """Every inspection (of one bat when ``serial``), by bat then time."""
+    if serial is not None:
+        return history(conn, serial)
+    rows = conn.execute(
+        f"SELECT {_INSPECTION_COLUMNS} FROM inspections i LEFT JOIN custody c "
+        "ON c.seq = i.record_seq ORDER BY i.serial, i.inspected_at, i.id").fetchall()
+    return [_inspection(r) for r in rows]

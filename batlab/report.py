@@ -1,10 +1,14 @@
-"""The inspection report: one self-contained HTML page (figures embedded as base64 PNG).
+"""The inspection report: one self-contained HTML page (figures embedded as base64 PNG) for a
+lab manager.
 
-Contents: the verdict and its confidence; driving-point FRFs of the baseline and the re-test
-with the re-test's modal synthesis; stabilisation diagrams of both fits; MAC of baseline vs
-re-test modes; element mass (alpha) and stiffness (beta) factors as bars over a to-scale drawing
-of the bat (the paper's Figures 2 and 3 for this bat); and the mass-property change implied by
-the element factors and by the fitted core. Layout: docs/report.md.
+Drawn from ``ReportInputs`` (the verdict as the registry stores it, the model, both fitted
+tests, meta.json, provenance), so a stored inspection's page can be rebuilt from the registry.
+Contents: one plain sentence (what, where, how much, how sure); the evidence in readable rows;
+element mass (alpha) and stiffness (beta) factors of the core fit and of the MSSO map on one
+shared symmetric scale with the map's noise band, over a to-scale drawing of the bat, and a
+sentence reconciling the two localisations; mass properties; paired modes; driving-point FRFs,
+MAC and stabilisation diagrams; provenance (date, version, species, weight, file hashes,
+custody records). Layout: docs/report.md.
 """
 
 from __future__ import annotations
@@ -18,40 +22,48 @@ from pathlib import Path
 
 import numpy as np
 
-from batlab.pipeline import InspectionResult, contract_dict
+from batlab.formatting import chance_words, p_value, status_of
+from batlab.pipeline import ReportInputs
+from batlab.registry import now_utc
 from ema.io.atomic_write import atomic_write
 from updating.model.mass_properties import MassProperties, mass_properties
 from updating.model.sections import Core
-from updating.model.units import IN_TO_M, KG_M2_TO_LB_IN2, LB_TO_KG
+from updating.model.units import (
+    IN_TO_M,
+    KG_M2_TO_LB_IN2,
+    LB_TO_KG,
+    LBF_IN3_TO_KG_M3,
+    PSI_TO_PA,
+)
 
 
 def _data_uri(png: bytes) -> str:
     return "data:image/png;base64," + base64.b64encode(png).decode("ascii")
 
 
-def _png(fig) -> str:
-    """A figure as a base64 PNG data URI (the figure is closed)."""
+def _png_bytes(fig) -> bytes:
+    """A figure as PNG bytes (the figure is closed)."""
     import matplotlib.pyplot as plt
 
     buf = io.BytesIO()
     fig.savefig(buf, format="png", dpi=110, bbox_inches="tight")
     plt.close(fig)
-    return _data_uri(buf.getvalue())
+    return buf.getvalue()
 
 
-def stabilisation_png(fit) -> str:
-    """The fit's stabilisation diagram (``ema.plots.plot_stabilisation``) as a data URI."""
+def stabilisation_png(fit) -> bytes:
+    """The fit's stabilisation diagram (``ema.plots.plot_stabilisation``) as PNG bytes."""
     from ema.plots import plot_stabilisation
 
     with tempfile.TemporaryDirectory(prefix="batlab-report-") as tmp:
-        return _data_uri(plot_stabilisation(fit, Path(tmp) / "stab.png").read_bytes())
+        return plot_stabilisation(fit, Path(tmp) / "stab.png").read_bytes()
 
 
 def _db(h: np.ndarray) -> np.ndarray:
     return 20 * np.log10(np.maximum(np.abs(h), 1e-300))
 
 
-def frf_figure(result: InspectionResult):
+def frf_figure(result: ReportInputs):
     """Driving-point accelerance, dB re 1 (m/s^2)/N: baseline, re-test, re-test synthesis."""
     import matplotlib.pyplot as plt
 
@@ -76,7 +88,7 @@ def frf_figure(result: InspectionResult):
     return fig
 
 
-def mac_figure(result: InspectionResult):
+def mac_figure(result: ReportInputs):
     """MAC between the baseline's and the re-test's mode shapes (same points)."""
     import matplotlib.pyplot as plt
 
@@ -98,64 +110,82 @@ def mac_figure(result: InspectionResult):
     return fig
 
 
-def element_figure(result: InspectionResult):
+def _symmetric_limit(values, floor: float) -> float:
+    """A symmetric axis limit: the largest magnitude plus 15 %, never below ``floor`` (so that
+    noise does not fill the axis of a clean bat)."""
+    vals = np.abs(np.concatenate([np.ravel(np.asarray(v, dtype=float)) for v in values]))
+    vals = vals[np.isfinite(vals)]
+    return max(1.15 * float(vals.max()) if vals.size else 0.0, floor)
+
+
+SCALE_FLOOR = 0.05
+"""Element-plot axes show at least +-5 % change: a clean bat's bars stay visibly small."""
+
+
+def element_figure(r: ReportInputs):
     """alpha and beta per element as bars, over the bat's profile drawn to scale (inches):
-    the physical fit's factors (how much; left half of each element, left axis) beside the
-    MSSO map (where; right half, hatched, right axis), each region shaded."""
+    the physical fit's factors (how much; left half of each element) beside the MSSO map
+    (where; right half, hatched) with its +-2 sigma noise band. One symmetric scale, shared
+    by both panels and both kinds of bar, at least +-SCALE_FLOOR: the bars compare by eye and
+    noise never fills a clean bat's plot."""
     import matplotlib.pyplot as plt
 
-    v, prof = result.verdict, result.profile
-    x0, x1 = np.asarray(v.element_x0_m) / IN_TO_M, np.asarray(v.element_x1_m) / IN_TO_M
+    v, prof = r.verdict, r.profile
+    els = v.get("elements") or []
+    x0 = np.array([e["x0_in"] for e in els], dtype=float)
+    x1 = np.array([e["x1_in"] for e in els], dtype=float)
+    fit = {"alpha": np.array([e["alpha"] for e in els], dtype=float),
+           "beta": np.array([e["beta"] for e in els], dtype=float)}
     w = x1 - x0
     length_in = prof.length_m / IN_TO_M
     d_max = float(prof.diameter_m.max()) / IN_TO_M
     fig, axes = plt.subplots(3, 1, sharex=True, figsize=(10, 6.8),
                              gridspec_kw={"height_ratios": [2.2, 2.2, 1.0]})
-    region = v.region_m if v.altered else None
-    msso = (v.details or {}).get("msso") or {}
+    region = v.get("region_in") if status_of(v) == "altered" else None
+    msso = (v.get("details") or {}).get("msso") or {}
     has_map = "alpha" in msso and len(msso["alpha"]) == len(x0)
-    for ax, vals, key, name, color in ((axes[0], v.alpha, "alpha", "alpha (mass)", "C0"),
-                                       (axes[1], v.beta, "beta", "beta (stiffness)", "C1")):
-        ax.bar(x0, np.asarray(vals), width=w / 2 if has_map else w, align="edge", color=color,
-               edgecolor="k", lw=0.4, label="physical core fit (how much)")
+    shown = [fit["alpha"], fit["beta"]]
+    if has_map:
+        band = {k: 2 * np.asarray(msso.get(f"{k}_std") or np.zeros(len(x0)), dtype=float)
+                for k in ("alpha", "beta")}
+        shown += [msso["alpha"], msso["beta"], band["alpha"], band["beta"]]
+    lim = _symmetric_limit(shown, SCALE_FLOOR)
+    for ax, key, name, color in ((axes[0], "alpha", "mass change, alpha", "C0"),
+                                 (axes[1], "beta", "stiffness change, beta", "C1")):
+        if has_map:
+            edges = np.append(x0, x1[-1])
+            b = np.append(band[key], band[key][-1])
+            ax.fill_between(edges, -b, b, step="post", color="0.6", alpha=0.3, lw=0,
+                            label="map noise band (±2σ)")
+        ax.bar(x0, fit[key], width=w / 2 if has_map else w, align="edge", color=color,
+               edgecolor="k", lw=0.4, label="core fit (how much)")
+        if has_map:
+            ax.bar(x0 + w / 2, np.asarray(msso[key], dtype=float), width=w / 2, align="edge",
+                   color="none", edgecolor="C2", hatch="////", lw=0.6,
+                   label="element map (where)")
+            if msso.get("region_m"):
+                a, b2 = msso["region_m"]
+                ax.axvspan(a / IN_TO_M, b2 / IN_TO_M, fill=False, hatch="..", color="C2",
+                           alpha=0.25, lw=0, label="map region")
+        if region is not None:
+            ax.axvspan(region[0], region[1], color="C3", alpha=0.12, label="fitted core region")
         ax.axhline(0, color="k", lw=0.6)
+        ax.set_ylim(-lim, lim)
         ax.set_ylabel(name)
         ax.grid(alpha=0.3, axis="y")
-        if region is not None:
-            ax.axvspan(region[0] / IN_TO_M, region[1] / IN_TO_M, color="C3", alpha=0.12)
-        if has_map:
-            ax2 = ax.twinx()
-            vm = np.asarray(msso[key])
-            ax2.bar(x0 + w / 2, vm, width=w / 2, align="edge", color="none", edgecolor="C2",
-                    hatch="////", lw=0.6, label="MSSO map (where)")
-            lim = 1.1 * max(float(np.max(np.abs(vm))), 1e-6)
-            ax2.set_ylim(-lim, lim)
-            ax2.set_ylabel(f"{key}, MSSO map", color="C2")
-            ax2.tick_params(axis="y", colors="C2")
-            if msso.get("region_m"):
-                a, b = msso["region_m"]
-                ax2.axvspan(a / IN_TO_M, b / IN_TO_M, fill=False, hatch="..", color="C2",
-                            alpha=0.25, lw=0)
-            lo, hi = ax.get_ylim()
-            m = max(abs(lo), abs(hi), 1e-6)
-            ax.set_ylim(-m, m)  # both zero lines at the same height
-            if key == "alpha":
-                h1, l1 = ax.get_legend_handles_labels()
-                h2, l2 = ax2.get_legend_handles_labels()
-                ax.legend(h1 + h2, l1 + l2, fontsize=8, loc="upper left")
-    axes[0].set_title("Element factors along the bat (knob at 0)")
+    axes[0].legend(fontsize=7, loc="upper left", ncol=3)
+    axes[0].set_title("Element changes along the bat (knob at 0)")
     ax = axes[2]
     x = prof.x_m / IN_TO_M
-    r = prof.diameter_m / IN_TO_M / 2
-    ax.fill_between(x, -r, r, color="burlywood", edgecolor="saddlebrown", lw=0.8)
-    if region is not None and v.core_diameter_m:
-        rc = v.core_diameter_m / IN_TO_M / 2
-        a, b = region[0] / IN_TO_M, region[1] / IN_TO_M
-        ax.add_patch(plt.Rectangle((a, -rc), b - a, 2 * rc, color="C3", alpha=0.7,
-                                   label="fitted core"))
-        ax.legend(fontsize=8, loc="lower left")
-    pts = result.baseline.modes.x_m / IN_TO_M
+    rad = prof.diameter_m / IN_TO_M / 2
+    ax.fill_between(x, -rad, rad, color="burlywood", edgecolor="saddlebrown", lw=0.8)
+    if region is not None and v.get("core_diameter_in"):
+        rc = float(v["core_diameter_in"]) / 2
+        ax.add_patch(plt.Rectangle((region[0], -rc), region[1] - region[0], 2 * rc, color="C3",
+                                   alpha=0.7, label="fitted core"))
+    pts = r.baseline.modes.x_m / IN_TO_M
     ax.plot(pts, np.zeros_like(pts), "k+", ms=5, label="test points")
+    ax.legend(fontsize=7, loc="lower left", ncol=2)
     ax.set_aspect("equal")
     ax.set_ylim(-0.75 * d_max, 0.75 * d_max)
     ax.set_xlim(-0.5, length_in + 0.5)
@@ -168,61 +198,177 @@ def element_figure(result: InspectionResult):
 # --- mass properties ---------------------------------------------------------------------------
 
 
-def element_mass_change(result: InspectionResult, n_quad: int = 24) -> MassProperties:
+def element_mass_change(r: ReportInputs, n_quad: int = 24) -> MassProperties:
     """Mass, first and second moments added by the element factors, as a MassProperties of the
     change: dm = sum alpha_e int rho A dx, d(m x_cg) = sum alpha_e int rho A x dx,
     dI_knob = sum alpha_e int (rho A x^2 + rho I) dx, I = pi D^4 / 64 (the section's own
     rotary inertia, as in ``updating.model.mass_properties``);
     cg_m holds d(m x_cg) / dm, i_cg is 0."""
-    v, prof = result.verdict, result.profile
-    rho = result.reference.rho_kg_m3
-    x0, x1 = np.asarray(v.element_x0_m), np.asarray(v.element_x1_m)
+    els = r.verdict.get("elements") or []
+    rho = r.reference.rho_kg_m3
+    x0 = np.array([e["x0_in"] for e in els], dtype=float) * IN_TO_M
+    x1 = np.array([e["x1_in"] for e in els], dtype=float) * IN_TO_M
     t, w = np.polynomial.legendre.leggauss(n_quad)
     half = (x1 - x0)[:, None] / 2
     xq = (x0 + x1)[:, None] / 2 + half * t[None, :]
     wq = half * w[None, :]
-    dq = prof.diameter_at(xq)
+    dq = r.profile.diameter_at(xq)
     rho_a = rho * np.pi / 4 * dq**2
     rho_i = rho * np.pi / 64 * dq**4
-    alpha = np.asarray(v.alpha)[:, None]
+    alpha = np.array([e["alpha"] for e in els], dtype=float)[:, None]
     dm = float(np.sum(alpha * wq * rho_a))
     dmx = float(np.sum(alpha * wq * rho_a * xq))
     di = float(np.sum(alpha * wq * (rho_a * xq**2 + rho_i)))
     return MassProperties(dm, dmx / dm if dm else 0.0, di, 0.0)
 
 
-def mass_rows(result: InspectionResult) -> list[tuple[str, float, float, float]]:
+def mass_rows(r: ReportInputs) -> list[tuple[str, float, float, float]]:
     """(label, weight lb, centre of mass in, I_knob lb in^2): reference, with the element
     factors applied, with the fitted core."""
-    ref = mass_properties(result.reference.build(result.profile))
+    ref = mass_properties(r.reference.build(r.profile))
     rows = [("reference (baseline)", ref.mass_kg, ref.cg_m, ref.i_knob_kg_m2)]
-    d = element_mass_change(result)
+    d = element_mass_change(r)
     m = ref.mass_kg + d.mass_kg
     rows.append(("with the element factors", m, (ref.mass_kg * ref.cg_m + d.mass_kg * d.cg_m) / m,
                  ref.i_knob_kg_m2 + d.i_knob_kg_m2))
-    v = result.verdict
-    if v.altered and v.region_m and v.core_diameter_m and v.fill_density_ratio is not None:
-        length = result.profile.length_m
-        core = Core(v.core_diameter_m, length - v.region_m[0], v.fill_density_ratio,
-                    plug_m=max(length - v.region_m[1], 0.0))
-        c = mass_properties(result.reference.build(result.profile, core=core))
+    v = r.verdict
+    region, core_in, fill = v.get("region_in"), v.get("core_diameter_in"), \
+        v.get("fill_density_ratio")
+    if status_of(v) == "altered" and region and core_in and fill is not None:
+        length = r.profile.length_m
+        a, b = region[0] * IN_TO_M, region[1] * IN_TO_M
+        core = Core(core_in * IN_TO_M, length - a, fill, plug_m=max(length - b, 0.0))
+        c = mass_properties(r.reference.build(r.profile, core=core))
         rows.append(("with the fitted core", c.mass_kg, c.cg_m, c.i_knob_kg_m2))
     return [(label, mk / LB_TO_KG, cg / IN_TO_M, i * KG_M2_TO_LB_IN2)
             for label, mk, cg, i in rows]
+
+
+# --- words -----------------------------------------------------------------------------------
+
+
+def _one_in(p: float) -> str:
+    """A rate as "1 in 100", "5 in 100", "1 in 1,000"."""
+    if p >= 0.01:
+        return f"{round(p * 100):g} in 100"
+    return f"{round(p * 1000):g} in 1,000" if p >= 0.001 else f"{p:.1g}"
+
+
+def headline(r: ReportInputs) -> str:
+    """One plain sentence (or two): what was found, where, how much and how sure."""
+    v, serial = r.verdict, r.serial
+    status, p = status_of(v), p_value(v)
+    alpha = v.get("false_alarm_rate")
+    if status == "inconclusive":
+        reasons = v.get("reasons") or ["the two tests cannot be compared"]
+        return (f"No verdict is possible for bat {serial}: " + "; ".join(reasons) +
+                ". The bat is not called altered.")
+    if status == "altered":
+        text = f"Bat {serial} has been altered"
+        region, core, fill = v.get("region_in"), v.get("core_diameter_in"), \
+            v.get("fill_density_ratio")
+        if region:
+            size = f"a bore about {core:.2f} in across " if core else "a change "
+            text += f": {size}from {region[0]:.1f} to {region[1]:.1f} in from the knob end"
+            if fill is not None:
+                text += (", left hollow" if fill < 0.05 else
+                         f", filled with material about {fill:.2f} times as dense as the wood")
+        rows = mass_rows(r)
+        if len(rows) == 3:
+            d_oz = (rows[2][1] - rows[0][1]) * 16
+            text += f" ({abs(d_oz):.1f} oz {'lighter' if d_oz < 0 else 'heavier'})"
+        text += "."
+        if p is not None:
+            text += (f" The evidence is strong: an unaltered bat would differ this much from "
+                     f"its baseline {chance_words(p)}.")
+        return text
+    text = (f"Bat {serial} shows no sign of alteration: the re-test differs from the baseline "
+            "no more than moisture, temperature and re-mounting the sensor explain.")
+    if p is not None:
+        text += f" Unaltered bats differ at least this much {chance_words(p)}"
+        if alpha:
+            text += (f"; a bat is called altered only when that chance falls below "
+                     f"{_one_in(float(alpha))}")
+        text += "."
+    return text
+
+
+def regions_note(r: ReportInputs) -> str:
+    """The two localisations side by side, reconciled or their difference explained."""
+    v = r.verdict
+    fit = v.get("region_in") if status_of(v) == "altered" else None
+    msso = (v.get("details") or {}).get("msso") or {}
+    if "error" in msso:
+        return f"The element map could not be computed ({msso['error']})."
+    if "alpha" not in msso:
+        return ""
+    mreg = msso.get("region_m")
+    mreg = None if not mreg else (mreg[0] / IN_TO_M, mreg[1] / IN_TO_M)
+    pts = np.sort(r.baseline.modes.x_m) / IN_TO_M
+    spacing = float(np.median(np.diff(pts))) if pts.size > 1 else float("nan")
+    n_modes = len(v.get("modes") or [])
+    if fit is None and mreg is None:
+        return ("Neither the core fit nor the element map finds a local change: every "
+                "element's map bar stays within its noise band.")
+    if fit is None:
+        return (f"The element map marks {mreg[0]:.1f}–{mreg[1]:.1f} in, but the decision test, "
+                "which allows for moisture and re-mounting, found the change no larger than an "
+                "unaltered bat's: it is not taken as an alteration.")
+    if mreg is None:
+        return (f"The core fit places the change at {fit[0]:.1f}–{fit[1]:.1f} in; no element of "
+                "the map rises above its noise band (the map resolves less than the fit, which "
+                "uses every mode at once): the location rests on the core fit.")
+    lo, hi = max(fit[0], mreg[0]), min(fit[1], mreg[1])
+    if lo >= hi:
+        return (f"The core fit ({fit[0]:.1f}–{fit[1]:.1f} in) and the element map "
+                f"({mreg[0]:.1f}–{mreg[1]:.1f} in) disagree on where the change is: treat the "
+                "location as uncertain and re-test with more points over both regions.")
+    inside = mreg[0] <= fit[0] and fit[1] <= mreg[1]
+    return (f"The core fit ({fit[0]:.1f}–{fit[1]:.1f} in) is the one bore that best explains "
+            f"all the frequency changes; the element map ({mreg[0]:.1f}–{mreg[1]:.1f} in) marks "
+            "every element whose change stands above its noise band. "
+            + ("The fit lies inside the map's region" if inside else
+               f"They overlap from {lo:.1f} to {hi:.1f} in")
+            + f": the map is wider because {n_modes} modes measured at points "
+            f"{spacing:.1f} in apart cannot pin a change to single elements, and a bore's "
+            "stiffness loss spreads to its neighbours. The core fit's region is the one to "
+            "act on.")
 
 
 # --- page ------------------------------------------------------------------------------------
 
 CSS = """
 body{font-family:system-ui,Segoe UI,Helvetica,Arial,sans-serif;max-width:1000px;margin:24px auto;
-color:#222;padding:0 12px}
-h1{margin-bottom:4px}.verdict{font-size:1.5em;padding:12px 16px;border-radius:6px;margin:12px 0}
+color:#222;padding:0 12px;line-height:1.4}
+h1{margin-bottom:4px}.verdict{font-size:1.25em;padding:12px 16px;border-radius:6px;margin:12px 0}
 .altered{background:#fde2e1;border:2px solid #c0392b}
-.clean{background:#e3f5e1;border:2px solid #27ae60}
-table{border-collapse:collapse;margin:8px 0}td,th{border:1px solid #ccc;padding:3px 8px;
-text-align:right}th{background:#f3f3f3}td:first-child,th:first-child{text-align:left}
-img{max-width:100%;display:block;margin:8px 0}.wide{overflow-x:auto}.note{color:#666;font-size:.9em}
+.not_altered{background:#e3f5e1;border:2px solid #27ae60}
+.inconclusive{background:#fdf3d8;border:2px solid #d4a017}
+table{border-collapse:collapse;margin:8px 0;width:100%;table-layout:fixed;font-size:.9em}
+td,th{border:1px solid #ccc;padding:3px 6px;text-align:right;overflow-wrap:anywhere}
+th{background:#f3f3f3;font-weight:600}td:first-child,th:first-child{text-align:left}
+table.facts td:first-child{width:45%}table.facts td{text-align:left}
+img{max-width:100%;display:block;margin:8px 0}.note{color:#555;font-size:.9em}
+code{font-size:.85em;overflow-wrap:anywhere}
 """
+
+MODE_HEADERS = {
+    "baseline_hz": "Baseline (Hz)", "retest_hz": "Re-test (Hz)",
+    "mac": "Shape match, baseline vs re-test (MAC)", "reference_hz": "Model (Hz)",
+    "mac_reference": "Shape match, model (MAC)", "change_pct": "Measured change (%)",
+    "moisture_fit_change_pct": "Explained by moisture alone (%)",
+    "core_fit_change_pct": "Explained by moisture + core (%)",
+}
+
+
+def _label(key: str) -> str:
+    """A readable header for a key without one in MODE_HEADERS (units from its suffix)."""
+    if key in MODE_HEADERS:
+        return MODE_HEADERS[key]
+    for suffix, unit in (("_hz", "Hz"), ("_pct", "%"), ("_in", "in"), ("_m", "m")):
+        if key.endswith(suffix):
+            return key[: -len(suffix)].replace("_", " ").capitalize() + f" ({unit})"
+    return key.replace("_", " ").capitalize()
 
 
 def _fmt(v, spec: str = ".4g") -> str:
@@ -235,97 +381,236 @@ def _fmt(v, spec: str = ".4g") -> str:
     return html.escape(str(v))
 
 
-def _table(header: list[str], rows: list[list]) -> str:
-    head = "".join(f"<th>{html.escape(h)}</th>" for h in header)
-    body = "".join("<tr>" + "".join(f"<td>{_fmt(c)}</td>" for c in r) + "</tr>" for r in rows)
-    return f"<div class='wide'><table><tr>{head}</tr>{body}</table></div>"
+def _mode_cell(key: str, v) -> str:
+    if not isinstance(v, (int, float)) or isinstance(v, bool):
+        return _fmt(v)
+    if key.endswith("_hz"):
+        return f"{v:.1f}"
+    if key.endswith("_pct"):
+        return f"{v:+.2f}"
+    return f"{v:.3f}" if key.startswith("mac") else _fmt(v)
+
+
+def _table(header: list[str] | None, rows: list[list], cls: str = "") -> str:
+    head = "" if not header else (
+        "<tr>" + "".join(f"<th>{html.escape(h)}</th>" for h in header) + "</tr>")
+    body = "".join("<tr>" + "".join(
+        f"<td>{c if isinstance(c, _Raw) else _fmt(c)}</td>" for c in r) + "</tr>" for r in rows)
+    return f"<table class='{cls}'>{head}{body}</table>"
+
+
+class _Raw(str):
+    """Already formatted (and escaped) cell text."""
 
 
 def _img(uri: str, alt: str) -> str:
     return f'<img src="{uri}" alt="{html.escape(alt)}">'
 
 
-def render_html(result: InspectionResult) -> str:
-    """The report page as a string."""
-    import matplotlib
+def _facts(r: ReportInputs) -> list[list]:
+    v = r.verdict
+    status = status_of(v)
+    p = p_value(v)
+    facts: list[list] = [["Decision", _Raw({"altered": "<b>altered</b>", "not_altered":
+                                            "not altered", "inconclusive":
+                                            "no verdict (inconclusive)"}[status])]]
+    for reason in v.get("reasons") or []:
+        facts.append(["Reason", reason])
+    if status == "inconclusive":  # the two tests cannot be compared: no statistic means much
+        return facts
+    if p is not None:
+        shown = "< 0.000001" if p < 1e-6 else f"{p:.3g}"
+        facts.append(["Chance an unaltered bat differs this much (p-value)",
+                      _Raw(f"{shown} ({html.escape(chance_words(p))})")])
+    if v.get("false_alarm_rate") is not None:
+        facts.append(["Called altered when that chance is below (false-alarm rate)",
+                      v["false_alarm_rate"]])
+    if v.get("region_in"):
+        facts.append(["Altered region (in from the knob end)",
+                      _Raw(f"{v['region_in'][0]:.2f} – {v['region_in'][1]:.2f}")])
+    if v.get("core_diameter_in") is not None:
+        facts.append(["Bore diameter (in)", _Raw(f"{v['core_diameter_in']:.2f}")])
+    if v.get("fill_density_ratio") is not None:
+        facts.append(["Fill density / wood density", _Raw(f"{v['fill_density_ratio']:.2f}")])
+    names = {"stiffness_scale": "stiffness", "density_scale": "density"}
+    for k, val in (v.get("moisture") or {}).items():
+        if isinstance(val, (int, float)):
+            facts.append([f"Whole-bat {names.get(k, k)} change (moisture, temperature), %",
+                          _Raw(f"{100 * (val - 1):+.2f}")])
+    for k, val in (v.get("uncertainty") or {}).items():
+        if not isinstance(val, (int, float)):
+            continue
+        if k.endswith("_m"):
+            facts.append([f"Uncertainty (1σ) of {k[:-2].replace('_', ' ')} (in)",
+                          _Raw(f"±{val / IN_TO_M:.3f}")])
+        elif k.endswith("_scale"):
+            facts.append([f"Uncertainty (1σ) of whole-bat {names.get(k, k)} change, %",
+                          _Raw(f"±{100 * val:.2f}")])
+        else:
+            facts.append([f"Uncertainty (1σ) of {k.replace('_', ' ')}", _Raw(f"±{val:.3g}")])
+    stat = v.get("statistic")
+    if stat is not None:
+        name = (v.get("details") or {}).get("statistic") or "test statistic"
+        facts.append([_Raw("Test statistic <span class='note'>(larger: further beyond what "
+                           "moisture explains; the p-value above is what it means)</span>"),
+                      _Raw(f"{stat:.4g} <span class='note'>{html.escape(str(name))}</span>")])
+    return facts
 
-    matplotlib.use("Agg")
-    out = contract_dict(result.serial, result.verdict)
-    v = result.verdict
-    cls = "altered" if out["altered"] else "clean"
-    decision = "ALTERED" if out["altered"] else "not altered"
-    conf = out["confidence"]
-    parts = [f"<h1>Inspection of bat {html.escape(result.serial)}</h1>",
-             f"<p class='note'>baseline {html.escape(result.baseline.name)}, re-test "
-             f"{html.escape(result.retest.name)}</p>",
-             f"<div class='verdict {cls}'>{decision}"
-             + ("" if conf is None else f" &mdash; confidence {conf:.3f}") + "</div>"]
-    facts = [["decision", out["altered"]], ["confidence (1 - p)", conf],
-             ["false-alarm rate", out["false_alarm_rate"]], ["test statistic", v.statistic]]
-    if out["region_in"]:
-        facts.append(["altered region (in from the knob)",
-                      f"{out['region_in'][0]:.2f} – {out['region_in'][1]:.2f}"])
-    facts += [["core diameter (in)", out["core_diameter_in"]],
-              ["fill density / wood density", out["fill_density_ratio"]]]
-    for k, val in (v.moisture or {}).items():
-        facts.append([f"uniform drift: {k}", val])
-    for k, val in (v.uncertainty or {}).items():
-        if k.endswith("_m") and isinstance(val, (int, float)):  # lengths shown in inches
-            k, val = k[:-2] + "_in", val / IN_TO_M
-        facts.append([f"standard uncertainty: {k}", val])
-    parts.append(_table(["quantity", "value"], facts))
 
-    parts.append("<h2>Element changes along the bat</h2>")
-    parts.append(_img(_png(element_figure(result)), "element factors over the bat profile"))
-    msso = (v.details or {}).get("msso") or {}
-    if "error" in msso:
-        parts.append(f"<p class='note'>MSSO map not available: {html.escape(msso['error'])}</p>")
-    elif "alpha" in msso:
-        reg = msso.get("region_m")
-        where = ("no significant local change" if not reg else
-                 f"changed region {reg[0] / IN_TO_M:.1f} – {reg[1] / IN_TO_M:.1f} in")
-        parts.append(
-            "<p class='note'>Solid bars, left axis: the element ratios of the fitted core (how "
-            "much; the contract's elements). Hatched bars, right axis: the MSSO map of the "
-            "re-test against the baseline-updated reference with the fitted moisture and sensor "
-            f"shift removed (where; {where}, peak z {msso.get('peak_z', 0):.1f}, "
-            f"{'agrees' if msso.get('agrees_with_fit') else 'disagrees'} with the fit). Its "
-            "stiffness bars also carry the core's shear loss, so they are larger than the "
-            "bending ratio.</p>")
+def _provenance(r: ReportInputs, generated_at: str) -> list[list]:
+    pv, meta = r.provenance, r.meta
+    rows: list[list] = [["Report generated (UTC)", generated_at[:19].replace("T", " ")],
+                        ["batlab version", pv.get("batlab_version")]]
+    if pv.get("inspection_id") is not None:
+        when = pv["inspected_at"][:19].replace("T", " ")
+        rows.append(["Inspection", f"#{pv['inspection_id']}, {when} UTC"])
+    rows.append(["Species", meta.get("species")])
+    if meta.get("weight_lb") is not None:
+        rows.append(["Weight at registration (lb)", _Raw(f"{float(meta['weight_lb']):.4f}")])
+    rows.append(["Calibrated wood: E (psi), density (lb/in³), E/G", _Raw(
+        f"{r.reference.E_pa / PSI_TO_PA:,.0f}, "
+        f"{r.reference.rho_kg_m3 / LBF_IN3_TO_KG_M3:.5f}, {r.reference.e_over_g:.1f}")])
+    for label, name, key in (("Baseline file", r.baseline.name, "baseline_sha256"),
+                             ("Re-test file", r.retest.name, "retest_sha256")):
+        sha = pv.get(key)
+        rows.append([label, _Raw(f"{html.escape(name)}<br><code>sha256 {sha or '—'}</code>")])
+    for label, key in (("Verdict record", "verdict_record"),
+                       ("Registration record", "reference_record")):
+        if pv.get(key) is not None:
+            rows.append([label, _Raw(f"#{pv[key]}<br><code>sha256 "
+                                     f"{pv[key + '_sha256']}</code>")])
+    return rows
+
+
+def provenance_hashes(page: str) -> dict:
+    """The hashes a report page carries (its Provenance rows, as ``_provenance`` writes them):
+    {"baseline_sha256", "retest_sha256", "verdict_record", "verdict_record_sha256",
+    "reference_record", "reference_record_sha256"} (missing keys absent)."""
+    import re
+
+    out: dict = {}
+    for label, key in (("Baseline file", "baseline_sha256"), ("Re-test file", "retest_sha256")):
+        m = re.search(rf"<td>{label}</td><td>[^<]*<br><code>sha256 ([0-9a-f]{{64}})</code>", page)
+        if m:
+            out[key] = m.group(1)
+    for label, key in (("Verdict record", "verdict_record"),
+                       ("Registration record", "reference_record")):
+        m = re.search(rf"<td>{label}</td><td>#(\d+)<br><code>sha256 ([0-9a-f]{{64}})</code>", page)
+        if m:
+            out[key], out[key + "_sha256"] = int(m.group(1)), m.group(2)
+    return out
+
+
+def render_html(r: ReportInputs, generated_at: str, figures: dict[str, bytes]) -> str:
+    """The report page as a string (``figures``: name -> PNG bytes, see ``figures_png``)."""
+    v = r.verdict
+    status = status_of(v)
+    parts = [f"<h1>Inspection of bat {html.escape(r.serial)}</h1>",
+             f"<p class='note'>baseline {html.escape(r.baseline.name)}, re-test "
+             f"{html.escape(r.retest.name)}</p>",
+             f"<div class='verdict {status}'>{html.escape(headline(r))}</div>",
+             "<h2>The evidence</h2>", _table(None, _facts(r), "facts")]
+    parts.append("<h2>Where the bat changed</h2>")
+    parts.append(_img(_data_uri(figures["elements"]), "element changes over the bat profile"))
+    note = regions_note(r)
+    if note:
+        parts.append(f"<p>{html.escape(note)}</p>")
+    parts.append("<p class='note'>Solid bars: the fitted core's change of each element's "
+                 "mass (alpha) and bending stiffness (beta), as fractions "
+                 "(M = M_S + Σ alpha_i m_i, K = K_S + Σ beta_i k_i). Hatched bars: the element "
+                 "map (MSSO) of the re-test against the baseline-updated model with the "
+                 "whole-bat drift and sensor shift removed; its stiffness bars also carry a "
+                 "bore's shear loss, so they are larger than the bending ratio. Grey: the "
+                 "map's ±2σ noise band; a bar inside it is not a change. One symmetric scale "
+                 "for every bar of both panels, at least ±5 %.</p>")
     parts.append("<h2>Mass properties</h2>")
-    rows = mass_rows(result)
+    rows = mass_rows(r)
     w0, cg0, i0 = rows[0][1:]
     parts.append(_table(
-        ["model", "weight (lb)", "change (%)", "centre of mass (in)", "shift (in)",
-         "I knob (lb in²)", "change (%)"],
-        [[label, w, 100 * (w / w0 - 1), cg, cg - cg0, i, 100 * (i / i0 - 1)]
+        ["Model", "Weight (lb)", "Weight change (%)", "Balance point from the knob (in)",
+         "Shift (in)", "Swing weight about the knob (lb in²)", "Change (%)"],
+        [[label, _Raw(f"{w:.4f}"), _Raw(f"{100 * (w / w0 - 1):+.2f}"), _Raw(f"{cg:.2f}"),
+          _Raw(f"{cg - cg0:+.3f}"), _Raw(f"{i:.0f}"), _Raw(f"{100 * (i / i0 - 1):+.2f}")]
          for label, w, cg, i in rows]))
-    if v.modes:
-        keys = list(dict.fromkeys(k for m in v.modes for k in m))
+    modes = v.get("modes") or []
+    if modes:
+        keys = list(dict.fromkeys(k for m in modes for k in m))
         parts.append("<h2>Paired modes</h2>")
-        parts.append(_table(keys, [[m.get(k) for k in keys] for m in v.modes]))
-
+        parts.append(_table([_label(k) for k in keys],
+                            [[_Raw(_mode_cell(k, m.get(k))) for k in keys] for m in modes],
+                            "modes"))
     parts.append("<h2>Test data</h2>")
-    parts.append(_img(_png(frf_figure(result)), "driving-point FRF overlay"))
-    parts.append(_img(_png(mac_figure(result)), "MAC baseline vs re-test"))
-    for ft in (result.baseline, result.retest):
-        if ft.fit is not None and getattr(ft.fit, "sweep", None) is not None:
-            parts.append(f"<h3>Stabilisation diagram: {html.escape(ft.name)}</h3>")
-            parts.append(_img(stabilisation_png(ft.fit), f"stabilisation {ft.name}"))
-    parts.append("<p class='note'>Made by batlab; element factors: M = M_S + sum alpha_i m_i, "
-                 "K = K_S + sum beta_i k_i (MSSO).</p>")
+    parts.append(_img(_data_uri(figures["frf"]), "driving-point FRF overlay"))
+    parts.append(_img(_data_uri(figures["mac"]), "MAC baseline vs re-test"))
+    for key, name in (("stabilisation_baseline", r.baseline.name),
+                      ("stabilisation_retest", r.retest.name)):
+        if key in figures:
+            parts.append(f"<h3>Stabilisation diagram: {html.escape(name)}</h3>")
+            parts.append(_img(_data_uri(figures[key]), f"stabilisation {name}"))
+    parts.append("<h2>Provenance</h2>")
+    parts.append(_table(None, _provenance(r, generated_at), "facts"))
+    if r.provenance.get("verdict_record") is not None:
+        parts.append("<p class='note'>To verify: <code>batlab registry check --report "
+                     "index.html</code> on the registry confirms every record is unchanged and "
+                     "that this page's records and files are the registry's; <code>batlab "
+                     f"history {html.escape(r.serial)} --json</code> shows these hashes; a "
+                     "file's <code>sha256sum</code> must equal its hash above.</p>")
     return ("<!DOCTYPE html><html lang='en'><head><meta charset='utf-8'>"
-            f"<title>batlab inspection {html.escape(result.serial)}</title>"
+            f"<title>batlab inspection {html.escape(r.serial)}</title>"
             f"<style>{CSS}</style></head><body>" + "\n".join(parts) + "</body></html>\n")
 
 
-def write_report(out_dir: str | os.PathLike, result: InspectionResult) -> Path:
-    """Write ``out_dir/index.html`` (temporary file, then rename); returns its path."""
+def figures_png(r: ReportInputs) -> dict[str, bytes]:
+    """Every figure of the report as PNG bytes, by name (the file name under ``--plots``)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    out = {"elements": _png_bytes(element_figure(r)), "frf": _png_bytes(frf_figure(r)),
+           "mac": _png_bytes(mac_figure(r))}
+    for key, ft in (("stabilisation_baseline", r.baseline), ("stabilisation_retest", r.retest)):
+        if ft.fit is not None and getattr(ft.fit, "sweep", None) is not None:
+            out[key] = stabilisation_png(ft.fit)
+    return out
+
+
+def check_destination(out_dir: str | os.PathLike, what: str = "report") -> Path:
+    """Create ``out_dir`` if needed and prove it writable (a probe file created and removed),
+    before any work: ValueError naming it otherwise."""
     out_dir = Path(out_dir)
     if out_dir.exists() and not out_dir.is_dir():
-        raise ValueError(f"{out_dir}: report destination is not a directory")
-    page = render_html(result)
-    out_dir.mkdir(parents=True, exist_ok=True)
+        raise ValueError(f"{out_dir}: {what} destination is not a directory")
+    try:
+        out_dir.mkdir(parents=True, exist_ok=True)
+        with tempfile.NamedTemporaryFile(dir=out_dir, prefix=".batlab-probe-"):
+            pass
+    except OSError as exc:
+        raise ValueError(f"{out_dir}: {what} destination not writable "
+                         f"({exc.strerror or exc})") from None
+    return out_dir
+
+
+def write_plots(plots_dir: str | os.PathLike, r: ReportInputs,
+                figures: dict[str, bytes] | None = None) -> Path:
+    """Each figure of the report as ``plots_dir/<name>.png``."""
+    plots_dir = check_destination(plots_dir, "plots")
+    for name, png in (figures or figures_png(r)).items():
+        atomic_write(plots_dir / f"{name}.png", lambda tmp, png=png: tmp.write_bytes(png))
+    return plots_dir
+
+
+def write_report(
+    out_dir: str | os.PathLike, r: ReportInputs, plots_dir: str | os.PathLike | None = None,
+    generated_at: str | None = None,
+) -> Path:
+    """Write ``out_dir/index.html`` (temporary file, then rename) and, with ``plots_dir``, each
+    figure as ``plots_dir/<name>.png``; returns the page's path."""
+    out_dir = check_destination(out_dir)
+    if plots_dir is not None:
+        plots_dir = check_destination(plots_dir, "plots")
+    figures = figures_png(r)
+    page = render_html(r, generated_at or now_utc(), figures)
     path = out_dir / "index.html"
     atomic_write(path, lambda tmp: tmp.write_text(page, encoding="utf-8"))
+    if plots_dir is not None:
+        write_plots(plots_dir, r, figures)
     return path

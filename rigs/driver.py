@@ -185,7 +185,9 @@ class SerialDevice:
 
     def handshake(self, sample_rate_hz: float | None = None, samples_per_frame: int | None = None,
                   timeout_s: float = 1.0, retries: int = 4) -> p.DeviceInfo:
-        """GET_INFO, CONFIGURE, START (docs/protocol.md, 'Host handshake'); returns the info."""
+        """GET_INFO, CONFIGURE, START (docs/protocol.md, 'Host handshake'); returns the info.
+        A device still streaming (its last host was killed) answers CONFIGURE with BAD_STATE:
+        it is sent STOP and configured again."""
         if self.csv:
             return self.info
         ack = self.request(p.GET_INFO, timeout_s=timeout_s, retries=retries)
@@ -193,8 +195,12 @@ class SerialDevice:
             raise DeviceError(f"{self.name}: device did not describe itself (no INFO)")
         info = replace(self.info, sample_rate_hz=sample_rate_hz or self.info.sample_rate_hz,
                        samples_per_frame=samples_per_frame or self.info.samples_per_frame)
-        ack = self.request(p.CONFIGURE, p.encode_configure(
-            info.sample_rate_hz, info.n_channels, info.bits, info.samples_per_frame)[1:])
+        config = p.encode_configure(info.sample_rate_hz, info.n_channels, info.bits,
+                                    info.samples_per_frame)[1:]
+        ack = self.request(p.CONFIGURE, config)
+        if ack.result == p.ACK_BAD_STATE:  # still streaming for a host that died: stop it
+            self.request(p.STOP)
+            ack = self.request(p.CONFIGURE, config)
         if ack.result != p.ACK_OK:
             raise DeviceError(f"{self.name}: device refused configuration {info.sample_rate_hz} "
                               f"Hz x {info.samples_per_frame} samples/frame (code {ack.result})")

@@ -74,3 +74,29 @@ class ModalModel:
         factors = -w2 / np.where(zero, 1.0, den)
         factors[zero] = 1.0
         return self._sum(factors, resp, ref)
+
+
+BETA_L = np.array([4.730040745, 7.853204624, 10.995607838, 14.137165491, 17.278759657,
+                   20.420352245, 23.561944902, 26.703537556])
+
+
+def uniform_beam_modes(length_m: float, mass_kg: float, f1_hz: float, x_m: np.ndarray,
+                       zeta1: float = 0.005, suspension_hz: tuple[float, float] = (2.0, 3.5),
+                       n_bending: int = 8):
+    """ModalModel of a free-free uniform beam at ``x_m``: two suspension (rigid) modes and
+    ``n_bending`` bending modes, f_n = f1 (b_n L / b_1 L)^2, shapes
+    phi_n(x) = [cosh bx + cos bx - s_n (sinh bx + sin bx)] / sqrt(m) with
+    s_n = (cosh bL - cos bL) / (sinh bL - sin bL) (int_0^L phi^2 rho A dx = 1).
+    Damping: 3 % on the suspension modes, zeta1 (f / f1)^0.3 on bending."""
+    x = np.asarray(x_m, dtype=float)[:, None]
+    bl = BETA_L[:n_bending][None, :]
+    b = bl / length_m
+    s = (np.cosh(bl) - np.cos(bl)) / (np.sinh(bl) - np.sin(bl))
+    bend = (np.cosh(b * x) + np.cos(b * x) - s * (np.sinh(b * x) + np.sin(b * x))) / np.sqrt(
+        mass_kg)
+    trans = np.full((x.shape[0], 1), 1 / np.sqrt(mass_kg))
+    rot = np.sqrt(12 / (mass_kg * length_m**2)) * (x - length_m / 2)
+    f_bend = f1_hz * (BETA_L[:n_bending] / BETA_L[0]) ** 2
+    freq = np.r_[suspension_hz, f_bend]
+    zeta = np.r_[0.03, 0.03, zeta1 * (f_bend / f1_hz) ** 0.3]
+    return ModalModel(freq, zeta, np.hstack([trans, rot, bend]), x[:, 0])

@@ -18,7 +18,10 @@ import numpy as np
 from rigs import protocol as p
 from rigs.capture import CaptureSettings, HitCapture, HitRecord, check_hit
 from rigs.driver import DeviceError
-from rigs.frf_estimate import estimate_frf
+from rigs.frf_estimate import FrfEstimate, estimate_frf
+
+DEFAULT_POINTS_IN = tuple(float(x) for x in np.arange(1.0, 32.0, 2.0))
+"""The default impact marks, inches from the knob end: 16 marks, every 2 in from 1 in."""
 
 
 @dataclass(frozen=True)
@@ -112,24 +115,60 @@ def acquire_point(source, capture: HitCapture, point: int, hits_per_point: int,
 def run_session(source, points: list[int], hits_per_point: int,
                 settings: CaptureSettings | None = None,
                 exp_window_tau_s: float | None = None, fmax_hz: float | None = None,
-                progress: Callable[[str], None] = _quiet, max_rejects: int = 20
+                progress: Callable[[str], None] = _quiet, max_rejects: int = 20,
+                done: dict[int, FrfEstimate] | None = None,
+                on_point: Callable[[int, FrfEstimate, list[HitLog]], None] | None = None,
                 ) -> SessionResult:
-    """Run the roving-hammer test on a source that has completed its handshake."""
+    """Run the roving-hammer test on a source that has completed its handshake.
+
+    ``done``: points already measured (a resumed session), skipped and used as they are;
+    ``on_point(point, estimate, log)`` is called as each point completes with the hit log so
+    far (the caller saves them, so a killed session keeps its completed points and their log).
+    A stream that ends raises :class:`SessionInterrupted` carrying the completed points.
+    """
     if hits_per_point < 1 or not points:
         raise ValueError("need at least one point and one hit per point")
     settings = settings or CaptureSettings()
     info = source.info
     capture = HitCapture(info, settings)
     log: list[HitLog] = []
-    estimates = []
+    estimates: dict[int, FrfEstimate] = dict(done or {})
     for k, point in enumerate(points):
-        recs = acquire_point(source, capture, point, hits_per_point, settings, log,
-                             f"point {k + 1}/{len(points)} (#{point})", progress, max_rejects)
-        estimates.append(estimate_frf(np.array([r.force_n for r in recs]),
-                                      np.array([r.accel_ms2 for r in recs]),
-                                      info.sample_rate_hz, exp_window_tau_s, fmax_hz=fmax_hz))
-    stack = {name: np.stack([getattr(e, name) for e in estimates], axis=-1)[:, None, :]
+        if point in estimates:
+            progress(f"point {k + 1}/{len(points)} (#{point}): already measured")
+            continue
+        try:
+            recs = acquire_point(source, capture, point, hits_per_point, settings, log,
+                                 f"point {k + 1}/{len(points)} (#{point})", progress,
+                                 max_rejects)
+        except (DeviceError, EOFError, OSError) as exc:
+            raise SessionInterrupted(str(exc), estimates, log, info) from exc
+        est = estimate_frf(np.array([r.force_n for r in recs]),
+                           np.array([r.accel_ms2 for r in recs]),
+                           info.sample_rate_hz, exp_window_tau_s, fmax_hz=fmax_hz)
+        estimates[point] = est
+        if on_point is not None:
+            on_point(point, est, log)
+    return combine(points, estimates, exp_window_tau_s, log, info)
+
+
+def combine(points: list[int], estimates: dict[int, FrfEstimate],
+            exp_window_tau_s: float | None, log: list[HitLog], info) -> SessionResult:
+    """The session's FRFs from per-point estimates, in ``points`` order."""
+    ests = [estimates[n] for n in points]
+    stack = {name: np.stack([getattr(e, name) for e in ests], axis=-1)[:, None, :]
              for name in ("h1", "h2", "coherence")}
-    return SessionResult(estimates[0].freq_hz, stack["h1"], stack["h2"], stack["coherence"],
+    return SessionResult(ests[0].freq_hz, stack["h1"], stack["h2"], stack["coherence"],
                          np.asarray(points, dtype=int), exp_window_tau_s, log, info,
-                         np.array([e.n_averages for e in estimates]))
+                         np.array([e.n_averages for e in ests]))
+
+
+class SessionInterrupted(OSError):
+    """The stream ended (device lost, recording cut) before every point was measured.
+
+    Attributes: ``completed`` {point: FrfEstimate} measured so far, ``log`` the hit log,
+    ``info`` the device description."""
+
+    def __init__(self, message: str, completed: dict, log: list[HitLog], info) -> None:
+        super().__init__(message)
+        self.completed, self.log, self.info = dict(completed), log, info

@@ -224,7 +224,7 @@ def test_registry_bad_input(lab, capsys):
     assert code == 2 and "--baseline" in err
 
     raw = sqlite3.connect(lab / "reg.sqlite")
-    raw.execute("UPDATE baseline_files SET content = substr(content, 1, length(content) - 1)")
+    raw.execute("UPDATE files SET content = substr(content, 1, length(content) - 1)")
     raw.commit()
     raw.close()
     code, out, err = run_cli(["inspect", "--serial", "HX-2001", lab / "retest_corked.uff"],

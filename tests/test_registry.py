@@ -10,6 +10,8 @@ import sqlite3
 import time
 
 import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
 
 from batlab import registry as reg
 
@@ -51,45 +53,63 @@ def test_register_get_list_history(tmp_path):
             reg.add_bat(conn, make_bat("HX-1"), "other.uff", b"other")
         reg.add_bat(conn, make_bat("HX-0"), "b0.uff", b"zero")
 
-        first = reg.add_inspection(conn, "HX-1", {"altered": False}, "r1.uff", "aa",
-                                   stored.baseline_sha256)
-        second = reg.add_inspection(conn, "HX-1", {"altered": True, "x": 1}, "r2.uff", "bb",
-                                    stored.baseline_sha256, report_path="/tmp/rep")
+        first = reg.add_inspection(conn, "HX-1", {"altered": False}, "r1.uff", b"aa")
+        second = reg.add_inspection(conn, "HX-1", {"altered": True, "x": 1}, "r2.uff", b"bb",
+                                    report_path="/tmp/rep")
+        third = reg.add_inspection(conn, "HX-1", {"status": "inconclusive", "altered": None,
+                                                  "reasons": ["amplitudes disagree"]},
+                                   "r2.uff", b"bb")
         hist = reg.history(conn, "HX-1")
-        assert [h.id for h in hist] == [first.id, second.id]
-        assert [h.altered for h in hist] == [False, True]
+        assert [h.id for h in hist] == [first.id, second.id, third.id]
+        assert [h.altered for h in hist] == [False, True, None]
+        assert [h.status for h in hist] == ["not_altered", "altered", "inconclusive"]
         assert hist[1].verdict == {"altered": True, "x": 1}
-        assert hist[1].report_path == "/tmp/rep" and hist[1].retest_sha256 == "bb"
+        assert hist[1].report_path == "/tmp/rep"
+        assert hist[1].retest_sha256 == reg.sha256_bytes(b"bb")
+        assert hist[1].baseline_sha256 == stored.baseline_sha256
+        assert hist[1].reference_seq == stored.reference_seq
+        # the re-test file is kept once (two inspections of the same bytes)
+        assert reg.stored_file(conn, hist[2].retest_sha256, "x") == ("r2.uff", b"bb")
+        assert conn.execute("SELECT count(*) FROM files").fetchone()[0] == 4
 
         bats = reg.list_bats(conn)
         assert [b.serial for b in bats] == ["HX-0", "HX-1"]
         assert bats[0].n_inspections == 0 and bats[0].last_altered is None
-        assert bats[1].n_inspections == 2 and bats[1].last_altered is True
+        assert bats[1].n_inspections == 3 and bats[1].last_altered is None
+        assert bats[1].last_status == "inconclusive"
 
         with pytest.raises(ValueError, match="unknown serial"):
             reg.get_bat(conn, "NOPE")
         with pytest.raises(ValueError, match="unknown serial"):
             reg.history(conn, "NOPE")
         with pytest.raises(ValueError, match="unknown serial"):
-            reg.add_inspection(conn, "NOPE", {"altered": False}, "r", "cc", "dd")
+            reg.add_inspection(conn, "NOPE", {"altered": False}, "r", b"cc")
+        assert reg.check(conn).ok
 
 
-def test_replace_keeps_history_and_drops_orphan_baseline(tmp_path):
+def test_replace_keeps_history_and_every_file(tmp_path):
+    """After --replace each inspection still names, and can rebuild, the registration it was
+    judged against; no stored file is ever deleted."""
     with reg.open_registry(tmp_path / "r.sqlite") as conn:
         old = reg.add_bat(conn, make_bat("S1"), "a.uff", b"first")
-        reg.add_inspection(conn, "S1", {"altered": False}, "r.uff", "11", old.baseline_sha256)
+        reg.add_inspection(conn, "S1", {"altered": False}, "r.uff", b"11")
         shorter = reg.BatRecord(**{**make_bat("S1").__dict__, "profile_x_m": [0.0, 0.8],
-                                   "profile_diameter_m": [0.03, 0.06]})
+                                   "profile_diameter_m": [0.03, 0.06],
+                                   "reference": {"E_pa": 1.5e10, "rho_kg_m3": 650.0}})
         new = reg.add_bat(conn, shorter, "b.uff", b"second", replace=True)
         assert new.profile_x_m == [0.0, 0.8] and reg.baseline_file(conn, new) == b"second"
+        assert new.reference_seq > old.reference_seq
+        reg.add_inspection(conn, "S1", {"altered": True}, "r2.uff", b"22")
         hist = reg.history(conn, "S1")
-        assert len(hist) == 1 and hist[0].baseline_sha256 == old.baseline_sha256
-        # the old baseline is still referenced by the inspection, so it is kept
-        assert conn.execute("SELECT count(*) FROM baseline_files").fetchone()[0] == 2
+        assert [h.baseline_sha256 for h in hist] == [old.baseline_sha256, new.baseline_sha256]
+        assert [h.reference_seq for h in hist] == [old.reference_seq, new.reference_seq]
+        then = reg.bat_as_registered(conn, hist[0].reference_seq)
+        assert then.profile_x_m == old.profile_x_m and then.reference == old.reference
+        assert then.baseline_name == "a.uff"
         reg.add_bat(conn, make_bat("S1"), "c.uff", b"third", replace=True)
-        # "second" is referenced by nothing any more
-        names = {r[0] for r in conn.execute("SELECT name FROM baseline_files")}
-        assert names == {"a.uff", "c.uff"}
+        names = {r[0] for r in conn.execute("SELECT name FROM files")}
+        assert names == {"a.uff", "b.uff", "c.uff", "r.uff", "r2.uff"}
+        assert reg.check(conn).ok
 
 
 def test_tampered_baseline_is_detected(tmp_path):
@@ -97,7 +117,7 @@ def test_tampered_baseline_is_detected(tmp_path):
     with reg.open_registry(path) as conn:
         reg.add_bat(conn, make_bat("T1"), "a.uff", b"genuine baseline data")
     raw = sqlite3.connect(path)
-    raw.execute("UPDATE baseline_files SET content = ?", (b"genuine baseline dat4",))
+    raw.execute("UPDATE files SET content = ?", (b"genuine baseline dat4",))
     raw.commit()
     raw.close()
     with reg.open_registry(path) as conn:
@@ -113,7 +133,8 @@ def test_failed_transaction_leaves_nothing(tmp_path):
             reg.add_bat(conn, bad, "a.uff", b"x")
         assert not conn.in_transaction
         assert reg.list_bats(conn) == []
-        assert conn.execute("SELECT count(*) FROM baseline_files").fetchone()[0] == 0
+        assert conn.execute("SELECT count(*) FROM files").fetchone()[0] == 0
+        assert conn.execute("SELECT count(*) FROM custody").fetchone()[0] == 0
 
 
 def test_migration_from_v1(tmp_path):
@@ -133,21 +154,29 @@ def test_migration_from_v1(tmp_path):
     conn.close()
 
     with reg.open_registry(path) as conn:
-        assert reg.schema_version(conn) == reg.SCHEMA_VERSION == 2
+        assert reg.schema_version(conn) == reg.SCHEMA_VERSION == 3
         versions = [r[0] for r in conn.execute("SELECT version FROM schema_version")]
-        assert versions == [1, 2]
+        assert versions == [1, 2, 3]
         bat = reg.get_bat(conn, "V1")
         assert bat.profile_x_m == prof["x_m"] and bat.profile_diameter_m == prof["diameter_m"]
         assert bat.species == "maple" and bat.reference == {"E_pa": 1e10}
         assert reg.baseline_file(conn, bat) == blob
         (insp,) = reg.history(conn, "V1")
         assert insp.altered is True and insp.retest_sha256 == "abc"
+        assert insp.status == "altered" and insp.reference_seq is None
         assert insp.baseline_sha256 == reg.sha256_bytes(blob)
+        # the migration chained what was there: the file, the bat, the verdict
+        kinds = [r[0] for r in conn.execute("SELECT kind FROM custody ORDER BY seq")]
+        assert kinds == ["file", "reference", "verdict"]
+        res = reg.check(conn)
+        assert res.ok and res.notes == [
+            f"inspection #{insp.id}: re-test file not kept (inspected before schema 3)"]
         assert conn.execute("PRAGMA foreign_key_check").fetchall() == []
         assert conn.execute("PRAGMA integrity_check").fetchone()[0] == "ok"
         # the migrated database is fully usable
-        reg.add_inspection(conn, "V1", {"altered": False}, "r.uff", "def", bat.baseline_sha256)
+        reg.add_inspection(conn, "V1", {"altered": False}, "r.uff", b"def")
         assert [i.altered for i in reg.history(conn, "V1")] == [True, False]
+        assert reg.check(conn).ok
 
 
 def test_newer_schema_is_refused(tmp_path):
@@ -184,7 +213,7 @@ def _worker(path: str, worker: int, n: int) -> None:
         assert shared is not None
         for k in range(n):
             reg.add_inspection(conn, "W0", {"altered": k % 2 == 0, "by": worker}, "r.uff",
-                               f"{worker}-{k}", shared.baseline_sha256)
+                               f"{worker}-{k}".encode())
 
 
 def test_concurrent_writers(tmp_path):
@@ -201,8 +230,9 @@ def test_concurrent_writers(tmp_path):
         hist = reg.history(conn, "W0")
         assert len(hist) == 60
         assert sorted(h.retest_sha256 for h in hist) == sorted(
-            f"{w}-{k}" for w in range(4) for k in range(15))
-        assert [r[0] for r in conn.execute("SELECT version FROM schema_version")] == [1, 2]
+            reg.sha256_bytes(f"{w}-{k}".encode()) for w in range(4) for k in range(15))
+        assert [r[0] for r in conn.execute("SELECT version FROM schema_version")] == [1, 2, 3]
+        assert reg.check(conn).ok  # one unbroken chain however the writers interleaved
 
 
 # --- a writer killed mid-transaction -------------------------------------------------------
@@ -211,7 +241,7 @@ def test_concurrent_writers(tmp_path):
 def _die_mid_transaction(path: str, ready) -> None:
     conn = reg.connect(path)
     conn.execute("BEGIN IMMEDIATE")
-    conn.execute("INSERT INTO baseline_files VALUES ('dead', 'dead.uff', 4, x'00112233')")
+    conn.execute("INSERT INTO files VALUES ('dead', 'dead.uff', 4, x'00112233')")
     conn.execute("INSERT INTO bats (serial, species, meta_json, reference_json, modes_json, "
                  "baseline_sha256, registered_at) VALUES ('DEAD', '', '{}', '{}', '{}', 'dead', "
                  "'now')")
@@ -225,7 +255,7 @@ def _inspect_forever(path: str, ready) -> None:
         k = 0
         while True:
             reg.add_inspection(conn, "K1", {"altered": False, "k": k, "pad": "x" * 5000},
-                               "r.uff", str(k), bat.baseline_sha256)
+                               "r.uff", str(k).encode(), bat.reference_seq)
             k += 1
             if k == 20:
                 ready.set()
@@ -251,9 +281,9 @@ def test_killed_writer_leaves_database_consistent(tmp_path):
         hist = reg.history(conn, "K1")
         assert len(hist) >= 20
         assert [h.verdict["k"] for h in hist] == list(range(len(hist)))  # no gap, no torn row
-        bat = reg.get_bat(conn, "K1")
-        reg.add_inspection(conn, "K1", {"altered": True}, "r.uff", "after", bat.baseline_sha256)
-        assert reg.history(conn, "K1")[-1].retest_sha256 == "after"
+        reg.add_inspection(conn, "K1", {"altered": True}, "r.uff", b"after")
+        assert reg.history(conn, "K1")[-1].retest_sha256 == reg.sha256_bytes(b"after")
+        assert reg.check(conn).ok
 
 
 def test_missing_registry_not_created_on_read(tmp_path):
@@ -261,3 +291,127 @@ def test_missing_registry_not_created_on_read(tmp_path):
     with pytest.raises(ValueError, match="no registry there"):
         reg.connect(path, create=False)
     assert not path.parent.exists()
+
+
+# --- chain of custody ----------------------------------------------------------------------
+
+
+def _chained(path) -> dict:
+    with reg.open_registry(path) as conn:
+        reg.add_bat(conn, make_bat("C1"), "base.uff", b"baseline bytes")
+        ids = [reg.add_inspection(conn, "C1", {"altered": k == 1, "k": k}, f"r{k}.uff",
+                                  f"retest {k}".encode()).id for k in range(3)]
+        assert reg.check(conn).ok
+        rows = conn.execute("SELECT seq, kind, subject FROM custody ORDER BY seq").fetchall()
+    return {"ids": ids, "seq": {(kind, subject): seq for seq, kind, subject in rows}}
+
+
+def _raw(path, sql, args=()):
+    raw = sqlite3.connect(path)
+    raw.execute(sql, args)
+    raw.commit()
+    raw.close()
+
+
+def _check(path) -> reg.CheckResult:
+    with reg.open_registry(path) as conn:
+        return reg.check(conn)
+
+
+def test_chain_names_a_changed_verdict(tmp_path):
+    path = tmp_path / "c.sqlite"
+    info = _chained(path)
+    victim = info["ids"][1]
+    _raw(path, "UPDATE inspections SET verdict_json = ? WHERE id = ?",
+         (json.dumps({"altered": False, "k": 1}), victim))
+    res = _check(path)
+    assert not res.ok and res.first_changed == info["seq"][("verdict", str(victim))]
+    assert any(f"inspection #{victim}: stored verdict differs" in p for p in res.problems)
+
+
+def test_chain_names_a_rewritten_record_and_everything_after_stays_linked(tmp_path):
+    """Rewriting a record's payload together with its content hash still breaks its own
+    record hash (and re-hashing it breaks the next record's link)."""
+    path = tmp_path / "c.sqlite"
+    info = _chained(path)
+    seq = info["seq"][("verdict", str(info["ids"][0]))]
+    with reg.open_registry(path) as conn:
+        payload = conn.execute("SELECT payload FROM custody WHERE seq = ?", (seq,)).fetchone()[0]
+    forged = payload.replace('"altered":false', '"altered":true')
+    assert forged != payload
+    _raw(path, "UPDATE custody SET payload = ?, content_sha256 = ? WHERE seq = ?",
+         (forged, reg.sha256_bytes(forged.encode()), seq))
+    res = _check(path)
+    assert res.first_changed == seq and f"custody record #{seq} " in res.problems[0]
+    assert "hash does not match" in res.problems[0]
+    # re-hash the forged record too: now the next record's link breaks
+    with reg.open_registry(path) as conn:
+        r = conn.execute("SELECT kind, subject, content_sha256, prev_sha256, recorded_at "
+                         "FROM custody WHERE seq = ?", (seq,)).fetchone()
+    _raw(path, "UPDATE custody SET record_sha256 = ? WHERE seq = ?",
+         (reg.record_hash(seq, *r), seq))
+    res = _check(path)
+    assert f"custody record #{seq + 1} " in res.problems[0]
+    assert "link to the previous record" in res.problems[0]
+    assert res.first_changed == seq  # the live inspection no longer matches its record either
+
+
+def test_chain_detects_missing_and_changed_files_and_deleted_records(tmp_path):
+    path = tmp_path / "c.sqlite"
+    info = _chained(path)
+    sha = reg.sha256_bytes(b"retest 2")
+    _raw(path, "DELETE FROM files WHERE sha256 = ?", (sha,))
+    res = _check(path)
+    assert any(f"re-test file {sha[:12]} missing" in p for p in res.problems)
+    assert res.first_changed is None  # the chain itself is intact
+    _raw(path, "UPDATE files SET content = ? WHERE name = 'base.uff'", (b"baseline bytez",))
+    assert any("base.uff" in p and "SHA-256" in p for p in _check(path).problems)
+    first_verdict = info["seq"][("verdict", str(info["ids"][0]))]
+    _raw(path, "DELETE FROM custody WHERE seq = ?", (first_verdict,))
+    res = _check(path)
+    assert res.first_changed == first_verdict + 1
+    assert any(f"records #{first_verdict}..#{first_verdict} removed" in p for p in res.problems)
+
+
+def test_read_only_registry_is_readable_and_refuses_writes(tmp_path):
+    path = tmp_path / "ro" / "r.sqlite"
+    _chained(path)
+    os.chmod(path, 0o444)
+    os.chmod(path.parent, 0o555)
+    try:
+        # root may write anything: there the explicit read-only mode is what is tested
+        readonly = os.access(path, os.W_OK)
+        with reg.open_registry(path, create=False, readonly=readonly) as conn:
+            assert [b.serial for b in reg.list_bats(conn)] == ["C1"]
+            assert len(reg.history(conn, "C1")) == 3 and reg.check(conn).ok
+            with pytest.raises(ValueError, match="read-only"):
+                reg.add_inspection(conn, "C1", {"altered": False}, "r.uff", b"new")
+    finally:
+        os.chmod(path.parent, 0o755)
+        os.chmod(path, 0o644)
+
+
+@settings(max_examples=12, deadline=None,
+          suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(n_bats=st.integers(1, 3), n_insp=st.integers(0, 4), pick=st.floats(0, 0.999),
+       how=st.sampled_from(["content", "stamp", "subject"]))
+def test_chain_names_whichever_record_was_changed(tmp_path, n_bats, n_insp, pick, how):
+    """Whatever the history and whichever record is changed (its content hash, its time stamp
+    or its subject), `check` names that record as the first changed one."""
+    path = tmp_path / f"h{n_bats}{n_insp}{pick}{how}.sqlite"
+    with reg.open_registry(path) as conn:
+        for b in range(n_bats):
+            reg.add_bat(conn, make_bat(f"P{b}"), f"b{b}.uff", f"base {b}".encode())
+        for k in range(n_insp):
+            reg.add_inspection(conn, f"P{k % n_bats}", {"altered": k % 2 == 0}, f"r{k}.uff",
+                               f"retest {k}".encode())
+        assert reg.check(conn).ok
+        n = conn.execute("SELECT count(*) FROM custody").fetchone()[0]
+    seq = 1 + int(pick * n)
+    column, value = {"content": ("content_sha256", "f" * 64),
+                     "stamp": ("recorded_at", "2000-01-01T00:00:00+00:00"),
+                     "subject": ("subject", "someone else")}[how]
+    _raw(path, f"UPDATE custody SET {column} = ? WHERE seq = ?", (value, seq))
+    res = _check(path)
+    assert not res.ok and res.first_changed == seq, res.problems
+    path.unlink()

@@ -10,7 +10,7 @@ import multiprocessing as mp
 import shutil
 from pathlib import Path
 
-from batlab.registry import history, list_bats, open_registry
+from batlab.registry import check, history, list_bats, open_registry
 
 SAMPLE = Path("data_samples/smooth_bat").resolve()
 
@@ -55,5 +55,6 @@ def test_concurrent_register_and_inspect_processes(tmp_path):
             hist = history(conn, f"C-{k}")
             assert len(hist) == 3 and all(h.altered for h in hist)
         assert conn.execute("PRAGMA integrity_check").fetchone()[0] == "ok"
-        # one baseline file, stored once, shared by the three bats
-        assert conn.execute("SELECT count(*) FROM baseline_files").fetchone()[0] == 1
+        # one baseline and one re-test file, each stored once, shared by the three bats
+        assert conn.execute("SELECT count(*) FROM files").fetchone()[0] == 2
+        assert check(conn).ok  # one unbroken custody chain however the writers interleaved

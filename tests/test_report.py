@@ -4,6 +4,7 @@ renders (headless Chromium screenshot, when Chromium is installed)."""
 from __future__ import annotations
 
 import base64
+import os
 import re
 import shutil
 import subprocess
@@ -14,7 +15,15 @@ import numpy as np
 import pytest
 
 from batlab import pipeline
-from batlab.report import element_mass_change, mass_rows, write_report
+from batlab.report import (
+    check_destination,
+    element_mass_change,
+    figures_png,
+    headline,
+    mass_rows,
+    render_html,
+    write_report,
+)
 from tests.inspect_standins import use_standins
 from updating.model.mass_properties import mass_properties
 from updating.model.units import IN_TO_M, LB_TO_KG
@@ -22,11 +31,18 @@ from updating.model.units import IN_TO_M, LB_TO_KG
 SAMPLE = Path("data_samples/smooth_bat")
 
 
+def _inputs(res):
+    meta = pipeline.read_meta_dict(SAMPLE / "meta.json")
+    prov = pipeline.provenance(baseline_sha256=pipeline.file_sha256(SAMPLE / "baseline.uff"),
+                               retest_sha256=pipeline.file_sha256(SAMPLE / "retest_corked.uff"))
+    return pipeline.report_inputs(res, meta, prov)
+
+
 @pytest.fixture
 def result(monkeypatch):
     use_standins(monkeypatch)
-    return pipeline.inspect_files(SAMPLE / "profile.csv", SAMPLE / "meta.json",
-                                  SAMPLE / "baseline.uff", SAMPLE / "retest_corked.uff")
+    return _inputs(pipeline.inspect_files(SAMPLE / "profile.csv", SAMPLE / "meta.json",
+                                          SAMPLE / "baseline.uff", SAMPLE / "retest_corked.uff"))
 
 
 def test_report_is_self_contained(result, tmp_path):
@@ -35,8 +51,12 @@ def test_report_is_self_contained(result, tmp_path):
     assert path == out / "index.html"
     assert sorted(p.name for p in out.iterdir()) == ["index.html"]  # no temporary left over
     page = path.read_text()
-    assert "Inspection of bat HX-2001" in page and "ALTERED" in page
-    assert "confidence 0.999" in page
+    assert "Inspection of bat HX-2001" in page
+    assert "Bat HX-2001 has been altered: a bore about 1.00 in across from 24.0 to 33.0 in" in page
+    assert "from its baseline in about 1 of 1,000 re-tests." in page  # p = 1 - 0.999
+    assert "confidence" not in page.lower()
+    assert pipeline.file_sha256(SAMPLE / "retest_corked.uff") in page  # provenance
+    assert "<td>Species</td><td>white ash</td>" in page
     imgs = re.findall(r'<img src="data:image/png;base64,([A-Za-z0-9+/=]+)"', page)
     assert len(imgs) >= 3  # element bars over the bat, FRF overlay, MAC
     for b64 in imgs:
@@ -47,11 +67,17 @@ def test_report_is_self_contained(result, tmp_path):
 
 def test_report_with_real_fits_has_stabilisation_diagrams(monkeypatch, tmp_path):
     use_standins(monkeypatch, fit=False)
-    res = pipeline.inspect_files(SAMPLE / "profile.csv", SAMPLE / "meta.json",
-                                 SAMPLE / "baseline.uff", SAMPLE / "retest_corked.uff")
-    page = write_report(tmp_path, res).read_text()
+    res = _inputs(pipeline.inspect_files(SAMPLE / "profile.csv", SAMPLE / "meta.json",
+                                         SAMPLE / "baseline.uff", SAMPLE / "retest_corked.uff"))
+    page = write_report(tmp_path, res, plots_dir=tmp_path / "plots").read_text()
     assert page.count("<h3>Stabilisation diagram: ") == 2
     assert len(re.findall(r'<img src="data:image/png;base64,', page)) == 5
+    pngs = sorted(p.name for p in (tmp_path / "plots").iterdir())
+    assert pngs == ["elements.png", "frf.png", "mac.png", "stabilisation_baseline.png",
+                    "stabilisation_retest.png"]
+    for name in pngs:  # the same figures as in the page
+        b64 = base64.b64encode((tmp_path / "plots" / name).read_bytes()).decode()
+        assert b64 in page
 
 
 def test_report_destination_is_a_file(result, tmp_path):
@@ -60,12 +86,28 @@ def test_report_destination_is_a_file(result, tmp_path):
         write_report(tmp_path / "f", result)
 
 
+def test_unwritable_destination_fails_before_work(result, tmp_path):
+    (tmp_path / "file").write_text("x")
+    with pytest.raises(ValueError, match="file/rep: report destination not writable"):
+        check_destination(tmp_path / "file" / "rep")  # (as root too)
+    locked = tmp_path / "locked"
+    locked.mkdir()
+    locked.chmod(0o555)
+    try:
+        if os.access(locked, os.W_OK):
+            pytest.skip("running as root: a read-only directory is writable")
+        with pytest.raises(ValueError, match="locked: report destination not writable"):
+            check_destination(locked / "rep")
+    finally:
+        locked.chmod(0o755)
+
+
 def test_element_mass_change_uniform_factor(result):
     """alpha = c everywhere scales the whole mass distribution: dm = c m, same centre of mass,
     dI_knob = c I_knob (against the FE model's own section quadrature)."""
     c = -0.05
-    v = replace(result.verdict, alpha=np.full(result.verdict.alpha.size, c))
-    d = element_mass_change(replace(result, verdict=v))
+    els = [{**e, "alpha": c} for e in result.verdict["elements"]]
+    d = element_mass_change(replace(result, verdict={**result.verdict, "elements": els}))
     ref = mass_properties(result.reference.build(result.profile))
     assert d.mass_kg == pytest.approx(c * ref.mass_kg, rel=1e-4)
     assert d.cg_m == pytest.approx(ref.cg_m, rel=1e-4)
@@ -105,3 +147,78 @@ def test_report_renders_in_headless_chromium(result, tmp_path):
     assert (gray < 0.5).mean() > 0.002  # some dark text/lines drawn
     reds = (img[..., 0] > 0.6) & (img[..., 1] < 0.5) & (img[..., 2] < 0.5)
     assert reds.sum() > 50  # the red verdict border is on screen
+
+
+def _with_verdict(inputs, **changes):
+    return replace(inputs, verdict={**inputs.verdict, **changes})
+
+
+def test_plain_sentence_for_clean_and_inconclusive(result):
+    """A clean bat at confidence 0.075 reads as p = 0.925, never as "7.5 % sure"; an
+    inconclusive verdict gives its reasons and no p-value; status derives from ``altered``
+    when the verdict has none."""
+    clean = _with_verdict(result, altered=False, confidence=0.075, region_in=None,
+                          core_diameter_in=None, fill_density_ratio=None)
+    text = headline(clean)
+    assert text.startswith("Bat HX-2001 shows no sign of alteration")
+    assert "in about 92 of 100 re-tests" in text and "below 1 in 100" in text
+    assert "0.075" not in text and "7.5" not in text
+    odd = _with_verdict(result, status="inconclusive", altered=None,
+                        reasons=["too few modes pair (2 of 6): re-test with more hits"])
+    assert headline(odd) == ("No verdict is possible for bat HX-2001: too few modes pair (2 of "
+                             "6): re-test with more hits. The bat is not called altered.")
+    page = render_html(odd, "2026-01-01T00:00:00", figures_png(odd))
+    assert "p-value" not in page and "<div class='verdict inconclusive'>" in page
+
+
+OVERFLOW_PROBE = """<script>
+const bad = [];
+const body = document.body.getBoundingClientRect();
+document.querySelectorAll('table, img').forEach((el, i) => {
+  const r = el.getBoundingClientRect();
+  if (r.right > body.right + 1 || el.scrollWidth > el.clientWidth + 1) bad.push(i);
+  el.querySelectorAll('td, th').forEach(c => {
+    if (c.scrollWidth > c.clientWidth + 1) bad.push(i + ':' + c.textContent.slice(0, 30));
+  });
+});
+document.body.setAttribute('data-overflow', bad.join('|'));
+</script>"""
+
+
+def overflowing(page: str, tmp_path: Path, width: int = 1100) -> str:
+    """What overflows the page body when headless Chromium lays it out at ``width`` px (the
+    report itself has no script: the probe is added to a copy)."""
+    probe = tmp_path / "probe.html"
+    probe.write_text(page.replace("</body>", OVERFLOW_PROBE + "</body>"))
+    dom = subprocess.run(
+        ["chromium", "--headless", "--no-sandbox", "--disable-gpu",
+         f"--window-size={width},1200", "--dump-dom", probe.resolve().as_uri()],
+        check=True, capture_output=True, text=True, timeout=90).stdout
+    found = re.search(r'data-overflow="([^"]*)"', dom)
+    assert found, "the probe did not run"
+    return found.group(1)
+
+
+@pytest.mark.skipif(shutil.which("chromium") is None,
+                    reason="chromium not installed (apt-get install chromium) - layout check "
+                           "skipped")
+def test_no_table_overflows_in_chromium(monkeypatch, tmp_path):
+    """Every table and figure fits the page, the paired-modes table with all its columns too
+    (its headers wrap); and the check fails on a table that does not fit."""
+    use_standins(monkeypatch)
+    res = pipeline.inspect_files(SAMPLE / "profile.csv", SAMPLE / "meta.json",
+                                 SAMPLE / "baseline.uff", SAMPLE / "retest_corked.uff")
+    inputs = _inputs(res)
+    keys = ["baseline_hz", "retest_hz", "mac", "reference_hz", "mac_reference", "change_pct",
+            "moisture_fit_change_pct", "core_fit_change_pct"]
+    modes = [{k: 1234.5678 * (i + 1) for k in keys} for i in range(6)]
+    inputs = _with_verdict(inputs, modes=modes)
+    page = render_html(inputs, "2026-01-01T00:00:00", figures_png(inputs))
+    assert "Explained by moisture + core (%)" in page and "core_fit_change_pct" not in page
+    for width in (1100, 800):
+        assert overflowing(page, tmp_path, width) == "", width
+    # a table laid out as the old report did (automatic widths, cells that never wrap)
+    wide = page.replace("</body>", "<table style='table-layout:auto;width:auto'><tr>"
+                        + "<td style='white-space:nowrap'>moisture_fit_change_pct</td>" * 12
+                        + "</tr></table></body>")
+    assert overflowing(wide, tmp_path) != ""

@@ -7,11 +7,11 @@ import numpy as np
 import pytest
 import serial
 
-from batlab.commands.rig import uniform_beam_modes
 from rigs import protocol as p
 from rigs.capture import CaptureSettings, HitCapture, check_hit
 from rigs.driver import DeviceError, SerialDevice, open_port
 from rigs.hits import Pulse, simulate_hit
+from rigs.modal_model import uniform_beam_modes
 from rigs.session import HitLog, acquire_point
 from rigs.stream import DataBlock, Gap
 from rigs.virtual_box import BoxConfig, VirtualBox, default_info

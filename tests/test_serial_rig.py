@@ -2,7 +2,6 @@
 against the simulated structure, and replay of recorded streams."""
 
 import json
-import os
 import select
 import subprocess
 import sys
@@ -11,8 +10,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from batlab.commands.rig import DEFAULT_POINTS_IN, IN_TO_M, uniform_beam_modes
 from rigs.frf_estimate import added_damping_ratio
+from rigs.modal_model import uniform_beam_modes
+from rigs.session import DEFAULT_POINTS_IN
+from updating.model.units import IN_TO_M
 
 ROOT = Path(__file__).resolve().parents[1]
 SAMPLE = ROOT / "data_samples" / "serial" / "beam_two_points.raw.bin"
@@ -28,8 +29,9 @@ def _batlab(*args, timeout=60):
 
 
 class _Rig:
-    def __init__(self, *args):
-        self.proc = subprocess.Popen([sys.executable, "-m", "batlab", "rig", "serve", "--once",
+    def __init__(self, *args, once: bool = True):
+        self.proc = subprocess.Popen([sys.executable, "-m", "batlab", "rig", "serve",
+                                      *(["--once"] if once else []),
                                       "--speed", "0", *args], cwd=ROOT, stdout=subprocess.PIPE,
                                      stderr=subprocess.PIPE, text=True)
         ready, _, _ = select.select([self.proc.stdout], [], [], 20)
@@ -96,9 +98,14 @@ def test_rig_serve_and_acquire_with_every_fault(tmp_path):
     assert [(r["point"], r["hit"], r["reason"]) for r in summary["rejected"]] == rejected
 
     # the recorded stream replays to the same verdicts
-    rep = _batlab("acquire", "--replay", str(raw), "--json")
+    rep = _batlab("acquire", "--replay", str(raw), "-o", str(tmp_path / "again.uff"), "--json")
     assert rep.returncode == 0, rep.stderr
     assert json.loads(rep.stdout)["rejected"] == summary["rejected"]
+    from ema.io.frf_io import read_test as _read
+
+    again = _read(tmp_path / "again.uff")  # positions from the sidecar, no --meta given
+    assert np.array_equal(again.frf, _read(out).frf)
+    assert again.node_x_m == _read(out).node_x_m
 
     # the FRFs: driving-point peaks at the structure's frequencies, damping after the window
     from ema.io.frf_io import read_test
@@ -122,10 +129,10 @@ def test_rig_serve_and_acquire_with_every_fault(tmp_path):
     assert strong.sum() >= 3 and test.coherence[k, 0, strong].min() > 0.98  # away from nodes
 
 
-def test_recorded_sample_replays_to_its_log():
+def test_recorded_sample_replays_to_its_log(tmp_path):
     side = json.loads(Path(str(SAMPLE) + ".json").read_text())
     assert SAMPLE.stat().st_size < 1_000_000
-    res = _batlab("acquire", "--replay", str(SAMPLE), "--json")
+    res = _batlab("acquire", "--replay", str(SAMPLE), "-o", str(tmp_path / "s.uff"), "--json")
     assert res.returncode == 0, res.stderr
     summary = json.loads(res.stdout)
     assert summary["accepted"] == sum(h["accepted"] for h in side["log"])
@@ -134,25 +141,85 @@ def test_recorded_sample_replays_to_its_log():
     assert {r["reason"] for r in summary["rejected"]} >= {"double hit", "data lost"}
 
 
-def test_truncated_recording_is_a_clean_error(tmp_path):
+def test_truncated_recording_keeps_its_completed_points(tmp_path):
+    """A recording cut during the second point: a clean error naming what was completed, and
+    --partial writes the completed point."""
     cut = tmp_path / "cut.raw.bin"
     data = SAMPLE.read_bytes()
-    cut.write_bytes(data[:len(data) // 3])
-    os.link(str(SAMPLE) + ".json", str(cut) + ".json")
-    res = _batlab("acquire", "--replay", str(cut), "--json")
+    side = json.loads(Path(str(SAMPLE) + ".json").read_text())
+    cut.write_bytes(data[: int(len(data) * 0.75)])
+    Path(str(cut) + ".json").write_text(json.dumps(side))
+    res = _batlab("acquire", "--replay", str(cut), "-o", str(tmp_path / "p.uff"), "--json")
     assert res.returncode == 2 and res.stdout == ""
-    assert res.stderr.strip().splitlines()[-1] == (
-        f"batlab acquire: error: {cut}: recorded stream ended")
-    assert "device stopped mid-hit" in res.stderr or "tap point" in res.stderr
+    last = res.stderr.strip().splitlines()[-1]
+    assert last.startswith(f"batlab acquire: error: {cut}: recorded stream ended after 1 of 2 "
+                           f"points (completed: {side['points'][0]})"), last
+    assert "--partial" in last and not (tmp_path / "p.uff").exists()
+    side["driving_point"] = side["points"][0]  # (the sample's driving point is its 2nd)
+    Path(str(cut) + ".json").write_text(json.dumps(side))
+    res = _batlab("acquire", "--replay", str(cut), "-o", str(tmp_path / "p.uff"), "--partial",
+                  "--json")
+    assert res.returncode == 0, res.stderr
+    assert json.loads(res.stdout)["points"] == side["points"][:1]
+    from ema.io.frf_io import read_test
+
+    assert read_test(tmp_path / "p.uff").frf.shape[2] == 1
+
+
+def test_replay_without_output_refuses_at_once():
+    res = _batlab("acquire", "--replay", str(SAMPLE), "--json")
+    assert res.returncode == 2 and res.stdout == ""
+    assert res.stderr.strip() == ("batlab acquire: error: --replay needs -o OUTPUT (the FRF "
+                                  "file to write from the recording)")
 
 
 def test_bad_port_and_bad_points_are_one_line_errors(tmp_path):
     res = _batlab("acquire", "--port", "/dev/no-such-box", "--points", "1,2", "--driving-point",
                   "2", "-o", str(tmp_path / "x.uff"))
     assert res.returncode == 2 and "/dev/no-such-box: cannot open serial port" in res.stderr
-    assert not (tmp_path / "x.uff").exists()
+    assert list(tmp_path.iterdir()) == []  # no orphan raw stream or sidecar
     res = _batlab("acquire", "--port", "loop://", "--points", "1,2", "--driving-point", "3",
                   "-o", str(tmp_path / "x.uff"))
     assert res.returncode == 2 and "not one of the impact points" in res.stderr
     res = _batlab("rig", "serve", "--faults", "lightning")
     assert res.returncode == 2 and "unknown fault(s) lightning" in res.stderr
+
+
+def test_killed_session_resumes_with_its_completed_points(tmp_path):
+    """SIGKILL the host after two points: their FRFs are on disk; `--resume` measures the
+    rest only, and the result has every point with the positions of the first run."""
+    rig = _Rig("--speed", "1", "--sample-rate", "4096", once=False)  # the box outlives a host
+    out = tmp_path / "t.uff"
+    args = [sys.executable, "-m", "batlab", "acquire", "--port", rig.path, "--points",
+            "1,4,7,16", "--driving-point", "16", "--hits", "1", "--record-s", "1.5",
+            "--points-in", ",".join(str(v) for v in DEFAULT_POINTS_IN), "-o", str(out)]
+    try:
+        host = subprocess.Popen(args, cwd=ROOT, stderr=subprocess.PIPE, text=True)
+        seen = []
+        while not any("point 3/4 (#7): tap point 7" in line for line in seen):  # 2 saved
+            ready, _, _ = select.select([host.stderr], [], [], 30)
+            line = host.stderr.readline() if ready else ""
+            assert line, seen  # (the host died or hung)
+            seen.append(line)
+        host.kill()
+        host.wait(10)
+        host.stderr.close()
+        side = json.loads((tmp_path / "t.raw.bin.json").read_text())
+        assert side["completed"] == [1, 4] and not out.exists()
+        assert [(h["point"], h["accepted"]) for h in side["log"]] == [(1, True), (4, True)]
+        assert side["points_in"][:2] == [1.0, 3.0]
+        res = _batlab("acquire", "--port", rig.path, "--resume", "-o", str(out), "--json")
+        assert res.returncode == 0, res.stderr
+    finally:
+        rig.close()
+    summary = json.loads(res.stdout)
+    assert summary["resumed_points"] == [1, 4] and summary["points"] == [1, 4, 7, 16]
+    assert summary["accepted"] == 4  # the first run's two hits and the resumed run's two
+    assert "point 1/4 (#1): already measured" in res.stderr
+    assert "tap point 1\n" not in res.stderr and "tap point 7\n" in res.stderr
+    assert (tmp_path / "t.raw.bin.resume1").stat().st_size > 0
+    from ema.io.frf_io import read_test
+
+    test = read_test(out)
+    assert test.frf.shape[2] == 4 and test.node_x_m[16] == pytest.approx(31 * IN_TO_M)
+    assert np.all(np.abs(test.frf[10:, 0, :]).max(axis=0) > 0)  # every point measured

@@ -6,8 +6,10 @@ import json
 from dataclasses import asdict
 
 from batlab.cli_support import add_db_argument, db_path
+from batlab.formatting import STATUS_WORDS
 
 HELP = "list the registered bats with their latest inspection"
+EXAMPLE = "batlab bats --db lab.sqlite"
 
 
 def add_arguments(p) -> None:
@@ -28,8 +30,8 @@ def run(args) -> int:
         return 0
     print(f"{'serial':<16} {'species':<14} {'registered (UTC)':<20} {'tests':>5}  latest")
     for b in bats:
-        latest = "-" if b.last_altered is None else (
-            ("ALTERED" if b.last_altered else "not altered") + f" ({b.last_inspected_at[:19]})")
+        latest = "-" if b.last_status is None else (
+            STATUS_WORDS.get(b.last_status, b.last_status) + f" ({b.last_inspected_at[:19]})")
         print(f"{b.serial:<16} {b.species:<14} {b.registered_at[:19]:<20} "
               f"{b.n_inspections:>5}  {latest}")
     return 0

@@ -7,6 +7,7 @@ import sys
 
 HELP = ("check the test rig on a reference bar: measured modes, damping and mass line "
         "against the bar's model")
+EXAMPLE = "batlab check-rig --bar steel_bar.json --frf bar_test.uff --json"
 
 
 def add_arguments(p) -> None:
@@ -26,33 +27,17 @@ def add_arguments(p) -> None:
 
 
 def run(args) -> int:
-    import numpy as np
+    from batlab import pipeline
 
-    from batlab.commands.diagnose import modal_fitter
-    from ema.io.frf_io import read_test
-    from updating.correlate.measured import from_fit
-    from updating.diagnose.rig_check import FREQ_TOL, MAX_DAMPING, SCALE_TOL, check_rig
-    from updating.model.bar import read_bar_json
+    def progress(message: str) -> None:
+        print(f"batlab check-rig: {message}", file=sys.stderr, flush=True)
 
-    bar = read_bar_json(args.bar)
-    test = read_test(args.frf)
-    fit_test = modal_fitter()
-    print(f"batlab check-rig: fitting the modes of {args.frf} ...", file=sys.stderr)
-    i, _ = test.driving_point
-    sensor_x_m = test.node_x_m[int(test.response_nodes[i])]
-    fit = fit_test(test, method=args.method)
-    measured = from_fit(fit, sensor_x_m)
-    if measured.freq_hz.size == 0:
-        raise ValueError(f"{args.frf}: the fitter found no elastic mode above 20 Hz")
-    ml = getattr(fit, "mass_line", None)
-    ml_dp = None
-    if ml is not None and np.size(ml):
-        ml_dp = float(np.real(np.asarray(ml)[fit.driving_frf]))
-    result = check_rig(
-        bar, measured, ml_dp if ml_dp and ml_dp > 0 else None,
-        freq_tol=FREQ_TOL if args.freq_tol is None else args.freq_tol / 100,
-        max_damping=MAX_DAMPING if args.max_damping is None else args.max_damping / 100,
-        scale_tol=SCALE_TOL if args.scale_tol is None else args.scale_tol / 100)
+    def fraction(pct: float | None) -> float | None:
+        return None if pct is None else pct / 100
+
+    result = pipeline.check_rig_files(args.bar, args.frf, args.method, fraction(args.freq_tol),
+                                      fraction(args.max_damping), fraction(args.scale_tol),
+                                      progress)
     out = result.to_json_dict()
     if args.json:
         print(json.dumps(out))

@@ -18,6 +18,7 @@ from pathlib import Path
 from batlab.cli_support import add_db_argument, progress_printer
 
 HELP = "simulate a baseline and a corked re-test of a built-in bat, register and inspect them"
+EXAMPLE = "batlab demo --out demo/"
 
 TRUTH = {"E_scale": 1.04, "density_scale": 0.97, "e_over_g": 13.0, "sensor_mass_g": 3.0,
          "bungee_k_n_per_m": 150.0, "noise_pct": 0.5, "df_hz": 1.0, "fmax_hz": 3200.0}
@@ -39,8 +40,10 @@ def builtin_dir() -> Path:
     return Path(__file__).resolve().parent.parent / "builtin"
 
 
-def simulate_pair(work: Path, seed: int, progress) -> tuple[Path, Path, Path, Path]:
-    """Copy the built-in bat to ``work`` and write its baseline and corked re-test as UFF."""
+def simulate_pair(work: Path, seed: int, progress,
+                  alteration: str | None = RETEST["alteration"]) -> tuple[Path, Path, Path, Path]:
+    """Copy the built-in bat to ``work`` and write its baseline and re-test as UFF (the re-test
+    after moisture and a re-mounted sensor, and ``alteration`` unless None)."""
     import numpy as np
 
     from ema.io.frf_io import write_test
@@ -61,29 +64,28 @@ def simulate_pair(work: Path, seed: int, progress) -> tuple[Path, Path, Path, Pa
                      bungee_k_n_per_m=TRUTH["bungee_k_n_per_m"],
                      rel_noise=TRUTH["noise_pct"] / 100)
     freq = np.arange(0.0, TRUTH["fmax_hz"] + TRUTH["df_hz"] / 2, TRUTH["df_hz"])
-    retest_bat = with_changes(bat, core=parse_core_spec(RETEST["alteration"]),
+    core = None if alteration is None else parse_core_spec(alteration)
+    retest_bat = with_changes(bat, core=core,
                               moisture_pct=RETEST["moisture_pct"],
                               sensor_offset_m=RETEST["sensor_offset_in"] * IN_TO_M)
     baseline_path, retest_path = work / "baseline.uff", work / "retest.uff"
     progress(f"simulating the baseline test of {meta.serial} on the virtual rig")
     write_test(baseline_path, simulate_test(bat, freq, seed=seed))
     progress("simulating the re-test weeks later: moisture +0.8 points, accelerometer "
-             "re-mounted, corked")
+             "re-mounted" + ("" if alteration is None else f", altered ({alteration})"))
     write_test(retest_path, simulate_test(retest_bat, freq, seed=seed + 1))
     return profile_path, meta_path, baseline_path, retest_path
 
 
 def run(args) -> int:
     from batlab import pipeline
-    from batlab.commands.inspect import readable
+    from batlab.formatting import readable
     from batlab.registry import open_registry
-    from batlab.report import write_report
+    from batlab.report import check_destination, write_report
 
     progress = progress_printer("demo")
     work = Path(args.out) if args.out else Path(tempfile.mkdtemp(prefix="batlab-demo-"))
-    if work.exists() and not work.is_dir():
-        raise ValueError(f"{work}: --out is not a directory")
-    work.mkdir(parents=True, exist_ok=True)
+    check_destination(work, "--out")
     db = Path(args.db) if args.db else work / "registry.sqlite"
     profile, meta, baseline, retest = simulate_pair(work, args.seed, progress)
     with open_registry(db) as conn:
@@ -92,8 +94,11 @@ def run(args) -> int:
         serial = done.record.serial
         result = pipeline.inspect_registered(conn, serial, retest, refit_baseline=True,
                                              progress=progress, baseline_fit=done.baseline.fit)
-        report = write_report(work / "report", result)
-        pipeline.store_inspection(conn, result, retest, str(report))
+        stored = pipeline.store_inspection(conn, result, retest)
+        inputs = pipeline.report_inputs(result, done.record.meta,
+                                        pipeline.provenance(conn, stored=stored))
+        report = write_report(work / "report", inputs)
+        pipeline.note_report(conn, stored, str(report))
     out = pipeline.contract_dict(serial, result.verdict)
     progress(f"wrote the tests, registry and report under {work}; report: {report}")
     if args.json:

@@ -6,6 +6,7 @@ import json
 import sys
 
 HELP = "compare a baseline test with the nominal model, rank the causes, calibrate the reference"
+EXAMPLE = "batlab diagnose --profile profile.csv --meta meta.json --frf baseline.uff --plot plots/"
 
 
 def add_arguments(p) -> None:
@@ -24,66 +25,28 @@ def add_arguments(p) -> None:
                         "bat (about a minute; names beam_theory with its gain)")
 
 
-def modal_fitter():
-    """ema.fit.fit_test, or a clear error when this installation lacks it."""
-    try:
-        from ema.fit import fit_test
-    except ImportError:
-        raise ValueError("the modal fitter (ema.fit) is not available in this "
-                         "installation") from None
-    return fit_test
-
-
-def fit_modes(test, method: str, fit_test):
-    """(MeasuredModes, suspension_hz) of a test by the ema fitter."""
-    from updating.correlate.measured import from_fit
-
-    i, _ = test.driving_point
-    sensor_x_m = test.node_x_m[int(test.response_nodes[i])]
-    fit = fit_test(test, method=method)
-    suspension = getattr(fit, "suspension_freq_hz", None)
-    return from_fit(fit, sensor_x_m), suspension
-
-
 def run(args) -> int:
     from pathlib import Path
 
+    from batlab import pipeline
     from batlab.diagnose_report import format_table, write_plot
-    from ema.io.frf_io import read_test
-    from updating.diagnose.run import MIN_GAIN_PCT, diagnose
-    from updating.model.lab_input import read_meta
-    from updating.model.profile import read_profile_csv
+    from batlab.report import check_destination
 
-    profile = read_profile_csv(args.profile)
-    meta = read_meta(args.meta)
-    if args.plot and not Path(args.plot).is_dir():
-        raise OSError(f"{args.plot}: --plot needs an existing directory")
-    test = read_test(args.frf)
-    fit_test = modal_fitter()
-    print(f"batlab diagnose: fitting the modes of {args.frf} ...", file=sys.stderr)
-    measured, suspension_hz = fit_modes(test, args.method, fit_test)
-    if measured.freq_hz.size == 0:
-        raise ValueError(f"{args.frf}: the fitter found no elastic mode above 20 Hz")
-    print(f"batlab diagnose: {measured.freq_hz.size} elastic modes; ranking the causes ...",
-          file=sys.stderr)
-    min_gain = MIN_GAIN_PCT if args.min_gain is None else args.min_gain
-    if args.solid:
-        from updating.diagnose.solid import diagnose_with_solid
+    if args.plot:  # created like every other output directory, and proved writable first
+        check_destination(args.plot, "--plot")
 
-        result, corr = diagnose_with_solid(profile, meta, measured, suspension_hz,
-                                           progress=True, min_gain_pct=min_gain)
-        print("batlab diagnose: 3D/1D corrections per plane, %: "
-              + "; ".join(" ".join(f"{100 * c:+.2f}" for c in row) for row in corr),
-              file=sys.stderr)
-    else:
-        result = diagnose(profile, meta, measured, suspension_hz, min_gain_pct=min_gain)
+    def progress(message: str) -> None:
+        print(f"batlab diagnose: {message}", file=sys.stderr, flush=True)
+
+    meta, result = pipeline.diagnose_files(args.profile, args.meta, args.frf, args.method,
+                                           args.min_gain, progress, solid=args.solid)
     out = result.to_json_dict()
     out["serial"] = meta.serial
     for w in result.warnings:
         print(f"batlab diagnose: warning: {w}", file=sys.stderr)
     if args.plot:
         path = write_plot(result, Path(args.plot) / "diagnose.png", title=meta.serial)
-        print(f"batlab diagnose: wrote {path}", file=sys.stderr)
+        progress(f"wrote {path}")
     if args.json:
         print(json.dumps(out))
     else:

@@ -8,6 +8,7 @@ import sys
 from ema.fit import MIN_SNR
 
 HELP = "fit natural frequencies, damping and mass-normalised mode shapes to a test's FRFs"
+EXAMPLE = "batlab fit baseline.uff --json"
 
 
 def add_arguments(p) -> None:
@@ -122,8 +123,8 @@ def _table(fit) -> str:
         lines.append(f"rigid body from the scaling: mass {rb.mass_kg:.4f} kg, centre of mass "
                      f"{rb.x_cg_m:.4f} m, pitch inertia {rb.pitch_inertia_kg_m2:.5f} kg m^2")
     if rb.mass_upper_bound_kg is not None:
-        lines.append(f"mass line at the driving point bounds the mass: <= "
-                     f"{rb.mass_upper_bound_kg:.4f} kg")
+        lines.append(f"mass line at the driving point bounds the mass from below: "
+                     f"M >= 1/a(x_d) = {rb.mass_upper_bound_kg:.4f} kg")
     return "\n".join(lines)
 
 

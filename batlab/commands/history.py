@@ -6,8 +6,10 @@ import json
 from dataclasses import asdict
 
 from batlab.cli_support import add_db_argument, db_path
+from batlab.formatting import STATUS_WORDS
 
 HELP = "list the inspections of a registered bat, oldest first"
+EXAMPLE = "batlab history HX-1004 --json"
 
 
 def add_arguments(p) -> None:
@@ -32,11 +34,12 @@ def run(args) -> int:
         print("  no inspections")
     for r in rows:
         v = r.verdict
-        what = "ALTERED" if r.altered else "not altered"
-        if r.altered and v.get("region_in"):
+        what = STATUS_WORDS.get(r.status, r.status)
+        if r.status == "altered" and v.get("region_in"):
             what += f" at {v['region_in'][0]:.1f}-{v['region_in'][1]:.1f} in"
-        conf = v.get("confidence")
-        conf_s = "" if conf is None else f", confidence {conf:.3f}"
+        p = v.get("confidence")
+        p_s = "" if p is None else f", p = {1 - p:.3g}"
+        against = "" if r.reference_seq is None else f", against registration #{r.reference_seq}"
         print(f"  #{r.id} {r.inspected_at[:19]} {r.retest_name or r.retest_sha256[:12]}: "
-              f"{what}{conf_s}" + (f", report {r.report_path}" if r.report_path else ""))
+              f"{what}{p_s}{against}" + (f", report {r.report_path}" if r.report_path else ""))
     return 0

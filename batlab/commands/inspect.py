@@ -12,6 +12,8 @@ import json
 from batlab.cli_support import add_db_argument, db_path, progress_printer
 
 HELP = "inspect a re-test of a bat for alteration (stateless, or against the registry)"
+EXAMPLE = ("batlab inspect --serial HX-1004 retest.uff --report report/   (or: --profile "
+           "profile.csv --meta meta.json --baseline baseline.uff --retest retest.uff --json)")
 
 
 def add_arguments(p) -> None:
@@ -25,7 +27,10 @@ def add_arguments(p) -> None:
     p.add_argument("--false-alarm", type=float, default=0.01,
                    help="false-alarm rate of the decision (default 0.01)")
     p.add_argument("--report", default=None, metavar="DIR",
-                   help="write an HTML report to DIR/index.html")
+                   help="write an HTML report to DIR/index.html (created if needed; checked "
+                        "writable before any work)")
+    p.add_argument("--plots", default=None, metavar="DIR",
+                   help="write the report's figures as PNG files to DIR")
     add_db_argument(p)
     p.add_argument("--json", action="store_true",
                    help="print the verdict as one JSON object on stdout")
@@ -40,37 +45,19 @@ def _retest_path(args) -> str:
     return path
 
 
-def readable(out: dict) -> str:
-    """The contract dict as a short verdict for a person."""
-    conf = out.get("confidence")
-    head = f"{out['serial']}: {'ALTERED' if out['altered'] else 'not altered'}"
-    if conf is not None:
-        head += f" (confidence {conf:.3f}, false-alarm rate {out.get('false_alarm_rate', 0):g})"
-    lines = [head]
-    if out["altered"]:
-        if out["region_in"]:
-            a, b = out["region_in"]
-            lines.append(f"  altered region {a:.1f} to {b:.1f} in from the knob end")
-        if out["core_diameter_in"] is not None:
-            lines.append(f"  core diameter {out['core_diameter_in']:.2f} in")
-        if out["fill_density_ratio"] is not None:
-            lines.append(f"  fill density / wood density {out['fill_density_ratio']:.2f}")
-    els = out["elements"]
-    if els:
-        big = max(els, key=lambda e: abs(e["alpha"]) + abs(e["beta"]))
-        lines.append(f"  {len(els)} elements; largest change at {big['x0_in']:.1f}-"
-                     f"{big['x1_in']:.1f} in: alpha {big['alpha']:+.4f}, beta {big['beta']:+.4f}")
-    return "\n".join(lines)
-
-
 def run(args) -> int:
     from batlab import pipeline
+    from batlab.formatting import readable
     from batlab.registry import open_registry
+    from batlab.report import check_destination
 
     progress = progress_printer("inspect")
     retest = _retest_path(args)
     if not 0 < args.false_alarm < 0.5:
         raise ValueError("--false-alarm must be between 0 and 0.5")
+    for opt, path in (("--report", args.report), ("--plots", args.plots)):
+        if path:  # before any work: an unwritable destination fails at once
+            check_destination(path, opt)
     stateless = (args.profile, args.meta, args.baseline)
     if args.serial:
         if any(stateless):
@@ -78,28 +65,53 @@ def run(args) -> int:
                              "and --baseline")
         with open_registry(db_path(args), create=False) as conn:
             result = pipeline.inspect_registered(conn, args.serial, retest, args.false_alarm,
-                                                 refit_baseline=bool(args.report),
+                                                 refit_baseline=bool(args.report or args.plots),
                                                  progress=progress)
-            report = _report(args, result, progress)
-            stored = pipeline.store_inspection(conn, result, retest, report)
-            progress(f"stored as inspection #{stored.id} of {result.serial}")
+            stored = pipeline.store_inspection(conn, result, retest, args.false_alarm)
+            progress(f"stored as inspection #{stored.id} of {result.serial} (custody record "
+                     f"#{stored.record_seq})")
+            _print(args, pipeline.contract_dict(result.serial, result.verdict), readable)
+            if args.report or args.plots:
+                bat = pipeline.stored_bat(conn, stored)
+                prov = pipeline.provenance(conn, stored=stored)
+                try:
+                    path = _report(args, pipeline.report_inputs(result, bat.meta, prov),
+                                   progress)
+                except (OSError, ValueError) as exc:
+                    raise ValueError(
+                        f"the verdict is stored (inspection #{stored.id}) but the report failed "
+                        f"({exc}); draw it again with: batlab report {result.serial} "
+                        f"--inspection {stored.id}") from None
+                if path is not None:
+                    pipeline.note_report(conn, stored, path)
     else:
         if not all(stateless):
             raise ValueError("give --serial S, or all of --profile, --meta and --baseline")
         result = pipeline.inspect_files(args.profile, args.meta, args.baseline, retest,
                                         args.false_alarm, progress)
-        _report(args, result, progress)
-    out = pipeline.contract_dict(result.serial, result.verdict)
-    print(json.dumps(out) if args.json else readable(out), flush=True)
+        _print(args, pipeline.contract_dict(result.serial, result.verdict), readable)
+        if args.report or args.plots:
+            prov = pipeline.provenance(baseline_sha256=pipeline.file_sha256(args.baseline),
+                                       retest_sha256=pipeline.file_sha256(retest))
+            meta = pipeline.read_meta_dict(args.meta)
+            _report(args, pipeline.report_inputs(result, meta, prov), progress)
     return 0
 
 
-def _report(args, result, progress) -> str | None:
-    if not args.report:
-        return None
-    from batlab.report import write_report
+def _print(args, out: dict, readable) -> None:
+    """The verdict on stdout, before anything optional (report, plots) can fail."""
+    print(json.dumps(out) if args.json else readable(out), flush=True)
 
+
+def _report(args, inputs, progress) -> str | None:
+    from batlab.report import write_plots, write_report
+
+    if not args.report:
+        progress("writing the plots")
+        write_plots(args.plots, inputs)
+        progress(f"plots: {args.plots}")
+        return None
     progress("writing the report")
-    path = write_report(args.report, result)
-    progress(f"report: {path}")
+    path = write_report(args.report, inputs, plots_dir=args.plots)
+    progress(f"report: {path}" + (f", plots: {args.plots}" if args.plots else ""))
     return str(path)

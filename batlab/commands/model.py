@@ -6,13 +6,18 @@ import json
 import sys
 
 HELP = "build a bat's FE model from its profile: mass properties, free-free modes, test points"
+EXAMPLE = "batlab model --profile profile.csv --meta meta.json --beam timoshenko --json"
 
 
 def add_arguments(p) -> None:
     p.add_argument("--profile", help="profile.csv (x_in,diameter_in); default: the paper's bat")
-    p.add_argument("--meta", help="meta.json for the material (default: the paper's birch)")
-    p.add_argument("--beam", choices=("euler", "timoshenko"), default="euler")
-    p.add_argument("--e-over-g", type=float, default=None, help="E/G (default 2.6, isotropic)")
+    p.add_argument("--meta", help="meta.json for the wood (default: the paper's white birch, "
+                                  "said on stderr)")
+    p.add_argument("--beam", choices=("euler", "timoshenko"), default="euler",
+                   help="beam theory: euler (Euler-Bernoulli, the paper's) or timoshenko "
+                        "(shear and rotary inertia)")
+    p.add_argument("--e-over-g", type=float, default=None,
+                   help="the wood's E/G, for timoshenko (default 14, as simulate and rig)")
     p.add_argument("--rotary-inertia", choices=("on", "off"), default=None,
                    help="default: on for timoshenko, off for euler")
     p.add_argument("--elements", type=int, default=None, help="number of elements (default ~1 in)")
@@ -24,20 +29,13 @@ def add_arguments(p) -> None:
 
 def run(args) -> int:
     from batlab.model_summary import summarise_model
+    from batlab.wood import wood
     from updating.model.assembly import build_model
-    from updating.model.lab_input import parse_core_spec, read_meta
-    from updating.model.material import ISOTROPIC_E_OVER_G, paper_material
+    from updating.model.lab_input import parse_core_spec
     from updating.model.profile import paper_profile, read_profile_csv
 
     profile = read_profile_csv(args.profile) if args.profile else paper_profile()
-    e_over_g = args.e_over_g if args.e_over_g is not None else ISOTROPIC_E_OVER_G
-    if args.meta:
-        material = read_meta(args.meta, e_over_g).material
-    else:
-        material = paper_material()
-        material = type(material)(material.E_pa, material.rho_kg_m3, e_over_g)
-    if e_over_g <= 0:
-        raise ValueError("--e-over-g must be positive")
+    material = wood(args.meta, args.e_over_g, "model")
     core = parse_core_spec(args.alter) if args.alter else None
     rotary = None if args.rotary_inertia is None else args.rotary_inertia == "on"
     model = build_model(profile, material, beam=args.beam, rotary_inertia=rotary,

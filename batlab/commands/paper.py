@@ -6,6 +6,7 @@ import json
 import sys
 
 HELP = "rerun the paper's corked-bat case: SEREP + MSSO as published, then batlab's refinement"
+EXAMPLE = "batlab paper --json"
 
 
 def add_arguments(p) -> None:

@@ -7,6 +7,7 @@ import json
 from batlab.cli_support import add_db_argument, db_path, progress_printer
 
 HELP = "register a bat: fit its baseline test, calibrate its reference, store it by serial"
+EXAMPLE = "batlab register --profile profile.csv --meta meta.json --baseline baseline.uff"
 
 
 def add_arguments(p) -> None:
@@ -24,6 +25,7 @@ def add_arguments(p) -> None:
 def run(args) -> int:
     from batlab.pipeline import register_files
     from batlab.registry import open_registry
+    from updating.model.units import LBF_IN3_TO_KG_M3, PSI_TO_PA
 
     progress = progress_printer("register")
     path = db_path(args)
@@ -42,6 +44,7 @@ def run(args) -> int:
         print(f"  baseline {rec.baseline_name} (sha256 {rec.baseline_sha256[:16]}...)")
         print("  modes (Hz): " + ", ".join(f"{f:.1f}" for f in rec.modes["freq_hz"]))
         ref = rec.reference
-        print(f"  calibrated: E {ref['E_pa'] / 1e9:.2f} GPa, density {ref['rho_kg_m3']:.0f} "
-              f"kg/m^3, E/G {ref['e_over_g']:.1f}, {ref['beam']} beam")
+        print(f"  calibrated: E {ref['E_pa'] / PSI_TO_PA:,.0f} psi, weight density "
+              f"{ref['rho_kg_m3'] / LBF_IN3_TO_KG_M3:.5f} lbf/in^3, E/G {ref['e_over_g']:.1f}, "
+              f"{ref['beam']} beam")
     return 0

@@ -17,35 +17,7 @@ import time
 import numpy as np
 
 HELP = "run the virtual acquisition box (a simulated bat test) on a pseudo-terminal"
-
-IN_TO_M = 0.0254
-BETA_L = np.array([4.730040745, 7.853204624, 10.995607838, 14.137165491, 17.278759657,
-                   20.420352245, 23.561944902, 26.703537556])
-DEFAULT_POINTS_IN = tuple(np.arange(1.0, 32.0, 2.0))  # 16 marks, every 2 in from 1 in
-
-
-def uniform_beam_modes(length_m: float, mass_kg: float, f1_hz: float, x_m: np.ndarray,
-                       zeta1: float = 0.005, suspension_hz: tuple[float, float] = (2.0, 3.5),
-                       n_bending: int = 8):
-    """ModalModel of a free-free uniform beam at ``x_m``: two suspension (rigid) modes and
-    ``n_bending`` bending modes, f_n = f1 (b_n L / b_1 L)^2, shapes
-    phi_n(x) = [cosh bx + cos bx - s_n (sinh bx + sin bx)] / sqrt(m) with
-    s_n = (cosh bL - cos bL) / (sinh bL - sin bL) (int_0^L phi^2 rho A dx = 1).
-    Damping: 3 % on the suspension modes, zeta1 (f / f1)^0.3 on bending."""
-    from rigs.modal_model import ModalModel
-
-    x = np.asarray(x_m, dtype=float)[:, None]
-    bl = BETA_L[:n_bending][None, :]
-    b = bl / length_m
-    s = (np.cosh(bl) - np.cos(bl)) / (np.sinh(bl) - np.sin(bl))
-    bend = (np.cosh(b * x) + np.cos(b * x) - s * (np.sinh(b * x) + np.sin(b * x))) / np.sqrt(
-        mass_kg)
-    trans = np.full((x.shape[0], 1), 1 / np.sqrt(mass_kg))
-    rot = np.sqrt(12 / (mass_kg * length_m**2)) * (x - length_m / 2)
-    f_bend = f1_hz * (BETA_L[:n_bending] / BETA_L[0]) ** 2
-    freq = np.r_[suspension_hz, f_bend]
-    zeta = np.r_[0.03, 0.03, zeta1 * (f_bend / f1_hz) ** 0.3]
-    return ModalModel(freq, zeta, np.hstack([trans, rot, bend]), x[:, 0])
+EXAMPLE = "batlab rig serve --profile profile.csv --meta meta.json --alter cork:depth=10,d=1.0"
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -58,7 +30,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="comma list of double,overload,weak,garbage,drop,bitflip,truncate")
     parser.add_argument("--fault-rate", type=float, default=0.3,
                         help="probability that a tap carries a fault (default 0.3)")
-    parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--seed", type=int, default=0, help="random seed of taps and faults")
     parser.add_argument("--speed", type=float, default=1.0,
                         help="stream time per wall time; 0 = as fast as the host reads")
     parser.add_argument("--sample-rate", type=float, default=12800.0, help="Hz")
@@ -77,13 +49,13 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 def _profile_model(args: argparse.Namespace, points_m: np.ndarray):
     """ModalModel of a bat at ``points_m`` from its profile (updating's virtual bat: FE model,
     Timoshenko, 3 g accelerometer at the driving point, two 150 N/m bungees)."""
-    from updating.model.lab_input import parse_core_spec, read_meta
-    from updating.model.material import paper_material
+    from batlab.wood import wood
+    from updating.model.lab_input import parse_core_spec
     from updating.model.profile import read_profile_csv
     from updating.simulate.virtual_bat import VirtualBat, modal_model
 
     profile = read_profile_csv(args.profile)
-    material = read_meta(args.meta).material if args.meta else paper_material()
+    material = wood(args.meta, None, "rig")
     accel = (args.accel_point - 1) if args.accel_point else -1
     bat = VirtualBat(profile, material, points_m, sensor_index=accel, sensor_mass_kg=0.003,
                      bungee_k_n_per_m=150.0,
@@ -93,7 +65,10 @@ def _profile_model(args: argparse.Namespace, points_m: np.ndarray):
 
 
 def run(args: argparse.Namespace) -> int:
+    from rigs.modal_model import uniform_beam_modes
+    from rigs.session import DEFAULT_POINTS_IN
     from rigs.virtual_box import FAULTS, BoxConfig, VirtualBox, default_info
+    from updating.model.units import IN_TO_M
 
     faults = tuple(f for f in args.faults.split(",") if f)
     unknown = [f for f in faults if f not in FAULTS]
@@ -101,9 +76,8 @@ def run(args: argparse.Namespace) -> int:
         raise ValueError(f"--faults: unknown fault(s) {', '.join(unknown)}")
     if args.meta and not args.points_in:
         from updating.model.lab_input import read_meta
-        from updating.model.units import IN_TO_M as in_to_m
 
-        points_in = read_meta(args.meta).points_m / in_to_m
+        points_in = read_meta(args.meta).points_m / IN_TO_M
         if not points_in.size:
             raise ValueError(f"{args.meta}: no points_in")
     elif args.points_in:

@@ -6,11 +6,14 @@ import json
 import sys
 
 HELP = "simulate an impact test of a bat on the virtual rig and write it (UFF, CSV or NPZ)"
+EXAMPLE = ("batlab simulate --profile profile.csv --meta meta.json --alter "
+           "cork:depth=10,d=1.0 --seed 1 --out retest.uff")
 
 
 def add_arguments(p) -> None:
     p.add_argument("--profile", help="profile.csv (default: the paper's bat)")
-    p.add_argument("--meta", help="meta.json: wood and test points (default: the paper's birch)")
+    p.add_argument("--meta", help="meta.json: wood and test points (default: the paper's white "
+                                  "birch, said on stderr)")
     p.add_argument("--out", required=True, help="output file (.uff, .csv or .npz)")
     p.add_argument("--alter", default=None,
                    help="alteration, inches: cork|heavy|neutral|core:depth=10,d=1.0,ratio=0.33")
@@ -20,12 +23,15 @@ def add_arguments(p) -> None:
     p.add_argument("--points", default=None,
                    help="impact points, inches from the knob, comma-separated (default: meta's "
                         "points_in, else every 2 in)")
-    p.add_argument("--e-over-g", type=float, default=14.0, help="the wood's E/G (default 14)")
+    p.add_argument("--e-over-g", type=float, default=None,
+                   help="the wood's E/G (default 14, as model and rig)")
     p.add_argument("--E-scale", type=float, default=1.0,
                    help="true modulus / nominal modulus (board-to-board variation)")
     p.add_argument("--density-scale", type=float, default=1.0,
                    help="true density / nominal density")
-    p.add_argument("--beam", choices=("euler", "timoshenko"), default="timoshenko")
+    p.add_argument("--beam", choices=("euler", "timoshenko"), default="timoshenko",
+                   help="beam theory of the simulated bat (default timoshenko: a real bat "
+                        "shears)")
     p.add_argument("--sensor-mass-g", type=float, default=3.0, help="accelerometer mass, g")
     p.add_argument("--sensor-offset-in", type=float, default=0.0,
                    help="accelerometer distance from its labelled point, in")
@@ -41,18 +47,17 @@ def add_arguments(p) -> None:
 def run(args) -> int:
     import numpy as np
 
+    from batlab.wood import wood
     from ema.io.frf_io import write_test
     from updating.model.lab_input import parse_core_spec, read_meta
-    from updating.model.material import paper_material
     from updating.model.profile import paper_profile, read_profile_csv
     from updating.model.units import IN_TO_M
     from updating.simulate.virtual_bat import VirtualBat, simulate_test
 
     profile = read_profile_csv(args.profile) if args.profile else paper_profile()
     meta = read_meta(args.meta) if args.meta else None
-    base = meta.material if meta else paper_material()
-    material = base.scaled(args.E_scale, args.density_scale)
-    material = type(material)(material.E_pa, material.rho_kg_m3, args.e_over_g, material.nu)
+    material = wood(args.meta, args.e_over_g, "simulate").scaled(args.E_scale,
+                                                                  args.density_scale)
     if args.points:
         try:
             points = np.array([float(v) for v in args.points.split(",")]) * IN_TO_M
@@ -76,7 +81,8 @@ def run(args) -> int:
     print(f"simulating {points.size} impact points, {freq.size} lines ...", file=sys.stderr)
     test = simulate_test(bat, freq, seed=args.seed)
     write_test(args.out, test)
-    summary = {"out": str(args.out), "points_in": [float(x) for x in np.sort(points) / IN_TO_M],
+    summary = {"out": str(args.out),
+               "points_in": [round(float(x), 4) for x in np.sort(points) / IN_TO_M],
                "driving_point_node": int(test.response_nodes[0]), "lines": int(freq.size)}
     if args.json:
         print(json.dumps(summary))

@@ -13,9 +13,10 @@ the accelerance: G is also the *mass line*, the lower residual L0 of ``ema.shape
 With the suspension modes fitted (band reaching below them) all of G is known and the
 implied mass follows. From the lower residual of a roving-hammer test only one row of G is
 known, a line a(x) = c0 + c1 x, and M is not identifiable from it alone: a(x_d) = 1/M +
-(x_d - x_c)^2 / I bounds M <= 1 / a(x_d), and a known mass fixes x_c = (1/M - c0) / c1 and
-I = (x_d - x_c) / c1, which must be plausible (x_c on the bat, I > 0). With one node (a
-single FRF) only the bound is known.
+(x_d - x_c)^2 / I >= 1/M bounds M from below, M >= 1 / a(x_d) (``mass_upper_bound_kg`` holds
+that lower bound), and a known mass fixes x_c = (1/M - c0) / c1 and I = (x_d - x_c) / c1,
+which must be plausible (x_c on the bat, I > 0). With one node (a single FRF) only the bound
+is known.
 """
 
 from __future__ import annotations

@@ -39,14 +39,21 @@ def read_meta(path: str | Path, e_over_g: float = ISOTROPIC_E_OVER_G) -> BatMeta
     for key in ("serial", "nominal_E_psi", "nominal_weight_density_lbf_in3"):
         if key not in raw:
             raise ValueError(f"{path}: missing key {key!r}")
+
+    def scalar(key: str) -> float:
+        try:
+            return float(raw[key])
+        except (TypeError, ValueError):
+            raise ValueError(f"{path}: key {key!r} must be a number, not {raw[key]!r}") from None
+
+    E = scalar("nominal_E_psi")
+    wd = scalar("nominal_weight_density_lbf_in3")
+    weight_kg = None if raw.get("weight_lb") is None else scalar("weight_lb") * LB_TO_KG
     try:
-        E = float(raw["nominal_E_psi"])
-        wd = float(raw["nominal_weight_density_lbf_in3"])
-        weight = raw.get("weight_lb")
-        weight_kg = None if weight is None else float(weight) * LB_TO_KG
-        points = np.asarray(raw.get("points_in", []), dtype=float) * IN_TO_M
+        points = np.asarray(raw.get("points_in", []), dtype=float).reshape(-1) * IN_TO_M
     except (TypeError, ValueError):
-        raise ValueError(f"{path}: a numeric key holds a non-number") from None
+        raise ValueError(f"{path}: key 'points_in' must be a list of numbers (inches from the "
+                         "knob end)") from None
     if E <= 0 or wd <= 0 or (weight_kg is not None and weight_kg <= 0):
         raise ValueError(f"{path}: modulus, density and weight must be positive")
     return BatMeta(str(raw["serial"]), str(raw.get("species", "")),

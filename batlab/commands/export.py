@@ -1,0 +1,26 @@
+"""`batlab export`: the inspection history of one bat, or of the whole registry, as CSV."""
+
+from __future__ import annotations
+
+from batlab.cli_support import add_db_argument, db_path
+
+HELP = "write the inspection history (one bat or all) as a CSV file"
+EXAMPLE = "batlab export HX-1004 -o HX-1004.csv"
+
+
+def add_arguments(p) -> None:
+    p.add_argument("serial", nargs="?", default=None, help="one bat (default: every bat)")
+    p.add_argument("-o", "--output", required=True, metavar="FILE.csv", help="CSV file to write")
+    add_db_argument(p)
+
+
+def run(args) -> int:
+    from batlab.pipeline import history_table
+    from batlab.registry import open_registry
+    from ema.io.atomic_write import atomic_write
+
+    with open_registry(db_path(args), create=False) as conn:
+        table = history_table(conn, args.serial)
+    atomic_write(args.output, lambda tmp: table.to_csv(tmp, index=False))
+    print(f"{len(table)} inspection(s) written to {args.output}")
+    return 0

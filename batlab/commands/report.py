@@ -1,0 +1,41 @@
+"""`batlab report`: regenerate a stored inspection's report from the registry alone."""
+
+from __future__ import annotations
+
+from batlab.cli_support import add_db_argument, db_path, progress_printer
+
+HELP = "regenerate the report of a stored inspection from the registry (files kept there)"
+EXAMPLE = "batlab report HX-1004 --inspection 3 --out report-HX-1004-3"
+
+
+def add_arguments(p) -> None:
+    p.add_argument("serial", help="the bat's serial number")
+    p.add_argument("--inspection", type=int, default=None, metavar="N",
+                   help="inspection number (see `batlab history S`; default the latest)")
+    p.add_argument("--out", default=None, metavar="DIR",
+                   help="write DIR/index.html (default ./report-SERIAL-N)")
+    p.add_argument("--plots", default=None, metavar="DIR",
+                   help="also write the figures as PNG files to DIR")
+    add_db_argument(p)
+
+
+def run(args) -> int:
+    from pathlib import Path
+
+    from batlab import pipeline
+    from batlab.registry import history, open_registry
+    from batlab.report import check_destination, write_report
+
+    progress = progress_printer("report")
+    with open_registry(db_path(args), create=False) as conn:
+        rows = history(conn, args.serial)
+        n = args.inspection if args.inspection is not None else (rows[-1].id if rows else 0)
+        out = Path(args.out) if args.out else Path(f"report-{args.serial}-{n}")
+        check_destination(out, "--out")
+        if args.plots:
+            check_destination(args.plots, "--plots")
+        inputs = pipeline.stored_report_inputs(conn, args.serial, args.inspection, progress)
+    path = write_report(out, inputs, plots_dir=args.plots)
+    progress(f"inspection #{inputs.provenance['inspection_id']} of {args.serial}")
+    print(path)
+    return 0
