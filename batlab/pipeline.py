@@ -23,6 +23,7 @@ import numpy as np
 from batlab import registry as reg
 from ema.io.frf_data import FrfTest
 from updating.correlate.measured import MeasuredModes, from_fit
+from updating.inspect.retest_meta import RetestConditions, read_retest_meta
 from updating.inspect.verdict import Verdict
 from updating.model.lab_input import BatMeta, read_meta
 from updating.model.profile import Profile, make_profile, read_profile_csv
@@ -106,6 +107,11 @@ def read_bat_files(profile_path, meta_path) -> tuple[Profile, BatMeta]:
         raise ValueError(f"{meta_path}: points_in run past the end of the bat "
                          f"({profile.length_m / IN_TO_M:.2f} in long in {profile_path})")
     return profile, meta
+
+
+def read_conditions(path) -> RetestConditions | None:
+    """retest.json (optional): the re-test's weight, accelerometer mass, temperature, date."""
+    return None if path is None else read_retest_meta(path)
 
 
 # --- modes -----------------------------------------------------------------------------------
@@ -201,12 +207,15 @@ def calibrate(profile: Profile, meta: BatMeta, baseline: FittedTest):
 
 def inspect_modes(
     profile: Profile, reference: BatReference, baseline: MeasuredModes, retest: MeasuredModes,
-    false_alarm: float,
+    false_alarm: float, conditions: RetestConditions | None = None,
+    registered_weight_kg: float | None = None,
 ) -> Verdict:
-    """Phase 3: the verdict on a re-test against the reference (``updating.inspect.run``)."""
+    """Phase 3: the verdict on a re-test against the reference (``updating.inspect.run``);
+    ``conditions``: retest.json, ``registered_weight_kg``: meta.json's weight_lb."""
     from updating.inspect.run import inspect_retest
 
-    return inspect_retest(profile, reference, baseline, retest, false_alarm=false_alarm)
+    return inspect_retest(profile, reference, baseline, retest, false_alarm=false_alarm,
+                          conditions=conditions, registered_weight_kg=registered_weight_kg)
 
 
 # --- JSON ------------------------------------------------------------------------------------
@@ -221,9 +230,10 @@ def _num(v) -> float | None:
 
 
 def contract_dict(serial: str, verdict: Verdict) -> dict:
-    """The verdict as ../shared/CONTRACT.md fixes it (inches from the knob end; region, core
-    and fill null when not altered), plus the decision's confidence and significance level."""
-    altered = bool(verdict.altered)
+    """The verdict as ../shared/CONTRACT.md fixes it (status, altered true/false/null, reasons;
+    inches from the knob end; region, core and fill null unless altered), plus the decision's
+    confidence and significance level."""
+    altered = verdict.altered is True
     region = verdict.region_m if altered else None
     core = verdict.core_diameter_m if altered else None
     fill = verdict.fill_density_ratio if altered else None
@@ -234,7 +244,9 @@ def contract_dict(serial: str, verdict: Verdict) -> dict:
     ]
     return {
         "serial": serial,
-        "altered": altered,
+        "status": verdict.status.value,
+        "altered": verdict.altered if verdict.altered is None else bool(verdict.altered),
+        "reasons": [str(r) for r in verdict.reasons],
         "region_in": None if region is None else [_in(region[0]), _in(region[1])],
         "core_diameter_in": None if core is None else round(float(core) / IN_TO_M, 4),
         "fill_density_ratio": _num(fill),
@@ -319,10 +331,12 @@ def register_files(
 
 def inspect_files(
     profile_path, meta_path, baseline_path, retest_path, false_alarm: float = 0.01,
-    progress: Progress = _quiet,
+    progress: Progress = _quiet, retest_meta_path=None,
 ) -> InspectionResult:
-    """The stateless inspection: the same steps as register, then the re-test against it."""
+    """The stateless inspection: the same steps as register, then the re-test against it
+    (``retest_meta_path``: the optional retest.json)."""
     profile, meta = read_bat_files(profile_path, meta_path)
+    conditions = read_conditions(retest_meta_path)
     base_test, re_test = read_frf(baseline_path), read_frf(retest_path)
     order = match_points(point_positions_m(base_test), point_positions_m(re_test),
                          str(retest_path))
@@ -331,13 +345,15 @@ def inspect_files(
     reference = calibrate(profile, meta, baseline).reference
     retest = fit_file(Path(retest_path).name, re_test, meta.weight_kg, order, progress)
     progress("inspecting the re-test against the reference")
-    verdict = inspect_modes(profile, reference, baseline.modes, retest.modes, false_alarm)
+    verdict = inspect_modes(profile, reference, baseline.modes, retest.modes, false_alarm,
+                            conditions, meta.weight_kg)
     return InspectionResult(meta.serial, profile, reference, baseline, retest, verdict)
 
 
 def inspect_registered(
     conn: sqlite3.Connection, serial: str, retest_path, false_alarm: float = 0.01,
     refit_baseline: bool = False, progress: Progress = _quiet, baseline_fit=None,
+    retest_meta_path=None,
 ) -> InspectionResult:
     """Inspect a re-test of a registered bat against its stored reference and baseline modes.
 
@@ -345,6 +361,7 @@ def inspect_registered(
     with ``refit_baseline`` (for a report), to show its FRFs and stabilisation diagram;
     ``baseline_fit``: a fit of that same file already at hand (saves the refit).
     """
+    conditions = read_conditions(retest_meta_path)
     bat = reg.get_bat(conn, serial)
     content = reg.baseline_file(conn, bat)
     base_test = frf_from_bytes(content, bat.baseline_name)
@@ -361,7 +378,8 @@ def inspect_registered(
     retest = fit_file(Path(retest_path).name, re_test, weight_kg, order, progress)
     reference = BatReference.from_dict(bat.reference)
     progress("inspecting the re-test against the registered reference")
-    verdict = inspect_modes(profile, reference, base_modes, retest.modes, false_alarm)
+    verdict = inspect_modes(profile, reference, base_modes, retest.modes, false_alarm,
+                            conditions, weight_kg)
     return InspectionResult(serial, profile, reference, baseline, retest, verdict)
 
 

@@ -1,8 +1,10 @@
 """`batlab inspect`: the lab's verdict on a re-test of a bat (../shared/CONTRACT.md).
 
 Two forms, the same verdict:
-    batlab inspect --profile P --meta M --baseline B.uff --retest R.uff [--json]   (stateless)
-    batlab inspect --serial S R.uff [--db PATH] [--json]      (registered bat; stored)
+    batlab inspect --profile P --meta M --baseline B.uff --retest R.uff
+                   [--retest-meta retest.json] [--json]                        (stateless)
+    batlab inspect --serial S R.uff [--retest-meta retest.json] [--db PATH] [--json]
+                                                               (registered bat; stored)
 """
 
 from __future__ import annotations
@@ -22,6 +24,9 @@ def add_arguments(p) -> None:
     p.add_argument("--meta", default=None, help="meta.json (stateless form)")
     p.add_argument("--baseline", default=None, help="baseline test file (stateless form)")
     p.add_argument("--retest", default=None, help="re-test file")
+    p.add_argument("--retest-meta", default=None, metavar="RETEST_JSON",
+                   help="retest.json: the re-test's weight_lb, accelerometer_mass_g, "
+                        "temperature_c, tested_on (every key optional)")
     p.add_argument("--false-alarm", type=float, default=0.01,
                    help="false-alarm rate of the decision (default 0.01)")
     p.add_argument("--report", default=None, metavar="DIR",
@@ -43,10 +48,12 @@ def _retest_path(args) -> str:
 def readable(out: dict) -> str:
     """The contract dict as a short verdict for a person."""
     conf = out.get("confidence")
-    head = f"{out['serial']}: {'ALTERED' if out['altered'] else 'not altered'}"
-    if conf is not None:
+    word = {"altered": "ALTERED", "not_altered": "not altered",
+            "inconclusive": "INCONCLUSIVE (no verdict)"}[out["status"]]
+    head = f"{out['serial']}: {word}"
+    if conf is not None and out["status"] != "inconclusive":
         head += f" (confidence {conf:.3f}, false-alarm rate {out.get('false_alarm_rate', 0):g})"
-    lines = [head]
+    lines = [head] + [f"  - {r}" for r in out.get("reasons", [])]
     if out["altered"]:
         if out["region_in"]:
             a, b = out["region_in"]
@@ -79,7 +86,8 @@ def run(args) -> int:
         with open_registry(db_path(args), create=False) as conn:
             result = pipeline.inspect_registered(conn, args.serial, retest, args.false_alarm,
                                                  refit_baseline=bool(args.report),
-                                                 progress=progress)
+                                                 progress=progress,
+                                                 retest_meta_path=args.retest_meta)
             report = _report(args, result, progress)
             stored = pipeline.store_inspection(conn, result, retest, report)
             progress(f"stored as inspection #{stored.id} of {result.serial}")
@@ -87,7 +95,7 @@ def run(args) -> int:
         if not all(stateless):
             raise ValueError("give --serial S, or all of --profile, --meta and --baseline")
         result = pipeline.inspect_files(args.profile, args.meta, args.baseline, retest,
-                                        args.false_alarm, progress)
+                                        args.false_alarm, progress, args.retest_meta)
         _report(args, result, progress)
     out = pipeline.contract_dict(result.serial, result.verdict)
     print(json.dumps(out) if args.json else readable(out), flush=True)
