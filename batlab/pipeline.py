@@ -23,7 +23,12 @@ import numpy as np
 from batlab import registry as reg
 from ema.io.frf_data import FrfTest
 from updating.correlate.measured import MeasuredModes, from_fit
-from updating.inspect.retest_meta import RetestConditions, read_retest_meta
+from updating.inspect.planes import merge_plane_pairs
+from updating.inspect.retest_meta import (
+    RetestConditions,
+    conditions_from_dict,
+    read_retest_meta,
+)
 from updating.inspect.verdict import Verdict
 from updating.model.lab_input import BatMeta, read_meta
 from updating.model.profile import Profile, make_profile, read_profile_csv
@@ -168,7 +173,7 @@ def fit_file(
     """Fit a test; its modes' point rows optionally re-ordered to the baseline's points."""
     progress(f"fitting modes of {name} ({test.frf.shape[2]} FRFs, {test.freq_hz.size} lines)")
     fit = fit_modes(test, weight_kg)
-    modes = from_fit(fit, sensor_x_m(test))
+    modes = merge_plane_pairs(from_fit(fit, sensor_x_m(test)))
     if modes.freq_hz.size == 0:
         raise ValueError(f"{name}: no elastic mode found in the test")
     if order is not None:
@@ -208,14 +213,18 @@ def calibrate(profile: Profile, meta: BatMeta, baseline: FittedTest):
 def inspect_modes(
     profile: Profile, reference: BatReference, baseline: MeasuredModes, retest: MeasuredModes,
     false_alarm: float, conditions: RetestConditions | None = None,
-    registered_weight_kg: float | None = None,
+    registered: RetestConditions | None = None,
 ) -> Verdict:
     """Phase 3: the verdict on a re-test against the reference (``updating.inspect.run``);
-    ``conditions``: retest.json, ``registered_weight_kg``: meta.json's weight_lb."""
+    ``conditions``: retest.json, ``registered``: the same keys of meta.json (weight_lb, and
+    accelerometer_mass_g, temperature_c of the baseline when the lab recorded them)."""
     from updating.inspect.run import inspect_retest
 
+    reg_ = registered or RetestConditions()
     return inspect_retest(profile, reference, baseline, retest, false_alarm=false_alarm,
-                          conditions=conditions, registered_weight_kg=registered_weight_kg)
+                          conditions=conditions, registered_weight_kg=reg_.weight_kg,
+                          baseline_temperature_c=reg_.temperature_c,
+                          baseline_sensor_mass_kg=reg_.sensor_mass_kg)
 
 
 # --- JSON ------------------------------------------------------------------------------------
@@ -346,7 +355,7 @@ def inspect_files(
     retest = fit_file(Path(retest_path).name, re_test, meta.weight_kg, order, progress)
     progress("inspecting the re-test against the reference")
     verdict = inspect_modes(profile, reference, baseline.modes, retest.modes, false_alarm,
-                            conditions, meta.weight_kg)
+                            conditions, conditions_from_dict(meta.extra, meta_path))
     return InspectionResult(meta.serial, profile, reference, baseline, retest, verdict)
 
 
@@ -379,7 +388,8 @@ def inspect_registered(
     reference = BatReference.from_dict(bat.reference)
     progress("inspecting the re-test against the registered reference")
     verdict = inspect_modes(profile, reference, base_modes, retest.modes, false_alarm,
-                            conditions, weight_kg)
+                            conditions, conditions_from_dict(bat.meta,
+                                                             f"registered bat {serial}"))
     return InspectionResult(serial, profile, reference, baseline, retest, verdict)
 
 

@@ -21,8 +21,9 @@ FREQ_MAX_LOG = 0.08
 """Largest median |ln(f_retest / f_baseline)| of one bat re-tested: moisture +-2.5 points
 and +-10 C move f by at most ~4 %, a core by a few %; another bat of the same model differs
 by 5-7 %."""
-WEIGHT_MAX_LOG = 0.10
-"""Largest |ln(W_retest / W_registered)| of one bat: moisture 2.5 %, the biggest cores ~8 %."""
+WEIGHT_MAX_LOG = 0.25
+"""Largest |ln(W_retest / W_registered)| of one bat: moisture 2.5 %, the biggest cores and
+plugs 10-15 % (a 1.25 x 12 in cork core takes out about 13 %)."""
 BARREL_REACH_IN = 12.0
 MAX_BARREL_GAP_IN = 5.0
 """The outer 12 in (the barrel, where cores are drilled) must have test points no further

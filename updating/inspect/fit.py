@@ -57,6 +57,9 @@ MAX_NFEV_START, MAX_NFEV_CORE = 15, 30
 """Caps on core-fit iterations (each start, final refinement): a real core converges in
 fewer; without one the position is unidentifiable and the optimiser would wander (an
 unconverged H1 fit only lowers F)."""
+DIFF_STEP = 1e-4
+"""Finite-difference step, absolute, in x's units (%, in, points, g): well above the
+eigen-solution's rounding, well below any change that matters."""
 WEIGHT_SIGMA_REL = 0.003
 """Standard deviation of ln(W_retest / W_registered) beyond the modelled drift: two scales,
 tape and dirt (0.3 %, ~0.1 oz on a 2.2 lb bat)."""
@@ -65,7 +68,22 @@ PRIOR_SHIFT_IN, PRIOR_END_MOISTURE_PT, PRIOR_SENSOR_MASS_G = 0.1, 1.0, 2.0
 excess and an unknown replacement accelerometer's mass change."""
 FREQ_MODEL_ERROR_REL = 3e-4
 """Floor on the relative frequency-change uncertainty: what the 1D change model misses in a
-change of frequency (two bending planes mixed slightly differently, suspension)."""
+change of frequency (suspension, mesh)."""
+PLANE_SPLIT_REL = (0.003, 0.013, 0.023, 0.030, 0.047, 0.056)
+"""Split of the two bending planes' frequencies, elastic modes 1-6 (3D analysis of a smooth
+ash bat); beyond mode 6 the last value."""
+PLANE_MIX = 0.15
+"""Fraction of the plane split that a re-test tapped at another angle (+-10 deg from the
+label) can move a mode's apparent frequency: the fitted frequency of an unresolved pair is
+its members' mean weighted by cos^2 and sin^2 of the angle; a 10 deg change moves those
+weights by up to sin(20 deg) ~ 0.34, and a fit resolving part of the pair less."""
+
+
+def plane_sigma(elastic_order: np.ndarray) -> np.ndarray:
+    """Standard deviation of ln f change from the two bending planes, per elastic mode
+    (0-based order among the elastic modes)."""
+    split = np.asarray(PLANE_SPLIT_REL)
+    return PLANE_MIX * split[np.minimum(np.asarray(elastic_order, dtype=int), split.size - 1)]
 
 
 @dataclass(frozen=True)
@@ -85,18 +103,22 @@ class NullBounds:
     at their typical sizes unless the data insist."""
 
     @staticmethod
-    def physical(reference_sensor_kg: float, retest_sensor_kg: float | None = None,
+    def physical(sensor_change_kg: float | None = None,
                  temperature_change_c: float | None = None) -> NullBounds:
+        """``sensor_change_kg``: the change of accelerometer mass when both tests' masses
+        are known (else fitted within +-10 g, prior ``PRIOR_SENSOR_MASS_G``: the calibrated
+        reference's own sensor mass can hold other physics, even be 0 g, so the change is
+        not bounded by it); ``temperature_change_c``: re-test minus baseline temperature
+        when both are known."""
         if temperature_change_c is None:
             t_lo, t_hi = -3.0, 3.0
         else:
             a, b = -0.1 * temperature_change_c, -0.3 * temperature_change_c
             t_lo, t_hi = min(a, b) - 0.3, max(a, b) + 0.3
-        ref_g = 1e3 * reference_sensor_kg
-        if retest_sensor_kg is None:
-            m_lo, m_hi, m0, m_sig = -ref_g, max(10.0 - ref_g, 0.5), 0.0, PRIOR_SENSOR_MASS_G
+        if sensor_change_kg is None:
+            m_lo, m_hi, m0, m_sig = -10.0, 10.0, 0.0, PRIOR_SENSOR_MASS_G
         else:
-            m0 = 1e3 * retest_sensor_kg - ref_g
+            m0 = 1e3 * sensor_change_kg
             m_lo, m_hi, m_sig = m0 - 0.3, m0 + 0.3, 0.1
         lo = np.array([-5.5 + t_lo, -3.0, -0.3, -2.5, -2.5, m_lo])
         hi = np.array([5.5 + t_hi, 3.0, 0.3, 2.5, 2.5, m_hi])
@@ -250,12 +272,44 @@ def residual_function(
     return fun
 
 
+def forward_jacobian(fun: Callable, upper: np.ndarray) -> Callable:
+    """x -> forward-difference Jacobian of ``fun`` with the absolute step ``DIFF_STEP``
+    (backward where the step would cross ``upper``); reuses fun(x) of the last call at x.
+
+    scipy's relative steps shrink with |x|: a parameter started at 1e-9 (just inside a
+    bound) got a 1e-13 step and a Jacobian swamped by the eigen-solver's rounding."""
+    last: dict = {}
+
+    def f(x: np.ndarray) -> np.ndarray:
+        key = x.tobytes()
+        if key not in last:
+            last.clear()
+            last[key] = fun(x)
+        return last[key]
+
+    def jac(x: np.ndarray) -> np.ndarray:
+        f0 = f(np.asarray(x, dtype=float))
+        J = np.empty((f0.size, x.size))
+        for i in range(x.size):
+            h = DIFF_STEP if x[i] + DIFF_STEP <= upper[i] else -DIFF_STEP
+            xi = np.array(x, dtype=float)
+            xi[i] += h
+            J[:, i] = (fun(xi) - f0) / h
+        return J
+
+    return f, jac
+
+
 def solve(fun: Callable, x0: np.ndarray, lower: np.ndarray, upper: np.ndarray,
           space: ParamSpace, diff: Differences, max_nfev: int | None = None) -> Fit:
-    """Bounded Gauss-Newton (trust-region reflective) from x0."""
-    x0 = np.clip(x0, lower + 1e-9, upper - 1e-9)
-    res = least_squares(fun, x0, bounds=(lower, upper), method="trf", diff_step=1e-6,
-                        x_scale=1.0, ftol=1e-6, xtol=1e-6, max_nfev=max_nfev)
+    """Bounded Gauss-Newton (trust-region reflective) from x0, moved at least 1 % of the
+    range inside the bounds: the first trust region is |x0|, so a start a hair inside a
+    bound (x0 ~ 1e-9) would crawl."""
+    margin = 0.01 * (upper - lower)
+    x0 = np.clip(x0, lower + margin, upper - margin)
+    f, jac = forward_jacobian(fun, upper)
+    res = least_squares(f, x0, jac=jac, bounds=(lower, upper), method="trf", x_scale=1.0,
+                        ftol=1e-6, xtol=1e-6, max_nfev=max_nfev)
     return Fit(res.x, space.params(res.x), res.fun, res.jac, diff.n_freq, diff.dpsi.size,
                np.asarray(res.active_mask))
 

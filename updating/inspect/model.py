@@ -153,7 +153,9 @@ class ChangePredictor:
         M = p.density_scale * M
         x = float(np.clip(self.sensor_x_m + p.sensor_shift_m, 0.0, self.profile.length_m))
         dofs, n = point_vector(ws.model, x)
-        mass = max(self.reference.sensor_mass_kg + p.sensor_mass_change_kg, 0.0)
+        # the change may take the calibrated mass below 0: calibration puts other physics
+        # there, the change is relative to it
+        mass = self.reference.sensor_mass_kg + p.sensor_mass_change_kg
         if mass:
             M[np.ix_(dofs, dofs)] += mass * np.outer(n, n)
         modes = solve_modes(p.stiffness_scale * K + ws.K_bungees, M, None, self.n_solve)

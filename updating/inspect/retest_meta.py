@@ -66,6 +66,14 @@ def read_retest_meta(path: str | Path) -> RetestConditions:
         raise ValueError(f"{path}: not a text file") from None
     if not isinstance(raw, dict):
         raise ValueError(f"{path}: expected a JSON object")
+    return conditions_from_dict(raw, path)
+
+
+def conditions_from_dict(raw: dict, source: str | Path) -> RetestConditions:
+    """A test's conditions from a dict with retest.json's keys (also meta.json's optional
+    ``weight_lb``, ``accelerometer_mass_g``, ``temperature_c`` of the baseline); ``source``
+    names it in errors."""
+    path = source
     weight = _number(path, raw, "weight_lb")
     mass_g = _number(path, raw, "accelerometer_mass_g")
     temp = _number(path, raw, "temperature_c")

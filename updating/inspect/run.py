@@ -55,6 +55,7 @@ from updating.inspect.fit import (
     covariance,
     fit_core,
     fit_null,
+    plane_sigma,
     residual_function,
     shape_noise,
     solve,
@@ -74,10 +75,17 @@ FALLBACK_FREQ_STD_PER_ZETA = 0.05
 half-power half-bandwidth)."""
 INITIAL_SHAPE_NOISE = 0.01
 MAP_MASS_NORMALISED = True
-MIN_CORE_DIAMETER_IN = 0.4
-"""Physical floor: a fitted 'core' narrower than this is not an alteration anyone makes
-(reported holes are 0.75-1.25 in); a significant change that only such a core explains is
-model error or drift, not a core."""
+MIN_CORE_DIAMETER_IN = 0.3
+"""Physical floor: the fitted core's diameter, less two standard uncertainties, must reach
+this for "altered" (reported holes are 0.75-1.25 in, the smallest considered 0.5 in); a
+significant change that only a thinner or undetermined core explains is model error or
+drift, not a core."""
+
+
+CONFUSABLE = ("barrel_end_moisture_pt", "sensor_mass_change_g", "sensor_shift_in")
+"""Nuisances that act where a core does (the barrel end): a core fit that needs one of them
+at its physical bound cannot be told from that drift. (A uniform scale at its bound beside
+a core only says the core model is not the alteration's exact shape.)"""
 
 
 def _rel_freq_std(m: MeasuredModes) -> np.ndarray:
@@ -141,8 +149,9 @@ def differences(predict: ChangePredictor, baseline: MeasuredModes, retest: Measu
     psi_b = baseline.shapes[:, ib]
     psi_r = align_signs(psi_b, retest.shapes[:, ir])
     phi0 = align_signs(psi_b, phi_mod[:, jmod])
+    order = np.searchsorted(np.flatnonzero(f_mod >= ELASTIC_MIN_HZ), jmod)
     sig = np.sqrt(_rel_freq_std(baseline)[ib] ** 2 + _rel_freq_std(retest)[ir] ** 2
-                  + FREQ_MODEL_ERROR_REL ** 2)
+                  + FREQ_MODEL_ERROR_REL ** 2 + plane_sigma(order) ** 2)
     rms = np.hypot(np.sqrt(np.mean(psi_b**2, axis=0)), np.sqrt(np.mean(psi_r**2, axis=0)))
     return Differences(jmod, np.log(retest.freq_hz[ir] / baseline.freq_hz[ib]), sig,
                        psi_r - psi_b, rms, f_mod[jmod], phi0, dlnw,
@@ -213,7 +222,8 @@ def inspect_retest(
     profile: Profile, reference: BatReference, baseline: MeasuredModes,
     retest: MeasuredModes, false_alarm: float = 0.01, *,
     conditions: RetestConditions | None = None, registered_weight_kg: float | None = None,
-    baseline_temperature_c: float | None = None, fill_modulus_ratio: float = 0.0,
+    baseline_temperature_c: float | None = None,
+    baseline_sensor_mass_kg: float | None = None, fill_modulus_ratio: float = 0.0,
     n_starts: int = 2, min_mac: float = 0.8,
 ) -> Verdict:
     """The lab's verdict on a re-test of a bat against its baseline test and reference.
@@ -226,6 +236,8 @@ def inspect_retest(
         conditions: the re-test's retest.json (weight, accelerometer mass, temperature).
         registered_weight_kg: the bat's weight at registration (meta.json).
         baseline_temperature_c: the lab's temperature at the baseline, if known.
+        baseline_sensor_mass_kg: the baseline's accelerometer mass, if known (with the
+            re-test's from ``conditions`` it fixes the change of accelerometer mass).
         fill_modulus_ratio: assumed fill stiffness of a core.
         n_starts: number of core positions refined by least squares.
         min_mac: minimum MAC to pair two modes.
@@ -263,7 +275,10 @@ def inspect_retest(
     dT = None
     if cond.temperature_c is not None and baseline_temperature_c is not None:
         dT = cond.temperature_c - baseline_temperature_c
-    bounds = NullBounds.physical(reference.sensor_mass_kg, cond.sensor_mass_kg, dT)
+    dm = None
+    if cond.sensor_mass_kg is not None and baseline_sensor_mass_kg is not None:
+        dm = cond.sensor_mass_kg - baseline_sensor_mass_kg
+    bounds = NullBounds.physical(dm, dT)
     space = ParamSpace(profile, bounds, fill_modulus_ratio,
                        float(retest.sensor_x_m - baseline.sensor_x_m))
     hyp = fit_hypotheses(predict, diff, space, n_starts)
@@ -285,18 +300,21 @@ def inspect_retest(
     c = full.params.core
     d_in = c.diameter_m / IN_TO_M
     start_in, end_in = (v / IN_TO_M for v in c.interval_m(profile.length_m))
-    held0, held1 = NullBounds.held(null), NullBounds.held(full)
+    held0 = NullBounds.held(null)
+    held1 = [h for h in NullBounds.held(full) if h in CONFUSABLE]
     weight_note = ""
     if dlnw is not None:
         weight_note = f"; weight {100 * np.expm1(dlnw):+.1f} % since registration"
     core_text = (f"a core {d_in:.2f} in across at {start_in:.1f}-{end_in:.1f} in from the "
                  f"knob end, fill/wood density {c.fill_density_ratio:.2f}")
-    if significant and d_in >= MIN_CORE_DIAMETER_IN and not held1:
+    d_low_in = d_in - 2 * candidate["sd"]["core_diameter_m"] / IN_TO_M
+    practical = d_low_in >= MIN_CORE_DIAMETER_IN
+    if significant and practical and not held1:
         altered = True
         reasons = [f"the change between the tests is not one moisture, temperature or the "
                    f"accelerometer can make (F = {F:.1f}, p = {p_value:.1e}){weight_note}",
                    f"it fits {core_text}"]
-    elif significant and d_in >= MIN_CORE_DIAMETER_IN:
+    elif significant and practical:
         altered = None
         reasons = [f"the change between the tests fits {core_text}, but only with "
                    f"{', '.join(held1)} at its physical bound: an alteration and that drift "
@@ -312,8 +330,9 @@ def inspect_retest(
         altered = False
         if significant:
             reasons = [f"the tests differ beyond noise (F = {F:.1f}) but only as a core "
-                       f"{d_in:.2f} in across would, below any practical core "
-                       f"({MIN_CORE_DIAMETER_IN} in){weight_note}"]
+                       f"{d_in:.2f} in across would (at least {max(d_low_in, 0):.2f} in at 2 "
+                       f"sigma), not surely a practical core ({MIN_CORE_DIAMETER_IN} in)"
+                       f"{weight_note}"]
         else:
             reasons = [f"the change between the tests is what moisture, temperature and the "
                        f"accelerometer make (F = {F:.2f}, p = {p_value:.2f}){weight_note}"]
