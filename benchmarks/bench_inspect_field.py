@@ -34,10 +34,15 @@ from updating.simulate.integrity import INTEGRITY  # noqa: E402
 
 def one(seed: int, kind: str, integrity: str | None, with_meta: bool) -> dict:
     rng = np.random.default_rng(seed)
-    case = draw_case(rng, kind, integrity=integrity, serial=f"F-{seed}")
-    row = {"seed": seed, "kind": kind, "integrity": integrity, "expected": case.expected}
+    row = {"seed": seed, "kind": kind, "integrity": integrity}
     with tempfile.TemporaryDirectory(prefix="batlab-field-") as tmp:
-        paths = write_case(case, tmp, seed, retest_meta_keys=None if with_meta else [])
+        try:
+            case = draw_case(rng, kind, integrity=integrity, serial=f"F-{seed}")
+            paths = write_case(case, tmp, seed, retest_meta_keys=None if with_meta else [])
+        except ValueError as exc:  # the simulator cannot make this draw: not counted
+            row.update(status="sim_error", reasons=[str(exc)])
+            return row
+        row["expected"] = case.expected
         t0 = time.perf_counter()
         try:
             res = pipeline.inspect_files(paths["profile"], paths["meta"], paths["baseline"],
@@ -64,9 +69,13 @@ def one(seed: int, kind: str, integrity: str | None, with_meta: bool) -> dict:
 
 def summarise(rows: list[dict]) -> str:
     lines = []
+    skipped = [r for r in rows if r["status"] == "sim_error"]
+    rows = [r for r in rows if r["status"] != "sim_error"]
     clean = [r for r in rows if r["kind"] == "none" and not r["integrity"]]
     alt = [r for r in rows if r["kind"] != "none" and not r["integrity"]]
     integ = [r for r in rows if r["integrity"]]
+    if skipped:
+        lines.append(f"({len(skipped)} draws the simulator could not make, not counted)")
     if clean:
         n = len(clean)
         fa = sum(r["status"] == "altered" for r in clean)

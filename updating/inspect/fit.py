@@ -127,6 +127,13 @@ class NullBounds:
                           PRIOR_END_MOISTURE_PT, m_sig])
         return NullBounds(lo, hi, center, sigma)
 
+    def widened(self) -> NullBounds:
+        """The same with the uniform stiffness and density free (+-40 %, +-30 %): what
+        another bat of the same profile, or a drift far beyond physics, would need."""
+        lo, hi = self.lower.copy(), self.upper.copy()
+        lo[:2], hi[:2] = (-40.0, -30.0), (40.0, 30.0)
+        return NullBounds(lo, hi, self.prior_center, self.prior_sigma)
+
     def prior_residual(self, x: np.ndarray) -> np.ndarray:
         return (x[:N_NULL] - self.prior_center) / self.prior_sigma
 

@@ -28,7 +28,7 @@
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 from scipy.stats import f as f_dist
@@ -209,6 +209,22 @@ def fit_hypotheses(predict: ChangePredictor, diff: Differences, space: ParamSpac
     return Hypotheses(null, full, sigma, scan)
 
 
+def _uniform_explanation(predict, diff, space, hyp: Hypotheses, q: int, dof: int,
+                         false_alarm: float) -> tuple[float, float] | None:
+    """(stiffness %, density %) when a uniform change of the wood beyond physical bounds
+    explains the change as well as the core does (another bat, not an alteration), else
+    None."""
+    wide = replace(space, bounds=space.bounds.widened())
+    fit = fit_null(predict, diff, wide, hyp.sigma_rel, x0=hyp.null.x)
+    rss1 = min(hyp.full.rss, hyp.null.rss)
+    F = max(fit.rss - rss1, 0.0) / q / max(rss1 / dof, 1.0)
+    beyond = np.any(fit.x[:2] < space.bounds.lower[:2]) or \
+        np.any(fit.x[:2] > space.bounds.upper[:2])
+    if beyond and f_dist.sf(F, q, dof) >= false_alarm:
+        return float(fit.x[0]), float(fit.x[1])
+    return None
+
+
 def _nan_verdict(predict: ChangePredictor, false_alarm: float, reasons: list[str],
                  details: dict) -> Verdict:
     """An inconclusive verdict (no test made)."""
@@ -309,7 +325,16 @@ def inspect_retest(
                  f"knob end, fill/wood density {c.fill_density_ratio:.2f}")
     d_low_in = d_in - 2 * candidate["sd"]["core_diameter_m"] / IN_TO_M
     practical = d_low_in >= MIN_CORE_DIAMETER_IN
+    uniform = None
     if significant and practical and not held1:
+        uniform = _uniform_explanation(predict, diff, space, hyp, q, dof, false_alarm)
+    if uniform is not None:
+        altered = None
+        reasons = [f"the tests differ as two bats of this profile would (uniform stiffness "
+                   f"{uniform[0]:+.1f} %, density {uniform[1]:+.1f} %), far beyond what moisture "
+                   "and temperature do: check that the re-test is of this bat (serial) and the "
+                   "registered baseline is its own"]
+    elif significant and practical and not held1:
         altered = True
         reasons = [f"the change between the tests is not one moisture, temperature or the "
                    f"accelerometer can make (F = {F:.1f}, p = {p_value:.1e}){weight_note}",
