@@ -89,6 +89,7 @@ class WoodSystem:
 
 def wood_system(
     profile: Profile, reference: BatReference, points_m: np.ndarray, core: Core | None,
+    like: WoodSystem | None = None,
 ) -> WoodSystem:
     """Model of the bat (wood only) with nodes at the test points, and its bungees."""
     model = replace(reference, sensor_mass_kg=0.0).build(profile, points_m, core=core)
@@ -97,6 +98,10 @@ def wood_system(
     idx = np.searchsorted(model.node_x_m, points_m - 1e-9)
     if np.any(np.abs(model.node_x_m[np.minimum(idx, model.n_nodes - 1)] - points_m) > 1e-9):
         raise ValueError("test points must be nodes of the model")
+    t = np.zeros(model.n_dof)
+    t[model.translational_dofs] = 1.0
+    if like is not None:  # end-grain matrices of the uncored bat (a core is not at the grain)
+        return WoodSystem(model, K, M, Kb, 2 * idx, like.K_ends, like.M_ends, t)
     mid = 0.5 * (model.node_x_m[:-1] + model.node_x_m[1:])
     parts = model.parts
     K_ends, M_ends = [], []
@@ -104,8 +109,6 @@ def wood_system(
         w = np.exp(-dist / END_DECAY_M)
         K_ends.append(place(model, parts.k_bend, w) + place(model, parts.k_shear, w))
         M_ends.append(place(model, parts.m_trans, w) + place(model, parts.m_rot, w))
-    t = np.zeros(model.n_dof)
-    t[model.translational_dofs] = 1.0
     return WoodSystem(model, K, M, Kb, 2 * idx, tuple(K_ends), tuple(M_ends), t)
 
 
@@ -139,7 +142,9 @@ class ChangePredictor:
             if len(self._cache) > 32:
                 for key in [k for k in self._cache if k is not None]:
                     del self._cache[key]
-            self._cache[core] = wood_system(self.profile, self.reference, self.points_m, core)
+            like = None if core is None else self.system(None)
+            self._cache[core] = wood_system(self.profile, self.reference, self.points_m, core,
+                                            like)
         return self._cache[core]
 
     def wood_mass_kg(self, p: ChangeParams) -> float:
