@@ -49,7 +49,10 @@ N_NULL, N_CORE = 6, 4
 NULL_NAMES = ("stiffness_pct", "density_pct", "sensor_shift_in", "knob_end_moisture_pt",
               "barrel_end_moisture_pt", "sensor_mass_change_g")
 R_MAX = 6.0  # densest fill considered, relative to the wood
-MIN_PLUG_IN, MIN_LENGTH_IN = 0.05, 0.5
+MIN_PLUG_IN, MIN_LENGTH_IN = 0.05, 2.0
+"""The shortest filled length considered a core: end plugs are 2-4 in, corks 3-12 in. A
+shorter 'core' at the barrel end fits what the accelerometer and cupped end do there (on
+clean nuisance-rich bats such 1 in 'cores' reached F = 13)."""
 CORE_LOWER = np.array([MIN_PLUG_IN, MIN_LENGTH_IN, 0.0, 0.0])
 CORE_UPPER = np.array([12.0, 15.0, 2.6 * R_MAX, 2.6 * R_MAX])
 MIN_B = 1e-4  # (0.01 in)^2: the smallest core diameter the model builds
