@@ -137,6 +137,13 @@ class NullBounds:
         lo[:2], hi[:2] = (-40.0, -30.0), (40.0, 30.0)
         return NullBounds(lo, hi, self.prior_center, self.prior_sigma)
 
+    def relaxed(self, factor: float = 3.0) -> NullBounds:
+        """Every range ``factor`` times as wide about its middle: to ask whether the data
+        really want a nuisance beyond its physical bound."""
+        mid, half = 0.5 * (self.lower + self.upper), 0.5 * (self.upper - self.lower)
+        return NullBounds(mid - factor * half, mid + factor * half, self.prior_center,
+                          self.prior_sigma)
+
     def prior_residual(self, x: np.ndarray) -> np.ndarray:
         return (x[:N_NULL] - self.prior_center) / self.prior_sigma
 
