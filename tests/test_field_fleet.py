@@ -221,3 +221,21 @@ def test_write_case_writes_the_contract_files(tmp_path):
     assert b.frf.shape == r.frf.shape == (case.freq_hz.size, 1, len(meta["points_in"]))
     no_meta = write_case(case, tmp_path / "bare", seed=5, retest_meta_keys=())
     assert no_meta["retest_meta"] is None and not (tmp_path / "bare" / "retest.json").exists()
+
+
+def test_alter_case_keeps_the_bat_and_its_conditions():
+    from updating.simulate.alterations import end_bored
+    from updating.simulate.field_fleet import alter_case
+
+    case = draw_case(np.random.default_rng(4), "none", ("cup", "moisture"))
+    L_in = case.profile.length_m / IN_TO_M
+    alt = end_bored("cork", L_in, 1.0, 10.0, 0.3, max(1.0, case.min_plug_in))
+    out = alter_case(case, alt, np.random.default_rng(1), serial="SIM-9")
+    assert out.baseline == case.baseline and out.retest.wood is case.retest.wood
+    assert out.retest.cavities == case.baseline.cavities  # the cup stays
+    assert out.truth["kind"] == "cork" and out.expected == "altered"
+    assert out.meta["serial"] == "SIM-9" and case.meta["serial"] == "SIM-0001"
+    drop = case.truth["true_weight_lb"]["retest"] - out.truth["true_weight_lb"]["retest"]
+    rho = case.baseline.material.rho_kg_m3
+    hole = np.pi / 4 * IN_TO_M**2 * 10.0 * IN_TO_M  # 1 in x 10 in of wood, 0.7 of it gone
+    assert drop * LB_TO_KG == pytest.approx(0.7 * rho * hole, rel=0.03)  # moisture: +-2 %

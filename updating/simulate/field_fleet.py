@@ -30,7 +30,7 @@ from updating.model.material import Material, material_from_imperial
 from updating.model.profile import Profile, write_profile_csv
 from updating.model.units import IN_TO_M, LB_TO_KG
 from updating.simulate import nuisances as nz
-from updating.simulate.alterations import KINDS, draw_alteration
+from updating.simulate.alterations import KINDS, Alteration, draw_alteration
 from updating.simulate.fleet import SPECIES, pro_profile
 from updating.simulate.integrity import INTEGRITY, corrupt
 from updating.simulate.virtual_bat import VirtualBat, simulate_test
@@ -75,6 +75,11 @@ class FieldCase:
     def expected(self) -> str:
         return self.truth["expected"]
 
+    @property
+    def min_plug_in(self) -> float:
+        """The shortest plug an alteration of this bat can have (behind a cupped end)."""
+        return self.truth["drawn"].get("cup", {}).get("depth_in", 0.0) + 0.25
+
 
 def scale_reading(bat: VirtualBat) -> tuple[float, float]:
     """(weight lb, balance point in from the knob) of the bare bat, without reading noise."""
@@ -85,6 +90,20 @@ def scale_reading(bat: VirtualBat) -> tuple[float, float]:
 def bare(bat: VirtualBat) -> VirtualBat:
     """The bat off the rig: no accelerometer, no bungees (what the scale weighs)."""
     return replace(bat, sensor_mass_kg=0.0, bungee_k_n_per_m=0.0)
+
+
+def lab_readings(rng: np.random.Generator, base: VirtualBat, retest: VirtualBat,
+                 truth: dict) -> None:
+    """Put the true and the scale's (noisy) weights and balance points of both tests into
+    ``truth`` (keys true_weight_lb, true_balance_in, lab_readings)."""
+    w_b, cg_b = scale_reading(bare(base))
+    w_r, cg_r = scale_reading(bare(retest))
+    truth["true_weight_lb"] = {"baseline": w_b, "retest": w_r}
+    truth["true_balance_in"] = {"baseline": cg_b, "retest": cg_r}
+    truth["lab_readings"] = {k: v + s * rng.standard_normal() for k, v, s in (
+        ("baseline_lb", w_b, SCALE_SIGMA_LB), ("retest_lb", w_r, SCALE_SIGMA_LB),
+        ("baseline_balance_in", cg_b, BALANCE_SIGMA_IN),
+        ("retest_balance_in", cg_r, BALANCE_SIGMA_IN))}
 
 
 def random_wood(rng: np.random.Generator, species: str | None = None) -> tuple[str, Material]:
@@ -197,15 +216,8 @@ def draw_case(
         _, other_wood = random_wood(rng, species)
         retest = replace(retest, material=replace(other_wood, e_over_g=retest.material.e_over_g))
 
-    w_b, cg_b = scale_reading(bare(base))
-    w_r, cg_r = scale_reading(bare(retest))
-    meas = {k: v + s * rng.standard_normal() for k, v, s in (
-        ("baseline_lb", w_b, SCALE_SIGMA_LB), ("retest_lb", w_r, SCALE_SIGMA_LB),
-        ("baseline_balance_in", cg_b, BALANCE_SIGMA_IN),
-        ("retest_balance_in", cg_r, BALANCE_SIGMA_IN))}
-    truth["true_weight_lb"] = {"baseline": w_b, "retest": w_r}
-    truth["true_balance_in"] = {"baseline": cg_b, "retest": cg_r}
-    truth["lab_readings"] = meas
+    lab_readings(rng, base, retest, truth)
+    meas = truth["lab_readings"]
     meta = {"serial": serial, "species": species, "nominal_E_psi": E_psi,
             "nominal_weight_density_lbf_in3": round(wd, 5),
             "weight_lb": round(meas["baseline_lb"], 4),
@@ -216,6 +228,26 @@ def draw_case(
                    "temperature_c": round(t_re, 1), "tested_on": "2026-05-02"}
     freq = np.arange(0.0, fmax + 0.25, 0.5)
     return FieldCase(profile, meta, retest_meta, base, retest, freq, integrity, truth)
+
+
+def alter_case(
+    case: FieldCase, alteration: Alteration, rng: np.random.Generator,
+    serial: str | None = None,
+) -> FieldCase:
+    """The same bat and the same re-test conditions with ``alteration`` instead of the
+    re-test's own (clean bats: a core added); weights, balance points and retest.json's
+    weight re-read. For paired studies: one baseline, many re-tests."""
+    cup = case.baseline.cavities  # the baseline's cavities are the bat's own (the cup)
+    retest = replace(case.retest, core=alteration.core, cavities=cup + alteration.cavities)
+    truth = dict(case.truth, altered=True,
+                 expected="inconclusive" if case.integrity else "altered")
+    truth.update(alteration.truth())
+    if serial is not None:
+        truth["serial"] = serial
+    lab_readings(rng, case.baseline, retest, truth)
+    retest_meta = dict(case.retest_meta, weight_lb=round(truth["lab_readings"]["retest_lb"], 4))
+    meta = case.meta if serial is None else dict(case.meta, serial=serial)
+    return replace(case, meta=meta, retest_meta=retest_meta, retest=retest, truth=truth)
 
 
 def case_tests(case: FieldCase, seed: int):
