@@ -250,11 +250,18 @@ def alter_case(
     return replace(case, meta=meta, retest_meta=retest_meta, retest=retest, truth=truth)
 
 
-def case_tests(case: FieldCase, seed: int):
-    """(baseline, re-test) FrfTests as the lab's files hold them (slip applied)."""
-    base = simulate_test(case.baseline, case.freq_hz, seed=seed)
-    re = corrupt(simulate_test(case.retest, case.freq_hz, seed=seed + 1), case.integrity)
-    return base, re
+def write_retest(
+    case: FieldCase, uff_path, json_path, seed: int, retest_meta_keys=None,
+) -> Path | None:
+    """Write the re-test's file (slip applied, noise ``seed``) and its retest.json (only the
+    ``retest_meta_keys`` given, default all; none: not written). The JSON's path or None."""
+    write_test(uff_path, corrupt(simulate_test(case.retest, case.freq_hz, seed=seed),
+                                 case.integrity))
+    keys = list(case.retest_meta) if retest_meta_keys is None else list(retest_meta_keys)
+    if not keys:
+        return None
+    Path(json_path).write_text(json.dumps({k: case.retest_meta[k] for k in keys}, indent=1))
+    return Path(json_path)
 
 
 def write_case(
@@ -271,15 +278,9 @@ def write_case(
                                         ("retest_meta", "retest.json"))}
     write_profile_csv(paths["profile"], case.profile)
     paths["meta"].write_text(json.dumps(case.meta, indent=1))
-    base, re = case_tests(case, seed)
-    write_test(paths["baseline"], base)
-    write_test(paths["retest"], re)
-    keys = list(case.retest_meta) if retest_meta_keys is None else list(retest_meta_keys)
-    if keys:
-        paths["retest_meta"].write_text(json.dumps({k: case.retest_meta[k] for k in keys},
-                                                   indent=1))
-    else:
-        paths["retest_meta"] = None
+    write_test(paths["baseline"], simulate_test(case.baseline, case.freq_hz, seed=seed))
+    paths["retest_meta"] = write_retest(case, paths["retest"], paths["retest_meta"], seed + 1,
+                                        retest_meta_keys)
     if truth:
         paths["truth"] = folder / "truth.json"
         paths["truth"].write_text(json.dumps(case.truth, indent=1, default=float))
