@@ -149,8 +149,8 @@ def test_no_nuisance_retest_equals_baseline_and_each_changes_its_own():
     only the fields it owns."""
     owns = {"moisture": {"wood"}, "uniform_drift": {"wood"}, "temperature": {"wood"},
             "billet": set(), "planes": {"theta_deg"}, "cup": set(), "noise": set(),
-            "points": set(), "band": set(), "accelerometer": {"sensor_mass_kg",
-                                                             "sensor_offset_m"},
+            "points": set(), "model_points": set(), "band": set(),
+            "accelerometer": {"sensor_mass_kg", "sensor_offset_m"},
             "bungees": {"bungee_k_n_per_m"}}
     for i, name in enumerate(("none",) + nz.NUISANCES + nz.OPTIONAL_NUISANCES):
         case = draw_case(np.random.default_rng(i), "none", () if name == "none" else (name,))
@@ -186,6 +186,16 @@ def test_weights_follow_the_truth():
     assert abs(case.meta["weight_lb"] - w["baseline"]) < 0.01
     m = mass_properties(bare(case.retest).truth_model()).mass_kg / LB_TO_KG
     assert m == pytest.approx(w["retest"])
+
+
+def test_model_points_layout_is_what_batlab_model_suggests():
+    case = draw_case(np.random.default_rng(6), "none", ("model_points",))
+    pts = np.array(case.meta["points_in"])
+    L_in = case.profile.length_m / IN_TO_M
+    assert 11 <= pts.size <= 20
+    assert pts[-1] == pytest.approx(L_in - 1.5, abs=0.01)
+    assert case.baseline.sensor_point() == pts.size - 1  # the accelerometer on it
+    assert np.all(np.diff(pts[pts > L_in - 14]) <= 2.0 + 1e-6)
 
 
 def test_integrity_slips(tmp_path):

@@ -152,6 +152,8 @@ def draw_case(
     points_in = nz.lab_points_in(L_in)
     if "points" in on:
         points_in = nz.draw_points(rng, L_in)
+    if "model_points" in on:
+        points_in = nz.draw_model_points(rng, profile, material_from_imperial(E_psi, wd))
     if integrity == "no_barrel_points":
         points_in = no_barrel_points_in(L_in)
     rec["points"] = len(points_in)
