@@ -2,7 +2,8 @@
 
     python benchmarks/bench_detection.py [--bats 6] [--diameters 0.5,0.75,1.0,1.25]
         [--lengths 3,6,9,12] [--ratio 0.3] [--kinds deep,empty,end_plug,partial,small,neutral]
-        [--lab-clean 100] [--seed 2] [--workers 2] [--no-retest-meta] [--out rows.json]
+        [--lab-clean 100] [--lab-bats 0] [--seed 2] [--workers 2] [--no-retest-meta]
+        [--out rows.json]
 
 Paired design on nuisance-rich virtual bats (``updating.simulate.field_fleet``, every
 nuisance on): each bat is registered once (`batlab register`, its baseline) and re-tested
@@ -17,6 +18,10 @@ Beside batlab, on the same bats, what a lab would do without it:
   +-2 points of moisture explain (1 %/point: 2 %) plus three scale sigmas (0.002 lb each);
 - **scale + balance point**: the scale's rule, or the balance point moved by more than any
   of ``--lab-clean`` further clean nuisance-rich bats moved it (zero false alarms there).
+
+``--lab-bats N`` adds the two lab methods on N further bats (weights and balance points only,
+no FRFs, no inspection: cheap), for their rates with more bats behind them; ``--bats 0``
+gives that table alone.
 
 batlab's ROC is over its ``confidence`` (1 - p), clean re-tests against altered ones; its
 operating point is its own verdict (``status`` == "altered", or ``altered`` on older
@@ -191,6 +196,28 @@ def report(rows: list[dict], balance_limit_in: float) -> str:
     return "\n".join(lines)
 
 
+def lab_only(n: int, seed: int, grid, ratio: float, kinds: list[str],
+             balance_limit_in: float) -> str:
+    """The lab's two methods on ``n`` further bats (readings only, no FRFs): the same grid and
+    kinds, re-tested under every nuisance; a markdown table of detection rates."""
+    said: dict[str, list[dict]] = {}
+    for k in range(n):
+        rng = np.random.default_rng(seed * 104729 + k)
+        case = draw_case(rng, "none", NUISANCES)
+        for rt in retests(case, grid, ratio, kinds, rng):
+            t = rt.truth
+            key = "clean (false alarms)" if t["kind"] == "none" else (
+                cell_name(t) if t["kind"] == "cork" and (
+                    t["core_diameter_in"], round(t["region_in"][1] - t["region_in"][0], 6))
+                in {(d, float(length)) for d, length in grid} else t["kind"])
+            said.setdefault(key, []).append(lab_verdicts(t, balance_limit_in))
+    lines = [f"| re-test ({n} bats, readings only) | scale | scale+balance |", "|---|---|---|"]
+    for key, vs in said.items():
+        lines.append(f"| {key} | " + " | ".join(
+            f"{100 * np.mean([v[m] for v in vs]):.0f} %" for m in METHODS[1:]) + " |")
+    return "\n".join(lines)
+
+
 def floats(text: str) -> list[float]:
     return [float(v) for v in text.split(",") if v.strip()]
 
@@ -205,6 +232,8 @@ def main(argv=None) -> int:
                     help="other alterations, one of each per bat (empty string: none)")
     ap.add_argument("--lab-clean", type=int, default=100,
                     help="clean bats (readings only) that set the balance-point limit")
+    ap.add_argument("--lab-bats", type=int, default=0,
+                    help="further bats for the lab's methods alone (readings only, cheap)")
     ap.add_argument("--seed", type=int, default=2)
     ap.add_argument("--workers", type=int, default=2, help="processes (at most 2)")
     ap.add_argument("--no-retest-meta", action="store_true")
@@ -213,6 +242,10 @@ def main(argv=None) -> int:
 
     grid = [(d, length) for d in floats(args.diameters) for length in floats(args.lengths)]
     kinds = [k for k in args.kinds.split(",") if k]
+    if args.bats == 0:  # the lab's methods alone
+        limit = lab_clean_balance(args.lab_clean, args.seed)
+        print(lab_only(args.lab_bats, args.seed + 1, grid, args.ratio, kinds, limit))
+        return 0
     jobs = [{"serial": f"DET-{b + 1:03d}", "seed": args.seed * 100019 + b, "grid": grid,
              "ratio": args.ratio, "kinds": kinds, "no_retest_meta": args.no_retest_meta}
             for b in range(args.bats)]
@@ -227,6 +260,9 @@ def main(argv=None) -> int:
     print(f"\n## Detection ({args.bats} bats, {len(rows)} re-tests, seed {args.seed}, "
           f"retest.json {'not ' if args.no_retest_meta else ''}passed)\n")
     print(report(rows, limit))
+    if args.lab_bats:
+        print(f"\n### The lab's methods on {args.lab_bats} further bats\n")
+        print(lab_only(args.lab_bats, args.seed + 1, grid, args.ratio, kinds, limit))
     return 0
 
 
