@@ -249,3 +249,16 @@ def test_alter_case_keeps_the_bat_and_its_conditions():
     rho = case.baseline.material.rho_kg_m3
     hole = np.pi / 4 * IN_TO_M**2 * 10.0 * IN_TO_M  # 1 in x 10 in of wood, 0.7 of it gone
     assert drop * LB_TO_KG == pytest.approx(0.7 * rho * hole, rel=0.03)  # moisture: +-2 %
+
+
+def test_sensor_on_the_end_face_stays_on_the_bat():
+    """The no-barrel layout puts the accelerometer on the end face; a re-mount offset past
+    the end is clipped to it (it crashed the FRF simulation before)."""
+    case = draw_case(np.random.default_rng(1), "none", ("accelerometer",),
+                     integrity="no_barrel_points")
+    L = case.profile.length_m
+    for bat in (case.baseline, replace(case.retest, sensor_offset_m=0.1 * IN_TO_M)):
+        assert 0 <= bat.sensor_x_m() <= L
+    test = simulate_test(replace(case.retest, sensor_offset_m=0.1 * IN_TO_M),
+                         np.arange(0.0, 500.0, 0.5), seed=1)
+    assert np.all(np.isfinite(test.frf))
