@@ -78,7 +78,17 @@ def retests(case, grid: list[tuple[float, float]], ratio: float, kinds: list[str
 
 
 def run_bat(job: dict) -> list[dict]:
-    """Register one bat, inspect all its re-tests through the registry; result rows."""
+    """Register one bat, inspect all its re-tests through the registry; result rows (none,
+    with the reason on stderr, when the benchmark itself fails on that bat)."""
+    try:
+        return bat_rows(job)
+    except Exception as exc:  # the benchmark's own failure: report it, go on
+        print(f"  {job['serial']}: benchmark failed: {type(exc).__name__}: {exc}",
+              file=sys.stderr)
+        return []
+
+
+def bat_rows(job: dict) -> list[dict]:
     rng = np.random.default_rng(job["seed"])
     case = draw_case(rng, "none", NUISANCES, None, job["serial"])
     rows = []

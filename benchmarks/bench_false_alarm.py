@@ -65,7 +65,19 @@ def plan(n_all: int, n_alone: int, n_integrity: int, seed: int) -> list[dict]:
 
 
 def run_job(job: dict, retest_meta: bool = True) -> dict:
-    """Draw, write and inspect one bat; its result row (with the job's group)."""
+    """Draw, write and inspect one bat; its result row (with the job's group). A failure of
+    the simulation is an "error" row, not the end of the run."""
+    try:
+        return inspect_job(job, retest_meta)
+    except Exception as exc:  # the benchmark's own failure: report it, go on
+        truth = {"serial": job["serial"], "kind": "none", "integrity": job["integrity"],
+                 "expected": "inconclusive" if job["integrity"] else "not_altered"}
+        row = verdict_row(None, f"{type(exc).__name__}: {exc}", 0.0, truth)
+        row.update(status="error", group=job["group"])
+        return row
+
+
+def inspect_job(job: dict, retest_meta: bool) -> dict:
     rng = np.random.default_rng(job["seed"])
     case = draw_case(rng, "none", job["nuisances"], job["integrity"], job["serial"])
     with tempfile.TemporaryDirectory(prefix="batlab-fa-") as tmp:
@@ -92,6 +104,9 @@ def summarise(rows: list[dict]) -> tuple[str, list[tuple[str, bool]]]:
     fa = sum(r["status"] == "altered" for r in clean)
     inc = sum(r["status"] == "inconclusive" for r in every)
     checks = [(f"clean bats called altered: {fa}/{len(clean)} (0)", fa == 0)]
+    errors = sum(r["status"] == "error" for r in rows)
+    if errors:
+        checks.append((f"bats the benchmark itself failed on: {errors}", False))
     if every:
         checks.append((f"inconclusive among all-nuisance bats: {inc}/{len(every)} "
                        f"({100 * inc / len(every):.0f} %, <= 5 %)", inc <= 0.05 * len(every)))

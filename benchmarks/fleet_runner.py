@@ -34,7 +34,9 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from batlab.cli import main as batlab_main  # noqa: E402
 
-STATUSES = ("not_altered", "inconclusive", "altered", "refused")
+STATUSES = ("not_altered", "inconclusive", "altered", "refused", "error")
+"""Verdicts, a refusal (non-zero exit), and "error": the benchmark itself failed on that bat
+(the simulation, not batlab), reported, never counted as a verdict."""
 MAX_WORKERS = 2
 
 
@@ -138,14 +140,14 @@ def _indexed(job):
 
 def count_table(groups: dict[str, list[dict]]) -> str:
     """Markdown: per group, how many bats got each status, and the median inspect time."""
-    lines = ["| group | bats | not_altered | inconclusive | altered | refused | median s |",
-             "|---|---|---|---|---|---|---|"]
+    lines = ["| group | bats | not_altered | inconclusive | altered | refused | error | median s |",
+             "|---|---|---|---|---|---|---|---|"]
     for name, rows in groups.items():
         c = {s: sum(r["status"] == s for r in rows) for s in STATUSES}
         t = sorted(r["seconds"] for r in rows)
         med = t[len(t) // 2] if t else float("nan")
         lines.append(f"| {name} | {len(rows)} | {c['not_altered']} | {c['inconclusive']} | "
-                     f"{c['altered']} | {c['refused']} | {med:.1f} |")
+                     f"{c['altered']} | {c['refused']} | {c['error']} | {med:.1f} |")
     return "\n".join(lines)
 
 

@@ -31,6 +31,19 @@ def test_verdict_status_reads_both_output_forms():
     assert fleet_runner.verdict_status(None) == "refused"
 
 
+def test_a_failing_bat_is_an_error_row_not_the_end(monkeypatch):
+    def boom(job, retest_meta):
+        raise ValueError("simulation broke")
+
+    monkeypatch.setattr(bench_false_alarm, "inspect_job", boom)
+    job = bench_false_alarm.plan(1, 0, 0, seed=1)[0]
+    row = bench_false_alarm.run_job(job)
+    assert row["status"] == "error" and "simulation broke" in row["error"]
+    table, checks = bench_false_alarm.summarise([row])
+    assert "| all nuisances | 1 | 0 | 0 | 0 | 0 | 1 |" in table
+    assert any("failed on: 1" in text and not ok for text, ok in checks)
+
+
 def test_plan_has_every_group():
     jobs = bench_false_alarm.plan(3, 2, 1, seed=1)
     groups = [j["group"] for j in jobs]
@@ -46,8 +59,8 @@ def table_counts(text: str) -> list[list[int]]:
     rows = []
     for line in text.splitlines():
         cells = [c.strip() for c in line.strip().strip("|").split("|")]
-        if len(cells) == 7 and cells[1].isdigit():
-            rows.append([int(c) for c in cells[1:6]])
+        if len(cells) == 8 and cells[1].isdigit():
+            rows.append([int(c) for c in cells[1:7]])
     return rows
 
 
