@@ -142,6 +142,35 @@ def roc_auc(clean: list[float], altered: list[float]) -> float:
     return float(np.mean((a > c) + 0.5 * (a == c)))
 
 
+def reading_errors(row: dict) -> tuple[float, float, float] | None:
+    """(start error in, diameter error %, fill ratio error %) of a detected alteration; None
+    when batlab gave no reading. The fill error is relative to the fill ratio (an empty hole:
+    absolute, in percentage points of the wood's density)."""
+    t = row["truth"]
+    if row["status"] != "altered" or not row.get("region_in") or \
+            row.get("core_diameter_in") is None or row.get("fill_density_ratio") is None:
+        return None
+    r_true = t["fill_density_ratio"]
+    fill = row["fill_density_ratio"] - r_true
+    return (row["region_in"][0] - t["region_in"][0],
+            100 * (row["core_diameter_in"] / t["core_diameter_in"] - 1),
+            100 * (fill / r_true if r_true > 0 else fill))
+
+
+def reading_table(altered: list[dict]) -> str:
+    """Readings of the detected alterations against the targets (start within 1.5 in,
+    diameter within 15 %, fill ratio within 25 %), per kind."""
+    out = ["| kind | detected with a reading | start within 1.5 in | diameter within 15 % |"
+           " fill within 25 % |", "|---|---|---|---|---|"]
+    for kind in sorted({r["kind"] for r in altered}):
+        rs = [r for r in altered if r["kind"] == kind]
+        e = [x for x in (reading_errors(r) for r in rs) if x is not None]
+        a = np.abs(np.array(e)) if e else np.zeros((0, 3))
+        out.append(f"| {kind} | {len(e)}/{len(rs)} | {np.sum(a[:, 0] <= 1.5)} | "
+                   f"{np.sum(a[:, 1] <= 15)} | {np.sum(a[:, 2] <= 25)} |")
+    return "\n".join(out)
+
+
 def cell_name(truth: dict) -> str:
     a, b = truth["region_in"]
     return f"{truth['core_diameter_in']:.2f} x {b - a:.0f} in"
@@ -188,6 +217,7 @@ def report(rows: list[dict], balance_limit_in: float) -> str:
         t, _ = rate_table("alteration kind", lambda r: r["kind"], others)
         lines += [""] + t
     altered = [r for r in rows if r["kind"] != "none"]
+    lines += ["", reading_table(altered)]
     conf = [r["confidence"] for r in clean if r["confidence"] is not None]
     conf_alt = [r["confidence"] if r["confidence"] is not None else 0.0 for r in altered]
     lines += ["", f"- batlab ROC area over its confidence (clean vs altered re-tests): "
