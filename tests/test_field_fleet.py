@@ -149,8 +149,8 @@ def test_no_nuisance_retest_equals_baseline_and_each_changes_its_own():
     only the fields it owns."""
     owns = {"moisture": {"wood"}, "uniform_drift": {"wood"}, "temperature": {"wood"},
             "billet": set(), "planes": {"theta_deg"}, "cup": set(), "noise": set(),
-            "points": set(), "band": set(), "accelerometer": {"sensor_mass_kg",
-                                                             "sensor_offset_m"},
+            "points": set(), "model_points": set(), "band": set(),
+            "accelerometer": {"sensor_mass_kg", "sensor_offset_m"},
             "bungees": {"bungee_k_n_per_m"}}
     for i, name in enumerate(("none",) + nz.NUISANCES + nz.OPTIONAL_NUISANCES):
         case = draw_case(np.random.default_rng(i), "none", () if name == "none" else (name,))
@@ -188,6 +188,16 @@ def test_weights_follow_the_truth():
     assert m == pytest.approx(w["retest"])
 
 
+def test_model_points_layout_is_what_batlab_model_suggests():
+    case = draw_case(np.random.default_rng(6), "none", ("model_points",))
+    pts = np.array(case.meta["points_in"])
+    L_in = case.profile.length_m / IN_TO_M
+    assert 11 <= pts.size <= 20
+    assert pts[-1] == pytest.approx(L_in - 1.5, abs=0.01)
+    assert case.baseline.sensor_point() == pts.size - 1  # the accelerometer on it
+    assert np.all(np.diff(pts[pts > L_in - 14]) <= 2.0 + 1e-6)
+
+
 def test_integrity_slips(tmp_path):
     case = draw_case(np.random.default_rng(2), "none", ())
     test = simulate_test(case.retest, case.freq_hz, seed=1)
@@ -221,3 +231,34 @@ def test_write_case_writes_the_contract_files(tmp_path):
     assert b.frf.shape == r.frf.shape == (case.freq_hz.size, 1, len(meta["points_in"]))
     no_meta = write_case(case, tmp_path / "bare", seed=5, retest_meta_keys=())
     assert no_meta["retest_meta"] is None and not (tmp_path / "bare" / "retest.json").exists()
+
+
+def test_alter_case_keeps_the_bat_and_its_conditions():
+    from updating.simulate.alterations import end_bored
+    from updating.simulate.field_fleet import alter_case
+
+    case = draw_case(np.random.default_rng(4), "none", ("cup", "moisture"))
+    L_in = case.profile.length_m / IN_TO_M
+    alt = end_bored("cork", L_in, 1.0, 10.0, 0.3, max(1.0, case.min_plug_in))
+    out = alter_case(case, alt, np.random.default_rng(1), serial="SIM-9")
+    assert out.baseline == case.baseline and out.retest.wood is case.retest.wood
+    assert out.retest.cavities == case.baseline.cavities  # the cup stays
+    assert out.truth["kind"] == "cork" and out.expected == "altered"
+    assert out.meta["serial"] == "SIM-9" and case.meta["serial"] == "SIM-0001"
+    drop = case.truth["true_weight_lb"]["retest"] - out.truth["true_weight_lb"]["retest"]
+    rho = case.baseline.material.rho_kg_m3
+    hole = np.pi / 4 * IN_TO_M**2 * 10.0 * IN_TO_M  # 1 in x 10 in of wood, 0.7 of it gone
+    assert drop * LB_TO_KG == pytest.approx(0.7 * rho * hole, rel=0.03)  # moisture: +-2 %
+
+
+def test_sensor_on_the_end_face_stays_on_the_bat():
+    """The no-barrel layout puts the accelerometer on the end face; a re-mount offset past
+    the end is clipped to it (it crashed the FRF simulation before)."""
+    case = draw_case(np.random.default_rng(1), "none", ("accelerometer",),
+                     integrity="no_barrel_points")
+    L = case.profile.length_m
+    for bat in (case.baseline, replace(case.retest, sensor_offset_m=0.1 * IN_TO_M)):
+        assert 0 <= bat.sensor_x_m() <= L
+    test = simulate_test(replace(case.retest, sensor_offset_m=0.1 * IN_TO_M),
+                         np.arange(0.0, 500.0, 0.5), seed=1)
+    assert np.all(np.isfinite(test.frf))

@@ -30,7 +30,7 @@ from updating.model.material import Material, material_from_imperial
 from updating.model.profile import Profile, write_profile_csv
 from updating.model.units import IN_TO_M, LB_TO_KG
 from updating.simulate import nuisances as nz
-from updating.simulate.alterations import KINDS, draw_alteration
+from updating.simulate.alterations import KINDS, Alteration, draw_alteration
 from updating.simulate.fleet import SPECIES, pro_profile
 from updating.simulate.integrity import INTEGRITY, corrupt
 from updating.simulate.virtual_bat import VirtualBat, simulate_test
@@ -75,6 +75,11 @@ class FieldCase:
     def expected(self) -> str:
         return self.truth["expected"]
 
+    @property
+    def min_plug_in(self) -> float:
+        """The shortest plug an alteration of this bat can have (behind a cupped end)."""
+        return self.truth["drawn"].get("cup", {}).get("depth_in", 0.0) + 0.25
+
 
 def scale_reading(bat: VirtualBat) -> tuple[float, float]:
     """(weight lb, balance point in from the knob) of the bare bat, without reading noise."""
@@ -85,6 +90,20 @@ def scale_reading(bat: VirtualBat) -> tuple[float, float]:
 def bare(bat: VirtualBat) -> VirtualBat:
     """The bat off the rig: no accelerometer, no bungees (what the scale weighs)."""
     return replace(bat, sensor_mass_kg=0.0, bungee_k_n_per_m=0.0)
+
+
+def lab_readings(rng: np.random.Generator, base: VirtualBat, retest: VirtualBat,
+                 truth: dict) -> None:
+    """Put the true and the scale's (noisy) weights and balance points of both tests into
+    ``truth`` (keys true_weight_lb, true_balance_in, lab_readings)."""
+    w_b, cg_b = scale_reading(bare(base))
+    w_r, cg_r = scale_reading(bare(retest))
+    truth["true_weight_lb"] = {"baseline": w_b, "retest": w_r}
+    truth["true_balance_in"] = {"baseline": cg_b, "retest": cg_r}
+    truth["lab_readings"] = {k: v + s * rng.standard_normal() for k, v, s in (
+        ("baseline_lb", w_b, SCALE_SIGMA_LB), ("retest_lb", w_r, SCALE_SIGMA_LB),
+        ("baseline_balance_in", cg_b, BALANCE_SIGMA_IN),
+        ("retest_balance_in", cg_r, BALANCE_SIGMA_IN))}
 
 
 def random_wood(rng: np.random.Generator, species: str | None = None) -> tuple[str, Material]:
@@ -133,6 +152,8 @@ def draw_case(
     points_in = nz.lab_points_in(L_in)
     if "points" in on:
         points_in = nz.draw_points(rng, L_in)
+    if "model_points" in on:
+        points_in = nz.draw_model_points(rng, profile, material_from_imperial(E_psi, wd))
     if integrity == "no_barrel_points":
         points_in = no_barrel_points_in(L_in)
     rec["points"] = len(points_in)
@@ -197,15 +218,8 @@ def draw_case(
         _, other_wood = random_wood(rng, species)
         retest = replace(retest, material=replace(other_wood, e_over_g=retest.material.e_over_g))
 
-    w_b, cg_b = scale_reading(bare(base))
-    w_r, cg_r = scale_reading(bare(retest))
-    meas = {k: v + s * rng.standard_normal() for k, v, s in (
-        ("baseline_lb", w_b, SCALE_SIGMA_LB), ("retest_lb", w_r, SCALE_SIGMA_LB),
-        ("baseline_balance_in", cg_b, BALANCE_SIGMA_IN),
-        ("retest_balance_in", cg_r, BALANCE_SIGMA_IN))}
-    truth["true_weight_lb"] = {"baseline": w_b, "retest": w_r}
-    truth["true_balance_in"] = {"baseline": cg_b, "retest": cg_r}
-    truth["lab_readings"] = meas
+    lab_readings(rng, base, retest, truth)
+    meas = truth["lab_readings"]
     meta = {"serial": serial, "species": species, "nominal_E_psi": E_psi,
             "nominal_weight_density_lbf_in3": round(wd, 5),
             "weight_lb": round(meas["baseline_lb"], 4),
@@ -218,11 +232,38 @@ def draw_case(
     return FieldCase(profile, meta, retest_meta, base, retest, freq, integrity, truth)
 
 
-def case_tests(case: FieldCase, seed: int):
-    """(baseline, re-test) FrfTests as the lab's files hold them (slip applied)."""
-    base = simulate_test(case.baseline, case.freq_hz, seed=seed)
-    re = corrupt(simulate_test(case.retest, case.freq_hz, seed=seed + 1), case.integrity)
-    return base, re
+def alter_case(
+    case: FieldCase, alteration: Alteration, rng: np.random.Generator,
+    serial: str | None = None,
+) -> FieldCase:
+    """The same bat and the same re-test conditions with ``alteration`` instead of the
+    re-test's own (clean bats: a core added); weights, balance points and retest.json's
+    weight re-read. For paired studies: one baseline, many re-tests."""
+    cup = case.baseline.cavities  # the baseline's cavities are the bat's own (the cup)
+    retest = replace(case.retest, core=alteration.core, cavities=cup + alteration.cavities)
+    truth = dict(case.truth, altered=True,
+                 expected="inconclusive" if case.integrity else "altered")
+    truth.update(alteration.truth())
+    if serial is not None:
+        truth["serial"] = serial
+    lab_readings(rng, case.baseline, retest, truth)
+    retest_meta = dict(case.retest_meta, weight_lb=round(truth["lab_readings"]["retest_lb"], 4))
+    meta = case.meta if serial is None else dict(case.meta, serial=serial)
+    return replace(case, meta=meta, retest_meta=retest_meta, retest=retest, truth=truth)
+
+
+def write_retest(
+    case: FieldCase, uff_path, json_path, seed: int, retest_meta_keys=None,
+) -> Path | None:
+    """Write the re-test's file (slip applied, noise ``seed``) and its retest.json (only the
+    ``retest_meta_keys`` given, default all; none: not written). The JSON's path or None."""
+    write_test(uff_path, corrupt(simulate_test(case.retest, case.freq_hz, seed=seed),
+                                 case.integrity))
+    keys = list(case.retest_meta) if retest_meta_keys is None else list(retest_meta_keys)
+    if not keys:
+        return None
+    Path(json_path).write_text(json.dumps({k: case.retest_meta[k] for k in keys}, indent=1))
+    return Path(json_path)
 
 
 def write_case(
@@ -239,15 +280,9 @@ def write_case(
                                         ("retest_meta", "retest.json"))}
     write_profile_csv(paths["profile"], case.profile)
     paths["meta"].write_text(json.dumps(case.meta, indent=1))
-    base, re = case_tests(case, seed)
-    write_test(paths["baseline"], base)
-    write_test(paths["retest"], re)
-    keys = list(case.retest_meta) if retest_meta_keys is None else list(retest_meta_keys)
-    if keys:
-        paths["retest_meta"].write_text(json.dumps({k: case.retest_meta[k] for k in keys},
-                                                   indent=1))
-    else:
-        paths["retest_meta"] = None
+    write_test(paths["baseline"], simulate_test(case.baseline, case.freq_hz, seed=seed))
+    paths["retest_meta"] = write_retest(case, paths["retest"], paths["retest_meta"], seed + 1,
+                                        retest_meta_keys)
     if truth:
         paths["truth"] = folder / "truth.json"
         paths["truth"].write_text(json.dumps(case.truth, indent=1, default=float))

@@ -13,12 +13,15 @@ re-test and a JSON-able record of what it drew. Magnitudes (../shared/BAT_PHYSIC
 | cup | barrel end cupped 0.25-1 in deep, 1.0-1.6 in across (both tests) |
 | noise | FRF noise 1-2 % (else 0.5 %) |
 | points | 8-20 evenly spaced impact points (else every 2 in) |
+| model_points | the 11-20 points `batlab model --points` suggests for the lab's profile |
 | band | 0-2000 Hz for both tests on half the bats (else 0-3200 Hz) |
 | accelerometer | replaced by one of 2-6 g on half the bats, else re-mounted up to 0.1 in off |
 | bungees | re-hung: each bungee's stiffness x 0.7-1.4 |
 """
 
 from __future__ import annotations
+
+from dataclasses import replace
 
 import numpy as np
 
@@ -34,7 +37,7 @@ from updating.simulate.wood import (
 NUISANCES = ("moisture", "temperature", "billet", "planes", "cup", "noise", "points", "band",
              "accelerometer", "bungees")
 """Every nuisance of the default nuisance-rich fleet."""
-OPTIONAL_NUISANCES = ("uniform_drift",)
+OPTIONAL_NUISANCES = ("uniform_drift", "model_points")
 """Drawn only when asked for."""
 
 
@@ -104,6 +107,20 @@ def lab_points_in(length_in: float) -> np.ndarray:
 
 def draw_points(rng: np.random.Generator, length_in: float) -> np.ndarray:
     return even_points_in(length_in, int(rng.integers(8, 21)))
+
+
+def draw_model_points(rng: np.random.Generator, profile, material) -> np.ndarray:
+    """The layout `batlab model --points N` suggests (N 11-20) for the lab's profile and the
+    species' handbook wood (Timoshenko, E/G 14), in."""
+    from updating.model.assembly import build_model, displacement_at
+    from updating.model.modes import model_modes
+    from updating.model.placement import suggest_points
+
+    model = build_model(profile, replace(material, e_over_g=14.0), beam="timoshenko")
+    shapes = model_modes(model, n_modes=6).elastic().shapes[:, :4]
+    layout = suggest_points(profile.length_m, lambda x: displacement_at(model, shapes, x),
+                            int(rng.integers(11, 21)))
+    return np.round(layout.points_m / IN_TO_M, 2)
 
 
 def draw_band(rng: np.random.Generator) -> float:

@@ -104,6 +104,12 @@ class VirtualBat:
         target = self.profile.length_m - IN_TO_M
         return int(np.argmin(np.abs(np.asarray(self.points_m) - target)))
 
+    def sensor_x_m(self) -> float:
+        """Where the accelerometer really sits: its labelled point plus the offset, kept on
+        the bat (a sensor on the end face cannot move past it)."""
+        x = float(np.asarray(self.points_m, dtype=float)[self.sensor_point()])
+        return float(np.clip(x + self.sensor_offset_m, 0.0, self.profile.length_m))
+
     def truth_model(self, plane: str = "radial"):
         """The FE model of one bending plane that generates the data (attachments included)."""
         stiff, dens = moisture_scales(self.moisture_pct)
@@ -115,7 +121,7 @@ class VirtualBat:
         elif plane != "radial":
             raise ValueError(f"unknown bending plane {plane!r}")
         points = np.asarray(self.points_m, dtype=float)
-        sensor_x = points[self.sensor_point()] + self.sensor_offset_m
+        sensor_x = self.sensor_x_m()
         attach = []
         if self.sensor_mass_kg:
             attach.append(Attachment(sensor_x, mass_kg=self.sensor_mass_kg))
@@ -152,7 +158,7 @@ def modal_model(
     shapes = modes.shapes[:, keep]
     f_modes = modes.freq_hz[keep]
     points = np.asarray(bat.points_m, dtype=float)
-    sensor_x = points[bat.sensor_point()] + bat.sensor_offset_m
+    sensor_x = bat.sensor_x_m()
     modal = ModalModel(f_modes, damping_ratios(f_modes, bat.zeta1, bat.zeta_exponent),
                        displacement_at(model, shapes, points), points)
     return modal, displacement_at(model, shapes, [sensor_x])
@@ -211,7 +217,7 @@ def simulate_modes(
     points = np.asarray(bat.points_m, dtype=float)
     shapes = displacement_at(model, modes.shapes[:, elastic], points)
     s = bat.sensor_point()
-    at_sensor = displacement_at(model, modes.shapes[:, elastic], [points[s] + bat.sensor_offset_m])
+    at_sensor = displacement_at(model, modes.shapes[:, elastic], [bat.sensor_x_m()])
     shapes = shapes * driving_point_scale(at_sensor[0], shapes[s])
     rng = np.random.default_rng(seed)
     f = modes.freq_hz[elastic] * (1 + freq_noise * rng.standard_normal(elastic.size))
