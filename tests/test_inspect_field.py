@@ -53,7 +53,7 @@ def test_each_alteration_among_all_nuisances_is_found(tmp_path, k, kind):
 
 
 @pytest.mark.parametrize("k,slip", list(enumerate(
-    ("receptance_as_accelerance", "g_per_n_as_si", "other_bat"))))
+    ("receptance_as_accelerance", "g_per_n_as_si", "other_bat", "no_barrel_points"))))
 def test_integrity_slips_are_inconclusive(tmp_path, k, slip):
     _, v = inspect_case(tmp_path, SEED + 300 + k, integrity=slip)
     assert v.status.value == "inconclusive" and v.altered is None, v.reasons
