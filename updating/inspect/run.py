@@ -89,6 +89,9 @@ two planes tapped at another angle, temperature, cupped end, replaced accelerome
 bungees, 1-2 % noise, 8-20 points; docs/inspection.md) F's tail is far heavier than
 F(4, N - 10): 4 of 40 clean bats passed p < 0.01, the largest F was 7.1 once 1 in 'cores'
 were excluded. Altered bats reach F = 15 to 3000 (a 0.5 x 4 in cork core 8-31)."""
+WEIGHT_DRIFT_MAX = 0.04
+"""|ln(W_retest / W_registered)| beyond which moisture (+-2.5 points, 1 %/point, plus the
+scale) cannot explain a weight change."""
 CONFUSABLE = ("barrel_end_moisture_pt", "sensor_mass_change_g", "sensor_shift_in")
 """Nuisances that act where a core does (the barrel end): a core fit that needs one of them
 at its physical bound cannot be told from that drift. (A uniform scale at its bound beside
@@ -366,13 +369,18 @@ def inspect_retest(
                    "cannot be told apart; weigh the bat, give retest.json (weight, "
                    "accelerometer mass, temperature) and re-test after a week at the "
                    "baseline's conditions"]
-    elif significant:
+    elif significant and dlnw is not None and abs(dlnw) > WEIGHT_DRIFT_MAX:
         altered = None
-        reasons = [f"the tests differ beyond what moisture, temperature and the accelerometer "
-                   f"do (F = {F:.1f}), but not as a core would (the best is {d_in:.2f} in "
-                   f"across, at least {max(d_low_in, 0):.2f} in at 2 sigma){weight_note}: "
-                   "check the set-up against the baseline's (points, accelerometer, "
-                   "suspension) and re-test"]
+        reasons = [f"the weight changed by {100 * np.expm1(dlnw):+.1f} %, more than moisture "
+                   f"does, and the tests differ (F = {F:.1f}), but not as a core would (the "
+                   f"best is {d_in:.2f} in across, at least {max(d_low_in, 0):.2f} in at 2 "
+                   "sigma): check that the re-test is of this bat and re-weigh it"]
+    elif significant:
+        altered = False
+        reasons = [f"the tests differ beyond noise (F = {F:.1f}) but only as a core "
+                   f"{d_in:.2f} in across would (at least {max(d_low_in, 0):.2f} in at 2 "
+                   f"sigma), not surely a practical core ({MIN_CORE_DIAMETER_IN} in)"
+                   f"{weight_note}"]
     elif held0 and _bounds_matter(predict, diff, space, hyp, n):
         altered = None
         reasons = [f"the drift between the tests is beyond physical bounds "
