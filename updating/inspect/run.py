@@ -87,8 +87,8 @@ F_FLOOR = 12.0
 """Calibrated floor on F: on nuisance-rich clean bats (end-grain moisture, billet gradients,
 two planes tapped at another angle, temperature, cupped end, replaced accelerometer,
 bungees, 1-2 % noise, 8-20 points; docs/inspection.md) F's tail is far heavier than
-F(4, N - 10): 4 of 40 clean bats passed p < 0.01, the largest F was 7.1 once 1 in 'cores'
-were excluded. Altered bats reach F = 15 to 3000 (a 0.5 x 4 in cork core 8-31)."""
+F(4, N - 10): 4 of 40 clean bats had p < 0.01 (F up to 13). With the floor, 0 of 40
+further clean bats were called altered; one had a practical candidate core at F = 9.8."""
 WEIGHT_DRIFT_MAX = 0.04
 """|ln(W_retest / W_registered)| beyond which moisture (+-2.5 points, 1 %/point, plus the
 scale) cannot explain a weight change."""
