@@ -26,6 +26,12 @@ from batlab import __version__
 from batlab import registry as reg
 from ema.io.frf_data import FrfTest
 from updating.correlate.measured import MeasuredModes, from_fit
+from updating.inspect.planes import merge_plane_pairs
+from updating.inspect.retest_meta import (
+    RetestConditions,
+    conditions_from_dict,
+    read_retest_meta,
+)
 from updating.inspect.verdict import Verdict
 from updating.model.lab_input import BatMeta, read_meta
 from updating.model.profile import Profile, make_profile, read_profile_csv
@@ -138,6 +144,11 @@ def read_bat_files(profile_path, meta_path) -> tuple[Profile, BatMeta]:
     return profile, meta
 
 
+def read_conditions(path) -> RetestConditions | None:
+    """retest.json (optional): the re-test's weight, accelerometer mass, temperature, date."""
+    return None if path is None else read_retest_meta(path)
+
+
 # --- modes -----------------------------------------------------------------------------------
 
 
@@ -192,7 +203,7 @@ def fit_file(
     """Fit a test; its modes' point rows optionally re-ordered to the baseline's points."""
     progress(f"fitting modes of {name} ({test.frf.shape[2]} FRFs, {test.freq_hz.size} lines)")
     fit = fit_modes(test, weight_kg)
-    modes = from_fit(fit, sensor_x_m(test))
+    modes = merge_plane_pairs(from_fit(fit, sensor_x_m(test)))
     if modes.freq_hz.size == 0:
         raise ValueError(f"{name}: no elastic mode found in the test")
     if order is not None:
@@ -278,12 +289,19 @@ def check_rig_files(
 
 def inspect_modes(
     profile: Profile, reference: BatReference, baseline: MeasuredModes, retest: MeasuredModes,
-    false_alarm: float,
+    false_alarm: float, conditions: RetestConditions | None = None,
+    registered: RetestConditions | None = None,
 ) -> Verdict:
-    """Phase 3: the verdict on a re-test against the reference (``updating.inspect.run``)."""
+    """Phase 3: the verdict on a re-test against the reference (``updating.inspect.run``);
+    ``conditions``: retest.json, ``registered``: the same keys of meta.json (weight_lb, and
+    accelerometer_mass_g, temperature_c of the baseline when the lab recorded them)."""
     from updating.inspect.run import inspect_retest
 
-    return inspect_retest(profile, reference, baseline, retest, false_alarm=false_alarm)
+    reg_ = registered or RetestConditions()
+    return inspect_retest(profile, reference, baseline, retest, false_alarm=false_alarm,
+                          conditions=conditions, registered_weight_kg=reg_.weight_kg,
+                          baseline_temperature_c=reg_.temperature_c,
+                          baseline_sensor_mass_kg=reg_.sensor_mass_kg)
 
 
 # --- JSON ------------------------------------------------------------------------------------
@@ -298,9 +316,10 @@ def _num(v) -> float | None:
 
 
 def contract_dict(serial: str, verdict: Verdict) -> dict:
-    """The verdict as docs/contract.md fixes it (inches from the knob end; region, core
-    and fill null when not altered), plus the decision's confidence and significance level."""
-    altered = bool(verdict.altered)
+    """The verdict as docs/contract.md fixes it (status, altered true/false/null, reasons;
+    inches from the knob end; region, core and fill null unless altered), plus the decision's
+    confidence and significance level."""
+    altered = verdict.altered is True
     region = verdict.region_m if altered else None
     core = verdict.core_diameter_m if altered else None
     fill = verdict.fill_density_ratio if altered else None
@@ -311,7 +330,9 @@ def contract_dict(serial: str, verdict: Verdict) -> dict:
     ]
     return {
         "serial": serial,
-        "altered": altered,
+        "status": verdict.status.value,
+        "altered": verdict.altered if verdict.altered is None else bool(verdict.altered),
+        "reasons": [str(r) for r in verdict.reasons],
         "region_in": None if region is None else [_in(region[0]), _in(region[1])],
         "core_diameter_in": None if core is None else round(float(core) / IN_TO_M, 4),
         "fill_density_ratio": _num(fill),
@@ -396,10 +417,12 @@ def register_files(
 
 def inspect_files(
     profile_path, meta_path, baseline_path, retest_path, false_alarm: float = 0.01,
-    progress: Progress = _quiet,
+    progress: Progress = _quiet, retest_meta_path=None,
 ) -> InspectionResult:
-    """The stateless inspection: the same steps as register, then the re-test against it."""
+    """The stateless inspection: the same steps as register, then the re-test against it
+    (``retest_meta_path``: the optional retest.json)."""
     profile, meta = read_bat_files(profile_path, meta_path)
+    conditions = read_conditions(retest_meta_path)
     base_test, re_test = read_frf(baseline_path), read_frf(retest_path)
     order = match_points(point_positions_m(base_test), point_positions_m(re_test),
                          str(retest_path))
@@ -408,7 +431,8 @@ def inspect_files(
     reference = calibrate(profile, meta, baseline).reference
     retest = fit_file(Path(retest_path).name, re_test, meta.weight_kg, order, progress)
     progress("inspecting the re-test against the reference")
-    verdict = inspect_modes(profile, reference, baseline.modes, retest.modes, false_alarm)
+    verdict = inspect_modes(profile, reference, baseline.modes, retest.modes, false_alarm,
+                            conditions, conditions_from_dict(meta.extra, meta_path))
     return InspectionResult(meta.serial, profile, reference, baseline, retest, verdict,
                             None, meta.weight_kg)
 
@@ -416,6 +440,7 @@ def inspect_files(
 def inspect_registered(
     conn: sqlite3.Connection, serial: str, retest_path, false_alarm: float = 0.01,
     refit_baseline: bool = False, progress: Progress = _quiet, baseline_fit=None,
+    retest_meta_path=None,
 ) -> InspectionResult:
     """Inspect a re-test of a registered bat against its stored reference and baseline modes.
 
@@ -423,6 +448,7 @@ def inspect_registered(
     with ``refit_baseline`` (for a report), to show its FRFs and stabilisation diagram;
     ``baseline_fit``: a fit of that same file already at hand (saves the refit).
     """
+    conditions = read_conditions(retest_meta_path)
     bat = reg.get_bat(conn, serial)
     content = reg.baseline_file(conn, bat)
     base_test = frf_from_bytes(content, bat.baseline_name)
@@ -442,7 +468,9 @@ def inspect_registered(
     retest = fit_file(Path(retest_path).name, re_test, weight_kg, order, progress)
     reference = BatReference.from_dict(bat.reference)
     progress("inspecting the re-test against the registered reference")
-    verdict = inspect_modes(profile, reference, base_modes, retest.modes, false_alarm)
+    verdict = inspect_modes(profile, reference, base_modes, retest.modes, false_alarm,
+                            conditions, conditions_from_dict(bat.meta,
+                                                             f"registered bat {serial}"))
     return InspectionResult(serial, profile, reference, baseline, retest, verdict,
                             bat.reference_seq, weight_kg, retest_content)
 

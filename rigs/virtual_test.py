@@ -39,7 +39,14 @@ def simulate_frf(
         model = ModalModel(model.freq_hz, model.damping_ratio, shapes,
                            np.concatenate([model.x_m, np.full(len(resp_shapes), np.nan)]))
         resp = model.x_m.size - len(resp_shapes) + np.arange(len(resp_shapes))
-    h = model.accelerance(freq_hz, resp, ref)
+    return add_noise(model.accelerance(freq_hz, resp, ref), rel_noise, floor_noise, seed)
+
+
+def add_noise(
+    h: np.ndarray, rel_noise: float, floor_noise: float, seed: int | None = None,
+) -> np.ndarray:
+    """H (1 + e_rel n_1) + e_floor s n_2 for FRFs h[f, ...], s the RMS of each FRF over f."""
+    h = np.asarray(h, dtype=complex)
     rng = np.random.default_rng(seed)
     rms = np.sqrt(np.mean(np.abs(h) ** 2, axis=0, keepdims=True))
     return (h * (1 + rel_noise * complex_noise(rng, h.shape))

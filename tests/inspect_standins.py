@@ -43,7 +43,8 @@ def fake_calibrate(profile, meta, baseline):
                                                   sensor_x_m=baseline.modes.sensor_x_m))
 
 
-def fake_inspect(profile, reference, baseline, retest, false_alarm):
+def fake_inspect(profile, reference, baseline, retest, false_alarm, conditions=None,
+                 registered=None):
     """Altered when the modes shift unevenly (beyond a uniform drift); 1 in elements; the
     'core' sits in the last 10 in, its size from the largest uneven shift."""
     n = min(baseline.freq_hz.size, retest.freq_hz.size)

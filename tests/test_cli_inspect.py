@@ -22,8 +22,8 @@ from updating.inspect.verdict import Verdict
 from updating.model.units import IN_TO_M
 
 SAMPLE = Path("data_samples/smooth_bat")
-CONTRACT_KEYS = {"serial", "altered", "region_in", "core_diameter_in", "fill_density_ratio",
-                 "elements"}
+CONTRACT_KEYS = {"serial", "status", "altered", "reasons", "region_in", "core_diameter_in",
+                 "fill_density_ratio", "elements"}
 
 
 @pytest.fixture
@@ -49,7 +49,10 @@ def stateless(lab, retest="retest_corked.uff", extra=()):
 
 def check_contract(out: dict, serial: str) -> None:
     assert CONTRACT_KEYS <= set(out)
-    assert out["serial"] == serial and isinstance(out["altered"], bool)
+    assert out["serial"] == serial and out["altered"] in (True, False, None)
+    assert out["status"] == {True: "altered", False: "not_altered",
+                             None: "inconclusive"}[out["altered"]]
+    assert all(isinstance(r, str) and "\n" not in r for r in out["reasons"])
     if out["altered"]:
         a, b = out["region_in"]
         assert 0 <= a < b
@@ -84,6 +87,88 @@ def test_contract_dict_units_and_nulls():
     assert out["region_in"] is None and out["core_diameter_in"] is None
     assert out["fill_density_ratio"] is None
     json.dumps(out)  # plain JSON types only
+    assert out["status"] == "not_altered" and out["reasons"] == []
+
+    unsure = Verdict(None, float("nan"), 0.01, float("nan"), None, None, None, {}, x0, x0 + 0.1,
+                     np.zeros(3), np.zeros(3), {}, reasons=("units: re-export",))
+    out = pipeline.contract_dict("S", unsure)
+    assert out["status"] == "inconclusive" and out["altered"] is None
+    assert out["reasons"] == ["units: re-export"] and out["confidence"] is None
+    assert out["region_in"] is None and out["fill_density_ratio"] is None
+    json.dumps(out, allow_nan=False)
+
+
+def _recording(monkeypatch):
+    """Patch the inspector to record the conditions it is given (stand-in verdict)."""
+    from tests.inspect_standins import fake_inspect
+
+    seen = []
+
+    def rec(profile, reference, baseline, retest, false_alarm, conditions=None,
+            registered=None):
+        seen.append((conditions, registered))
+        return fake_inspect(profile, reference, baseline, retest, false_alarm)
+
+    monkeypatch.setattr(pipeline, "inspect_modes", rec)
+    return seen
+
+
+def test_retest_meta_reaches_the_inspection_in_both_forms(lab, capsys, monkeypatch):
+    seen = _recording(monkeypatch)
+    (lab / "retest.json").write_text(json.dumps(
+        {"weight_lb": 2.0, "accelerometer_mass_g": 4.1, "temperature_c": 24.0,
+         "tested_on": "2026-05-02", "operator": "ignored"}))
+    code, out, err = run_cli(stateless(lab, extra=["--json", "--retest-meta",
+                                                   lab / "retest.json"]), capsys)
+    assert code == 0, err
+    check_contract(json.loads(out), "HX-2001")
+    cond, registered = seen[-1]
+    assert cond.weight_kg == pytest.approx(2.0 * 0.45359237)
+    assert cond.sensor_mass_kg == pytest.approx(4.1e-3) and cond.temperature_c == 24.0
+    assert cond.tested_on == "2026-05-02"
+    meta = json.loads((lab / "meta.json").read_text())
+    assert registered.weight_kg == pytest.approx(meta["weight_lb"] * 0.45359237)
+
+    assert run_cli(["register", "--profile", lab / "profile.csv", "--meta", lab / "meta.json",
+                    "--baseline", lab / "baseline.uff"], capsys)[0] == 0
+    (lab / "retest.json").write_text(json.dumps({"temperature_c": 18.5}))  # keys optional
+    code, out, err = run_cli(["inspect", "--serial", "HX-2001", lab / "retest_corked.uff",
+                              "--retest-meta", lab / "retest.json", "--json"], capsys)
+    assert code == 0, err
+    cond, registered = seen[-1]
+    assert cond.temperature_c == 18.5 and cond.weight_kg is None
+    assert registered.weight_kg == pytest.approx(meta["weight_lb"] * 0.45359237)
+    code, out, _ = run_cli(["inspect", "--serial", "HX-2001", lab / "retest_corked.uff",
+                            "--json"], capsys)
+    assert code == 0 and seen[-1][0] is None  # without retest.json
+
+
+@pytest.mark.parametrize("content,expect", [
+    ('{"weight_lb": 2.2', "not valid JSON"),
+    ('[1, 2]', "expected a JSON object"),
+    ('{"weight_lb": "heavy"}', "weight_lb must be a number"),
+    ('{"accelerometer_mass_g": -1}', "accelerometer_mass_g = -1 is outside"),
+    ('{"temperature_c": 400}', "temperature_c = 400 is outside"),
+    ('{"tested_on": "yesterday"}', "tested_on must be a date"),
+])
+def test_bad_retest_meta_is_refused_in_one_line(lab, capsys, content, expect):
+    (lab / "retest.json").write_text(content)
+    for form in ("stateless", "registry"):
+        if form == "stateless":
+            args = stateless(lab, extra=["--json", "--retest-meta", lab / "retest.json"])
+        else:
+            assert run_cli(["register", "--profile", lab / "profile.csv", "--meta",
+                            lab / "meta.json", "--baseline", lab / "baseline.uff",
+                            "--replace"], capsys)[0] == 0
+            args = ["inspect", "--serial", "HX-2001", lab / "retest_corked.uff",
+                    "--retest-meta", lab / "retest.json", "--json"]
+        code, out, err = run_cli(args, capsys)
+        assert code == 2 and out == ""
+        last = err.strip().splitlines()[-1]
+        assert "retest.json" in last and expect in last
+        assert "fitting modes" not in err  # refused before any work
+    code, out, _ = run_cli(["history", "HX-2001", "--json"], capsys)
+    assert json.loads(out)["inspections"] == []  # nothing stored
 
 
 def test_stateless_inspect_json(lab, capsys):

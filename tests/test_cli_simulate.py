@@ -55,3 +55,25 @@ def test_sample_is_what_the_script_makes(tmp_path, monkeypatch, capsys):
     assert ours.node_x_m == sample.node_x_m
     test = read_test(SAMPLES / "paper_bat" / "corked.uff")
     assert np.all(np.isfinite(test.frf)) and test.frf.shape == (3201, 1, 17)
+
+
+def test_simulate_case_writes_a_labs_files(tmp_path, capsys):
+    folder = tmp_path / "bat"
+    assert main(["simulate", "--case", str(folder), "--kind", "cork", "--nuisances",
+                 "moisture,cup", "--seed", "3", "--json"]) == 0
+    summary = json.loads(capsys.readouterr().out)
+    assert summary["expected"] == "altered"
+    names = {"profile.csv", "meta.json", "baseline.uff", "retest.uff", "retest.json",
+             "truth.json"}
+    assert {p.name for p in folder.iterdir()} == names
+    truth = json.loads((folder / "truth.json").read_text())
+    assert truth["kind"] == "cork" and set(truth["drawn"]) >= {"moisture", "cup"}
+    meta = json.loads((folder / "meta.json").read_text())
+    assert read_test(folder / "retest.uff").frf.shape[2] == len(meta["points_in"])
+
+
+def test_simulate_case_bad_nuisance(tmp_path, capsys):
+    assert main(["simulate", "--case", str(tmp_path / "x"), "--nuisances", "bogus"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "bogus" in err[0]
+    assert not (tmp_path / "x").exists()

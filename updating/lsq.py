@@ -34,6 +34,8 @@ class LsqSolution:
     residual: np.ndarray
     jac: np.ndarray
     nfev: int
+    active: np.ndarray
+    """(p,) -1 / +1 where a lower / upper bound holds the solution, else 0."""
 
     @property
     def ssr(self) -> float:
@@ -77,7 +79,7 @@ def solve_bounded(
     """
     x0 = np.clip(np.asarray(x0, dtype=float), lower + margin, upper - margin)
     out = least_squares(fun, x0, jac=jac, bounds=(lower, upper), method="trf", **options)
-    return LsqSolution(out.x, out.fun, out.jac, int(out.nfev))
+    return LsqSolution(out.x, out.fun, out.jac, int(out.nfev), np.asarray(out.active_mask))
 
 
 def covariance(

@@ -1,8 +1,10 @@
 """`batlab inspect`: the lab's verdict on a re-test of a bat (docs/contract.md).
 
 Two forms, the same verdict:
-    batlab inspect --profile P --meta M --baseline B.uff --retest R.uff [--json]   (stateless)
-    batlab inspect --serial S R.uff [--db PATH] [--json]      (registered bat; stored)
+    batlab inspect --profile P --meta M --baseline B.uff --retest R.uff
+                   [--retest-meta retest.json] [--json]                        (stateless)
+    batlab inspect --serial S R.uff [--retest-meta retest.json] [--db PATH] [--json]
+                                                               (registered bat; stored)
 """
 
 from __future__ import annotations
@@ -24,6 +26,9 @@ def add_arguments(p) -> None:
     p.add_argument("--meta", default=None, help="meta.json (stateless form)")
     p.add_argument("--baseline", default=None, help="baseline test file (stateless form)")
     p.add_argument("--retest", default=None, help="re-test file")
+    p.add_argument("--retest-meta", default=None, metavar="RETEST_JSON",
+                   help="retest.json: the re-test's weight_lb, accelerometer_mass_g, "
+                        "temperature_c, tested_on (every key optional)")
     p.add_argument("--false-alarm", type=float, default=0.01,
                    help="false-alarm rate of the decision (default 0.01)")
     p.add_argument("--report", default=None, metavar="DIR",
@@ -66,7 +71,8 @@ def run(args) -> int:
         with open_registry(db_path(args), create=False) as conn:
             result = pipeline.inspect_registered(conn, args.serial, retest, args.false_alarm,
                                                  refit_baseline=bool(args.report or args.plots),
-                                                 progress=progress)
+                                                 progress=progress,
+                                                 retest_meta_path=args.retest_meta)
             stored = pipeline.store_inspection(conn, result, retest, args.false_alarm)
             progress(f"stored as inspection #{stored.id} of {result.serial} (custody record "
                      f"#{stored.record_seq})")
@@ -88,7 +94,7 @@ def run(args) -> int:
         if not all(stateless):
             raise ValueError("give --serial S, or all of --profile, --meta and --baseline")
         result = pipeline.inspect_files(args.profile, args.meta, args.baseline, retest,
-                                        args.false_alarm, progress)
+                                        args.false_alarm, progress, args.retest_meta)
         _print(args, pipeline.contract_dict(result.serial, result.verdict), readable)
         if args.report or args.plots:
             prov = pipeline.provenance(baseline_sha256=pipeline.file_sha256(args.baseline),

@@ -23,7 +23,9 @@ def add_arguments(p) -> None:
     p.add_argument("--elements", type=int, default=None, help="number of elements (default ~1 in)")
     p.add_argument("--alter", default=None, help="e.g. cork:depth=10,d=1.0,ratio=0.33,plug=1 (in)")
     p.add_argument("--modes", type=int, default=8, help="number of modes to list (incl. rigid)")
-    p.add_argument("--points", type=int, default=16, help="number of test points to suggest")
+    p.add_argument("--points", type=int, default=16,
+                   help="number of test points to suggest (default 16; the barrel's last 14 in "
+                        "get a row every 1.5-2 in, the accelerometer 1.5 in from the end)")
     p.add_argument("--json", action="store_true", help="print JSON on stdout")
 
 
@@ -53,4 +55,5 @@ def run(args) -> int:
             print(f"{i:4d}  {f:12.2f}")
         pts = ", ".join(f"{x:.1f}" for x in out["suggested_points_in"])
         print(f"suggested test points (in from the knob): {pts}")
+        print(f"accelerometer (driving point) at {out['driving_point_in']:.1f} in")
     return 0

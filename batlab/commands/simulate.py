@@ -14,7 +14,21 @@ def add_arguments(p) -> None:
     p.add_argument("--profile", help="profile.csv (default: the paper's bat)")
     p.add_argument("--meta", help="meta.json: wood and test points (default: the paper's white "
                                   "birch, said on stderr)")
-    p.add_argument("--out", required=True, help="output file (.uff, .csv or .npz)")
+    p.add_argument("--out", default=None, help="output file (.uff, .csv or .npz)")
+    p.add_argument("--case", default=None, metavar="DIR",
+                   help="instead of one test: a random nuisance-rich bat as a lab hands it over "
+                        "(profile.csv, meta.json, baseline.uff, retest.uff, retest.json, "
+                        "truth.json) in DIR; see --kind, --nuisances, --integrity, --seed")
+    p.add_argument("--kind", default="none",
+                   help="--case: alteration of the re-test: none, cork, deep, empty, end_plug, "
+                        "partial, small, neutral")
+    p.add_argument("--nuisances", default="all",
+                   help="--case: all, none, or a comma-separated list (moisture, uniform_drift, "
+                        "temperature, billet, planes, cup, noise, points, model_points, band, "
+                        "accelerometer, bungees)")
+    p.add_argument("--integrity", default=None,
+                   help="--case: a data-integrity slip of the re-test: receptance_as_accelerance,"
+                        " g_per_n_as_si, other_bat, no_barrel_points")
     p.add_argument("--alter", default=None,
                    help="alteration, inches: cork|heavy|neutral|core:depth=10,d=1.0,ratio=0.33")
     p.add_argument("--moisture", type=float, default=0.0,
@@ -44,7 +58,40 @@ def add_arguments(p) -> None:
     p.add_argument("--json", action="store_true", help="print a JSON summary on stdout")
 
 
+def run_case(args) -> int:
+    """`--case DIR`: one random bat of the nuisance-rich fleet, written as lab files."""
+    import numpy as np
+
+    from updating.simulate.field_fleet import draw_case, write_case
+    from updating.simulate.nuisances import NUISANCES
+
+    if args.nuisances == "all":
+        nuisances = NUISANCES
+    elif args.nuisances == "none":
+        nuisances = ()
+    else:
+        nuisances = tuple(n.strip() for n in args.nuisances.split(",") if n.strip())
+    rng = np.random.default_rng(args.seed)
+    case = draw_case(rng, args.kind, nuisances, args.integrity)
+    print(f"simulating a {args.kind} bat with {', '.join(nuisances) or 'no nuisance'} ...",
+          file=sys.stderr)
+    paths = write_case(case, args.case, seed=int(rng.integers(2**31)), truth=True)
+    summary = {k: str(v) for k, v in paths.items() if v is not None}
+    summary["expected"] = case.expected
+    if args.json:
+        print(json.dumps(summary))
+    else:
+        print(f"wrote {args.case}: {', '.join(sorted(summary))}")
+    return 0
+
+
 def run(args) -> int:
+    if args.case:
+        if args.out:
+            raise ValueError("give --out (one test) or --case DIR (a bat's files), not both")
+        return run_case(args)
+    if not args.out:
+        raise ValueError("--out is required (or --case DIR)")
     import numpy as np
 
     from batlab.wood import wood

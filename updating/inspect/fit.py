@@ -4,25 +4,32 @@ Data (paired modes r, test points j): the measured changes
 
     y_f[r]    = ln(f_retest[r] / f_baseline[r])
     y_psi[j,r] = psi_retest[j,r] - psi_baseline[j,r]        (mass-normalised shapes)
+    y_w       = ln(W_retest / W_registered)                   (when both weights are known)
 
-are matched by the model's changes from the reference, ln(f(theta)/f(0)) and
-phi(theta) - phi(0), so that what the calibrated reference gets wrong (and the test's own
-bias) largely cancels. Residuals are weighted by their standard deviations: sigma_f from the
-modal fit's frequency uncertainties, sigma_psi = sigma_rel * rms-shape of the mode (one
-relative shape-noise level estimated from the residuals). Parameters:
+are matched by the model's changes from the reference, ln(f(theta)/f(0)),
+phi(theta) - phi(0) and ln(m(theta)/m(0)) (m: the wood's mass), so that what the calibrated
+reference gets wrong (and the test's own bias) largely cancels. Residuals are weighted by
+their standard deviations: sigma_f from the modal fit's frequency uncertainties (with a
+model-error floor), sigma_psi = sigma_rel * rms-shape of the mode (one relative shape-noise
+level estimated from the residuals), sigma_w = ``WEIGHT_SIGMA_REL``. Parameters:
 
-    null:  x = [100 (s_E - 1), 100 (s_rho - 1), sensor shift (in)]
-    core:  x = null + [core depth from the barrel end (in), p = r b, q = (R - r) b]
+    null (what an unaltered bat does between tests, physically bounded, ``NullBounds``):
+          x = [100 (s_E - 1), 100 (s_rho - 1), sensor shift (in),
+               end-grain moisture at the knob end (points), at the barrel end (points),
+               change of the accelerometer's mass (g)]
+    core: x = null + [plug (in), filled length (in), p = r b, q = (R - r) b]
 
 with b = (d / 1 in)^2 for core diameter d, fill density ratio r in [0, R]: the box p, q >= 0
-is exactly the cone of physical cores, b = (p + q) / R and r = R p / (p + q). The core's
-mass change (r - 1) b and its stiffness change (shear through the section's area and
-Cowper's coefficient ~ b, bending ~ b^2) are nearly linear in (p, q), so the model has a
-non-vanishing gradient at "no core" and no flat regions.
+is exactly the cone of physical cores, b = (p + q) / R and r = R p / (p + q). The filled part
+runs from ``plug`` to ``plug + length`` from the barrel end (a plug of wood, or nothing, at
+the end): end-bored cores, cores starting inside the bat, empty holes (r = 0) and heavy end
+plugs (short, r > 1) are all of this family. The core's mass change (r - 1) b and its
+stiffness change (shear through the section's area and Cowper's coefficient ~ b, bending
+~ b^2) are nearly linear in (p, q), so the model has a non-vanishing gradient at "no core".
 
-The core fit starts from the best depths of a linearised scan (the residual projected on
-the null model's Jacobian and on the responses to a stiffness-only and a mass-only core at
-each depth), which avoids the local minima of the depth.
+The core fit starts from the best (plug, length) of a linearised scan (the residual
+projected on the null model's Jacobian and on the responses to a stiffness-only and a
+mass-only core there), which avoids the local minima of the position.
 """
 
 from __future__ import annotations
@@ -33,21 +40,118 @@ from dataclasses import dataclass
 import numpy as np
 
 from updating.inspect.model import ChangeParams
+from updating.lsq import covariance as lsq_covariance
 from updating.lsq import solve_bounded
 from updating.model.profile import Profile
 from updating.model.sections import Core
 from updating.model.units import IN_TO_M
 
-NULL_LOWER = np.array([-15.0, -10.0, -0.5])
-NULL_UPPER = np.array([15.0, 10.0, 0.5])
+N_NULL, N_CORE = 6, 4
+NULL_NAMES = ("stiffness_pct", "density_pct", "sensor_shift_in", "knob_end_moisture_pt",
+              "barrel_end_moisture_pt", "sensor_mass_change_g")
 R_MAX = 6.0  # densest fill considered, relative to the wood
-CORE_LOWER = np.array([0.0, 0.0, 0.0])  # depth lower bound is set from the plug
-CORE_UPPER = np.array([15.0, 2.6 * R_MAX, 2.6 * R_MAX])
+MIN_PLUG_IN, MIN_LENGTH_IN = 0.05, 2.0
+"""The shortest filled length considered a core: end plugs are 2-4 in, corks 3-12 in. A
+shorter 'core' at the barrel end fits what the accelerometer and cupped end do there (on
+clean nuisance-rich bats such 1 in 'cores' reached F = 13)."""
+CORE_LOWER = np.array([MIN_PLUG_IN, MIN_LENGTH_IN, 0.0, 0.0])
+CORE_UPPER = np.array([12.0, 15.0, 2.6 * R_MAX, 2.6 * R_MAX])
 MIN_B = 1e-4  # (0.01 in)^2: the smallest core diameter the model builds
 MAX_NFEV_START, MAX_NFEV_CORE = 15, 30
 """Caps on core-fit iterations (each start, final refinement): a real core converges in
-fewer; without one the depth is unidentifiable and the optimiser would wander (an
+fewer; without one the position is unidentifiable and the optimiser would wander (an
 unconverged H1 fit only lowers F)."""
+DIFF_STEP = 1e-4
+"""Finite-difference step, absolute, in x's units (%, in, points, g): well above the
+eigen-solution's rounding, well below any change that matters."""
+WEIGHT_SIGMA_REL = 0.003
+"""Standard deviation of ln(W_retest / W_registered) beyond the modelled drift: two scales,
+tape and dirt (0.3 %, ~0.1 oz on a 2.2 lb bat)."""
+PRIOR_SHIFT_IN, PRIOR_END_MOISTURE_PT, PRIOR_SENSOR_MASS_G = 0.1, 1.0, 2.0
+"""Prior standard deviations of the accelerometer's re-mounting shift, the end-grain moisture
+excess and an unknown replacement accelerometer's mass change."""
+FREQ_MODEL_ERROR_REL = 3e-4
+"""Floor on the relative frequency-change uncertainty: what the 1D change model misses in a
+change of frequency (suspension, mesh)."""
+PLANE_SPLIT_REL = (0.003, 0.013, 0.023, 0.030, 0.047, 0.056)
+"""Split of the two bending planes' frequencies, elastic modes 1-6 (3D analysis of a smooth
+ash bat); beyond mode 6 the last value."""
+PLANE_MIX = 0.15
+"""Fraction of the plane split that a re-test tapped at another angle (+-10 deg from the
+label) can move a mode's apparent frequency: the fitted frequency of an unresolved pair is
+its members' mean weighted by cos^2 and sin^2 of the angle; a 10 deg change moves those
+weights by up to sin(20 deg) ~ 0.34, and a fit resolving part of the pair less."""
+
+
+def plane_sigma(elastic_order: np.ndarray) -> np.ndarray:
+    """Standard deviation of ln f change from the two bending planes, per elastic mode
+    (0-based order among the elastic modes)."""
+    split = np.asarray(PLANE_SPLIT_REL)
+    return PLANE_MIX * split[np.minimum(np.asarray(elastic_order, dtype=int), split.size - 1)]
+
+
+@dataclass(frozen=True)
+class NullBounds:
+    """Physical bounds of the null parameters (x[:6], module docstring), from
+    ../docs/inspection.md: moisture +-2.5 points (E -2 %, mass +1 % per point), temperature
+    +-10 C (E -0.1..-0.3 %/C), end grain up to 2.5 points beyond the middle, the sensor
+    re-mounted within 0.3 in, a replacement accelerometer within 0-10 g (or its known mass
+    within 0.3 g)."""
+
+    lower: np.ndarray
+    upper: np.ndarray
+    prior_center: np.ndarray
+    prior_sigma: np.ndarray
+    """Gaussian prior on each null parameter (inf: none): keeps the nearly interchangeable
+    nuisances (end-grain moisture at the barrel end, the accelerometer's mass and position)
+    at their typical sizes unless the data insist."""
+
+    @staticmethod
+    def physical(sensor_change_kg: float | None = None,
+                 temperature_change_c: float | None = None) -> NullBounds:
+        """``sensor_change_kg``: the change of accelerometer mass when both tests' masses
+        are known (else fitted within +-10 g, prior ``PRIOR_SENSOR_MASS_G``: the calibrated
+        reference's own sensor mass can hold other physics, even be 0 g, so the change is
+        not bounded by it); ``temperature_change_c``: re-test minus baseline temperature
+        when both are known."""
+        if temperature_change_c is None:
+            t_lo, t_hi = -3.0, 3.0
+        else:
+            a, b = -0.1 * temperature_change_c, -0.3 * temperature_change_c
+            t_lo, t_hi = min(a, b) - 0.3, max(a, b) + 0.3
+        if sensor_change_kg is None:
+            m_lo, m_hi, m0, m_sig = -10.0, 10.0, 0.0, PRIOR_SENSOR_MASS_G
+        else:
+            m0 = 1e3 * sensor_change_kg
+            m_lo, m_hi, m_sig = m0 - 0.3, m0 + 0.3, 0.1
+        lo = np.array([-5.5 + t_lo, -3.0, -0.3, -2.5, -2.5, m_lo])
+        hi = np.array([5.5 + t_hi, 3.0, 0.3, 2.5, 2.5, m_hi])
+        center = np.array([0.0, 0.0, 0.0, 0.0, 0.0, m0])
+        sigma = np.array([np.inf, np.inf, PRIOR_SHIFT_IN, PRIOR_END_MOISTURE_PT,
+                          PRIOR_END_MOISTURE_PT, m_sig])
+        return NullBounds(lo, hi, center, sigma)
+
+    def widened(self) -> NullBounds:
+        """The same with the uniform stiffness and density free (+-40 %, +-30 %): what
+        another bat of the same profile, or a drift far beyond physics, would need."""
+        lo, hi = self.lower.copy(), self.upper.copy()
+        lo[:2], hi[:2] = (-40.0, -30.0), (40.0, 30.0)
+        return NullBounds(lo, hi, self.prior_center, self.prior_sigma)
+
+    def relaxed(self, factor: float = 3.0) -> NullBounds:
+        """Every range ``factor`` times as wide about its middle: to ask whether the data
+        really want a nuisance beyond its physical bound."""
+        mid, half = 0.5 * (self.lower + self.upper), 0.5 * (self.upper - self.lower)
+        return NullBounds(mid - factor * half, mid + factor * half, self.prior_center,
+                          self.prior_sigma)
+
+    def prior_residual(self, x: np.ndarray) -> np.ndarray:
+        return (x[:N_NULL] - self.prior_center) / self.prior_sigma
+
+    @staticmethod
+    def held(fit: ChangeFit) -> list[str]:
+        """Names of the null parameters a bound holds in ``fit`` (the data want more)."""
+        return [NULL_NAMES[i] for i in np.flatnonzero(fit.active[:N_NULL])]
 
 
 @dataclass(frozen=True)
@@ -60,6 +164,8 @@ class Differences:
         dpsi: (n_points, m) retest minus baseline shapes (signs aligned).
         psi_scale: (m,) sqrt(rms_baseline^2 + rms_retest^2) of each mode's shape entries.
         f0: (m,) reference model frequencies, Hz; phi0: (n_points, m) its shapes, aligned.
+        dlnw: ln(W_retest / W_registered), or None when a weight is missing.
+        mass0_kg: the reference's wood mass (the model's weight before any change).
     """
 
     model_index: np.ndarray
@@ -69,6 +175,8 @@ class Differences:
     psi_scale: np.ndarray
     f0: np.ndarray
     phi0: np.ndarray
+    dlnw: float | None = None
+    mass0_kg: float = 1.0
 
     @property
     def n_freq(self) -> int:
@@ -76,7 +184,7 @@ class Differences:
 
     @property
     def n_data(self) -> int:
-        return self.dlnf.size + self.dpsi.size
+        return self.dlnf.size + self.dpsi.size + (self.dlnw is not None)
 
 
 @dataclass(frozen=True)
@@ -88,6 +196,9 @@ class ChangeFit:
     residual: np.ndarray
     jac: np.ndarray
     n_freq: int
+    n_psi: int
+    active: np.ndarray
+    """(len(x),) -1 / +1 where a lower / upper bound holds the solution, else 0."""
 
     @property
     def rss(self) -> float:
@@ -95,7 +206,7 @@ class ChangeFit:
 
     @property
     def rss_shapes(self) -> float:
-        r = self.residual[self.n_freq:]
+        r = self.residual[self.n_freq:self.n_freq + self.n_psi]
         return float(r @ r)
 
 
@@ -108,89 +219,137 @@ class ParamSpace:
     """
 
     profile: Profile
-    plug_m: float
+    bounds: NullBounds
     fill_modulus_ratio: float = 0.0
     sensor_mount_m: float = 0.0
 
     def lower(self) -> np.ndarray:
-        lo = CORE_LOWER.copy()
-        lo[0] = self.plug_m / IN_TO_M + 0.5
-        return np.concatenate([NULL_LOWER, lo])
+        return np.concatenate([self.bounds.lower, CORE_LOWER])
 
     def upper(self) -> np.ndarray:
-        return np.concatenate([NULL_UPPER, CORE_UPPER])
+        return np.concatenate([self.bounds.upper, CORE_UPPER])
 
-    def core(self, depth_in: float, p: float, q: float) -> Core:
-        """The core of x[3:6]; diameter clipped to 90 % of the thinnest outer diameter it
-        spans."""
+    def core(self, plug_in: float, length_in: float, p: float, q: float) -> Core:
+        """The core of x[6:10]; depth kept within 95 % of the bat, diameter clipped to 90 %
+        of the thinnest outer diameter it spans."""
         L = self.profile.length_m
-        depth = min(depth_in * IN_TO_M, 0.95 * L)
-        xs = np.linspace(L - depth, L - self.plug_m, 25)
+        plug = plug_in * IN_TO_M
+        depth = min(plug + length_in * IN_TO_M, 0.95 * L)
+        plug = min(plug, depth - MIN_LENGTH_IN * IN_TO_M)
+        xs = np.linspace(L - depth, L - plug, 25)
         b = max((p + q) / R_MAX, MIN_B)
         r = R_MAX * p / (p + q) if p + q > 0 else 1.0
         d = min(np.sqrt(b) * IN_TO_M, 0.9 * float(np.min(self.profile.diameter_at(xs))))
-        return Core(d, depth, r, self.fill_modulus_ratio, self.plug_m)
+        return Core(d, depth, r, self.fill_modulus_ratio, plug)
 
     def reading(self, x: np.ndarray, cov: np.ndarray) -> dict:
         """Core start (m from the knob end), diameter (m), fill ratio and their standard
         uncertainties from the covariance of x (first-order propagation)."""
-        _, p, q = x[3:6]
+        _, _, p, q = x[N_NULL:]
         s = max(p + q, R_MAX * MIN_B)
         b = s / R_MAX
         dd = IN_TO_M / (2 * np.sqrt(b)) / R_MAX
-        grads = {"region_start_m": np.array([-IN_TO_M, 0.0, 0.0]),
-                 "core_diameter_m": np.array([0.0, dd, dd]),
-                 "fill_density_ratio": R_MAX * np.array([0.0, q, -p]) / s**2}
-        c = cov[3:6, 3:6]
+        grads = {"region_start_m": np.array([-IN_TO_M, -IN_TO_M, 0.0, 0.0]),
+                 "core_diameter_m": np.array([0.0, 0.0, dd, dd]),
+                 "fill_density_ratio": R_MAX * np.array([0.0, 0.0, q, -p]) / s**2}
+        c = cov[N_NULL:, N_NULL:]
         sd = {k: float(np.sqrt(max(g @ c @ g, 0.0))) for k, g in grads.items()}
-        return {"core": self.core(*x[3:6]), "sd": sd}
+        return {"core": self.core(*x[N_NULL:]), "sd": sd}
 
     def params(self, x: np.ndarray) -> ChangeParams:
-        core = None if x.size == 3 else self.core(*x[3:6])
+        core = None if x.size == N_NULL else self.core(*x[N_NULL:])
         return ChangeParams(1 + x[0] / 100, 1 + x[1] / 100,
-                            self.sensor_mount_m + x[2] * IN_TO_M, core)
+                            self.sensor_mount_m + x[2] * IN_TO_M, core,
+                            (float(x[3]), float(x[4])), float(x[5]) * 1e-3)
 
-    def to_x(self, depth_in: float, b: float, r: float) -> np.ndarray:
-        """Core part of x for depth (in), b = (d / 1 in)^2 and fill ratio r."""
-        return np.array([depth_in, r * b, (R_MAX - r) * b])
+    @staticmethod
+    def to_x(plug_in: float, length_in: float, b: float, r: float) -> np.ndarray:
+        """Core part of x for plug, length (in), b = (d / 1 in)^2 and fill ratio r."""
+        return np.array([plug_in, length_in, r * b, (R_MAX - r) * b])
 
 
 def residual_function(
-    predict: Callable, diff: Differences, space: ParamSpace, sigma_rel: float,
+    predict, diff: Differences, space: ParamSpace, sigma_rel: float,
 ) -> Callable[[np.ndarray], np.ndarray]:
-    """x -> weighted residual (measured minus predicted change), length n_data."""
+    """x -> weighted residual (measured minus predicted change), length n_data, then the
+    null parameters' prior residuals (N_NULL)."""
     def fun(x: np.ndarray) -> np.ndarray:
-        f, phi = predict(space.params(np.asarray(x, dtype=float)))
+        params = space.params(np.asarray(x, dtype=float))
+        f, phi = predict(params)
         f, phi = f[diff.model_index], phi[:, diff.model_index]
         phi = phi * np.sign(np.einsum("ij,ij->j", phi, diff.phi0))
         rf = (diff.dlnf - np.log(f / diff.f0)) / diff.sigma_lnf
         rs = (diff.dpsi - (phi - diff.phi0)) / (sigma_rel * diff.psi_scale)
-        return np.concatenate([rf, rs.ravel()])
+        parts = [rf, rs.ravel()]
+        if diff.dlnw is not None:
+            dw = np.log(predict.wood_mass_kg(params) / diff.mass0_kg)
+            parts.append(np.array([(diff.dlnw - dw) / WEIGHT_SIGMA_REL]))
+        parts.append(space.bounds.prior_residual(np.asarray(x, dtype=float)))
+        return np.concatenate(parts)
 
     return fun
 
 
+def forward_jacobian(fun: Callable, upper: np.ndarray) -> Callable:
+    """x -> forward-difference Jacobian of ``fun`` with the absolute step ``DIFF_STEP``
+    (backward where the step would cross ``upper``); reuses fun(x) of the last call at x.
+
+    scipy's relative steps shrink with |x|: a parameter started at 1e-9 (just inside a
+    bound) got a 1e-13 step and a Jacobian swamped by the eigen-solver's rounding."""
+    last: dict = {}
+
+    def f(x: np.ndarray) -> np.ndarray:
+        key = x.tobytes()
+        if key not in last:
+            last.clear()
+            last[key] = fun(x)
+        return last[key]
+
+    def jac(x: np.ndarray) -> np.ndarray:
+        f0 = f(np.asarray(x, dtype=float))
+        J = np.empty((f0.size, x.size))
+        for i in range(x.size):
+            h = DIFF_STEP if x[i] + DIFF_STEP <= upper[i] else -DIFF_STEP
+            xi = np.array(x, dtype=float)
+            xi[i] += h
+            J[:, i] = (fun(xi) - f0) / h
+        return J
+
+    return f, jac
+
+
 def fit_bounded(fun: Callable, x0: np.ndarray, lower: np.ndarray, upper: np.ndarray,
-                space: ParamSpace, n_freq: int, max_nfev: int | None = None) -> ChangeFit:
-    """Bounded Gauss-Newton (trust-region reflective, updating.lsq.solve_bounded) from x0."""
-    res = solve_bounded(fun, x0, lower, upper, diff_step=1e-6, x_scale=1.0, ftol=1e-6,
-                        xtol=1e-6, max_nfev=max_nfev)
-    return ChangeFit(res.x, space.params(res.x), res.residual, res.jac, n_freq)
+                space: ParamSpace, diff: Differences, max_nfev: int | None = None) -> ChangeFit:
+    """Bounded Gauss-Newton (trust-region reflective, ``updating.lsq.solve_bounded``) from
+    x0, moved at least 1 % of the range inside the bounds: the first trust region is |x0|,
+    so a start a hair inside a bound (x0 ~ 1e-9) would crawl."""
+    f, jac = forward_jacobian(fun, upper)
+    res = solve_bounded(f, x0, lower, upper, jac=jac, margin=0.01 * (upper - lower),
+                        x_scale=1.0, ftol=1e-6, xtol=1e-6, max_nfev=max_nfev)
+    return ChangeFit(res.x, space.params(res.x), res.residual, res.jac, diff.n_freq,
+                     diff.dpsi.size, res.active)
 
 
 def fit_null(predict, diff: Differences, space: ParamSpace, sigma_rel: float,
              x0: np.ndarray | None = None) -> ChangeFit:
-    """Moisture and sensor shift only."""
+    """What every bat does between tests: moisture (uniform and end grain), temperature,
+    the re-mounted or replaced accelerometer."""
     fun = residual_function(predict, diff, space, sigma_rel)
-    x0 = np.zeros(3) if x0 is None else x0
-    return fit_bounded(fun, x0, NULL_LOWER, NULL_UPPER, space, diff.n_freq)
+    b = space.bounds
+    x0 = np.clip(0.0, b.lower, b.upper) if x0 is None else x0
+    return fit_bounded(fun, x0, b.lower, b.upper, space, diff)
 
 
-def depth_scan(
+SCAN_PLUGS_IN = (0.1, 1.0, 3.0)
+SCAN_LENGTHS_IN = (2.0, 4.0, 6.0, 9.0, 12.0)
+"""Where the linearised scan puts trial cores (plug from the barrel end, filled length)."""
+
+
+def position_scan(
     predict, diff: Differences, space: ParamSpace, sigma_rel: float, null: ChangeFit,
-    depths_in: np.ndarray,
+    plugs_in=SCAN_PLUGS_IN, lengths_in=SCAN_LENGTHS_IN,
 ) -> tuple[np.ndarray, np.ndarray]:
-    """Linearised scan: for each depth, residual norm and seed x (6,) for the core fit.
+    """Linearised scan: for each (plug, length), residual norm and seed x for the core fit.
 
     The change in residual from a 1 in core with density-neutral fill (b = 1, r = 1:
     stiffness only), and from making that fill massless (r = 0: mass only), are combined
@@ -200,42 +359,45 @@ def depth_scan(
     fun = residual_function(predict, diff, space, sigma_rel)
     r0 = null.residual
     norms, seeds = [], []
-    for depth in depths_in:
-        r_stiff = fun(np.concatenate([null.x, space.to_x(depth, 1.0, 1.0)]))
-        r_mass = fun(np.concatenate([null.x, space.to_x(depth, 1.0, 0.0)]))
-        A = np.column_stack([null.jac, r_stiff - r0, r_mass - r_stiff])
-        coef, *_ = np.linalg.lstsq(A, -r0, rcond=None)
-        norms.append(float(np.linalg.norm(r0 + A @ coef)))
-        c_s, c_m = coef[3], coef[4]
-        b = float(np.clip(max(c_s, 0.0) ** 0.8, 0.01, 2.2))
-        r = float(np.clip(1.0 - c_m / b, 0.05, R_MAX - 0.05))
-        seeds.append(np.concatenate([null.x + coef[:3], space.to_x(depth, b, r)]))
+    for plug in plugs_in:
+        for length in lengths_in:
+            r_stiff = fun(np.concatenate([null.x, space.to_x(plug, length, 1.0, 1.0)]))
+            r_mass = fun(np.concatenate([null.x, space.to_x(plug, length, 1.0, 0.0)]))
+            A = np.column_stack([null.jac, r_stiff - r0, r_mass - r_stiff])
+            coef, *_ = np.linalg.lstsq(A, -r0, rcond=None)
+            norms.append(float(np.linalg.norm(r0 + A @ coef)))
+            c_s, c_m = coef[N_NULL], coef[N_NULL + 1]
+            b = float(np.clip(max(c_s, 0.0) ** 0.8, 0.01, 2.2))
+            r = float(np.clip(1.0 - c_m / b, 0.05, R_MAX - 0.05))
+            seeds.append(np.concatenate([null.x + coef[:N_NULL],
+                                         space.to_x(plug, length, b, r)]))
     return np.array(norms), np.array(seeds)
 
 
 def fit_core(
     predict, diff: Differences, space: ParamSpace, sigma_rel: float, null: ChangeFit,
-    depths_in: np.ndarray, n_starts: int = 2, min_separation_in: float = 2.0,
-    x0: np.ndarray | None = None,
+    n_starts: int = 2, x0: np.ndarray | None = None,
 ) -> tuple[ChangeFit, dict]:
-    """Moisture, sensor shift and a core; multi-start from the depth scan (or from x0)."""
+    """The null model and a core; multi-start from the position scan (or from x0)."""
     fun = residual_function(predict, diff, space, sigma_rel)
     lo, hi = space.lower(), space.upper()
     if x0 is not None:
-        return (fit_bounded(fun, x0, lo, hi, space, diff.n_freq, MAX_NFEV_CORE),
-                {"starts_in": [float(x0[3])]})
-    norms, seeds = depth_scan(predict, diff, space, sigma_rel, null, depths_in)
+        return fit_bounded(fun, x0, lo, hi, space, diff, MAX_NFEV_CORE), {}
+    norms, seeds = position_scan(predict, diff, space, sigma_rel, null)
     starts: list[np.ndarray] = []
     for i in np.argsort(norms):
-        if all(abs(seeds[i][3] - s[3]) >= min_separation_in for s in starts):
+        far = all(abs(seeds[i][N_NULL] - s[N_NULL]) + abs(seeds[i][N_NULL + 1]
+                                                         - s[N_NULL + 1]) >= 2.0
+                  for s in starts)
+        if far:
             starts.append(seeds[i])
         if len(starts) == n_starts:
             break
-    fits = [fit_bounded(fun, s, lo, hi, space, diff.n_freq, MAX_NFEV_START) for s in starts]
+    fits = [fit_bounded(fun, s, lo, hi, space, diff, MAX_NFEV_START) for s in starts]
     best = min(fits, key=lambda f: f.rss)
-    info = {"scan_depth_in": [float(d) for d in depths_in],
-            "scan_norm": [float(n) for n in norms],
-            "starts_in": [float(s[3]) for s in starts],
+    info = {"scan_norm": [float(n) for n in norms],
+            "starts_plug_length_in": [[float(s[N_NULL]), float(s[N_NULL + 1])]
+                                      for s in starts],
             "start_rss": [f.rss for f in fits]}
     return best, info
 
@@ -258,3 +420,8 @@ def shape_noise(fit: ChangeFit, diff: Differences, sigma_rel: float, n_params: i
     n_psi = diff.dpsi.size
     dof = n_psi - n_params * n_psi / diff.n_data
     return max(float(sigma_rel * np.sqrt(fit.rss_shapes / dof)), SHAPE_NOISE_FLOOR)
+
+
+def covariance(fit: ChangeFit, dof: int) -> np.ndarray:
+    """s^2 (J^T J)^+ with s^2 = RSS / dof (parameters in x units; ``updating.lsq``)."""
+    return lsq_covariance(fit.jac, fit.residual, dof)

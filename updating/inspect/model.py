@@ -2,9 +2,15 @@
 
 Relative to the bat's calibrated reference (``BatReference``):
 
-- moisture: uniform factors on the wood's stiffness (E and G together) and density,
-  ``K = s_E K_wood + K_bungees``, ``M = s_rho M_wood + M_sensor``;
-- the accelerometer re-mounted ``sensor_shift_m`` from where it was (same mass);
+- moisture and temperature: uniform factors on the wood's stiffness (E and G together) and
+  density, ``K = s_E K_wood + K_bungees``, ``M = s_rho M_wood + M_sensor``;
+- end-grain moisture: end grain takes up and gives off water many times faster than side
+  grain, so the change near each end can be about twice the middle's. ``end_moisture_pt``
+  (knob, barrel) adds m extra points there, decaying as w(x) = exp(-s / END_DECAY_M) with s
+  the distance from that end, coupled as moisture is (about -2 % E and +1 % mass per point):
+  ``K_wood -> K_wood - 0.02 m sum w_i k_i``, ``M_wood -> M_wood + 0.01 m sum w_i m_i``;
+- the accelerometer re-mounted ``sensor_shift_m`` from where it was, and possibly a
+  replacement of another mass (``sensor_mass_change_kg``);
 - optionally an axial core (``Core``: depth, diameter, fill density ratio, fill modulus,
   plug), built exactly into the section properties (Cowper shear coefficient included).
 
@@ -20,7 +26,13 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from updating.model.assembly import BatModel, assemble, attachment_matrices, point_vector
+from updating.model.assembly import (
+    BatModel,
+    assemble,
+    attachment_matrices,
+    place,
+    point_vector,
+)
 from updating.model.modes import solve_modes
 from updating.model.profile import Profile
 from updating.model.reference import BatReference
@@ -35,22 +47,49 @@ class ChangeParams:
     density_scale: float = 1.0
     sensor_shift_m: float = 0.0
     core: Core | None = None
+    end_moisture_pt: tuple[float, float] = (0.0, 0.0)
+    sensor_mass_change_kg: float = 0.0
+
+
+END_DECAY_M = 2.0 * 0.0254
+"""Decay length of the end-grain moisture excess (../docs/inspection.md)."""
+E_PER_POINT, MASS_PER_POINT = -0.02, 0.01
+"""Moisture coupling: relative change of E and of mass per point of moisture content."""
 
 
 @dataclass(frozen=True)
 class WoodSystem:
     """The bat without its accelerometer: model, K_wood (+ bungees), M_wood, shape rows of
-    the test points."""
+    the test points, and the end-grain weighted matrices (knob, barrel)."""
 
     model: BatModel
     K: np.ndarray
     M: np.ndarray
     K_bungees: np.ndarray
     point_rows: np.ndarray
+    K_ends: tuple[np.ndarray, np.ndarray]
+    M_ends: tuple[np.ndarray, np.ndarray]
+    translation: np.ndarray
+
+    def wood_matrices(self, end_moisture_pt: tuple[float, float]) -> tuple[np.ndarray,
+                                                                             np.ndarray]:
+        """K_wood, M_wood with the end-grain moisture excess (module docstring)."""
+        K, M = self.K, self.M
+        for m, Ke, Me in zip(end_moisture_pt, self.K_ends, self.M_ends, strict=True):
+            if m:
+                K = K + E_PER_POINT * m * Ke
+                M = M + MASS_PER_POINT * m * Me
+        return K, M
+
+    def mass_kg(self, M: np.ndarray) -> float:
+        """Total (translational) mass of a mass matrix: t^T M t, t the rigid translation."""
+        t = self.translation
+        return float(t @ M @ t)
 
 
 def wood_system(
     profile: Profile, reference: BatReference, points_m: np.ndarray, core: Core | None,
+    like: WoodSystem | None = None,
 ) -> WoodSystem:
     """Model of the bat (wood only) with nodes at the test points, and its bungees."""
     model = replace(reference, sensor_mass_kg=0.0).build(profile, points_m, core=core)
@@ -59,44 +98,83 @@ def wood_system(
     idx = np.searchsorted(model.node_x_m, points_m - 1e-9)
     if np.any(np.abs(model.node_x_m[np.minimum(idx, model.n_nodes - 1)] - points_m) > 1e-9):
         raise ValueError("test points must be nodes of the model")
-    return WoodSystem(model, K, M, Kb, 2 * idx)
+    t = np.zeros(model.n_dof)
+    t[model.translational_dofs] = 1.0
+    if like is not None:  # end-grain matrices of the uncored bat (a core is not at the grain)
+        return WoodSystem(model, K, M, Kb, 2 * idx, like.K_ends, like.M_ends, t)
+    mid = 0.5 * (model.node_x_m[:-1] + model.node_x_m[1:])
+    parts = model.parts
+    K_ends, M_ends = [], []
+    for dist in (mid - model.node_x_m[0], model.node_x_m[-1] - mid):
+        w = np.exp(-dist / END_DECAY_M)
+        K_ends.append(place(model, parts.k_bend, w) + place(model, parts.k_shear, w))
+        M_ends.append(place(model, parts.m_trans, w) + place(model, parts.m_rot, w))
+    return WoodSystem(model, K, M, Kb, 2 * idx, tuple(K_ends), tuple(M_ends), t)
+
+
+class ChangePredictor:
+    """predict(params) -> (freq_hz (n_solve,), shapes at the points (n_points, n_solve)).
+
+    All of the lowest ``n_solve`` modes are returned (suspension modes included); the caller
+    selects the elastic ones by index. ``sensor_x_m`` is the accelerometer's position before
+    any shift. ``wood_mass_kg(params)`` is the bat's mass on a scale (no accelerometer).
+    Wood systems are cached per core (at most 32).
+    """
+
+    def __init__(self, profile: Profile, reference: BatReference, points_m: np.ndarray,
+                 sensor_x_m: float, n_solve: int):
+        self.profile, self.reference = profile, reference
+        self.points_m = np.asarray(points_m, dtype=float)
+        self.sensor_x_m, self.n_solve = float(sensor_x_m), int(n_solve)
+        self.drive = int(np.argmin(np.abs(self.points_m - self.sensor_x_m)))
+        self._cache: dict[Core | None, WoodSystem] = {}
+
+    def at_sensor(self, sensor_x_m: float) -> ChangePredictor:
+        """The same bat with the accelerometer's unshifted position at ``sensor_x_m`` (the
+        wood systems already built are shared)."""
+        out = ChangePredictor(self.profile, self.reference, self.points_m, sensor_x_m,
+                              self.n_solve)
+        out._cache = self._cache
+        return out
+
+    def system(self, core: Core | None = None) -> WoodSystem:
+        if core not in self._cache:
+            if len(self._cache) > 32:
+                for key in [k for k in self._cache if k is not None]:
+                    del self._cache[key]
+            like = None if core is None else self.system(None)
+            self._cache[core] = wood_system(self.profile, self.reference, self.points_m, core,
+                                            like)
+        return self._cache[core]
+
+    def wood_mass_kg(self, p: ChangeParams) -> float:
+        ws = self.system(p.core)
+        _, M = ws.wood_matrices(p.end_moisture_pt)
+        return p.density_scale * ws.mass_kg(M)
+
+    def __call__(self, p: ChangeParams) -> tuple[np.ndarray, np.ndarray]:
+        ws = self.system(p.core)
+        K, M = ws.wood_matrices(p.end_moisture_pt)
+        M = p.density_scale * M
+        x = float(np.clip(self.sensor_x_m + p.sensor_shift_m, 0.0, self.profile.length_m))
+        dofs, n = point_vector(ws.model, x)
+        # the change may take the calibrated mass below 0: calibration puts other physics
+        # there, the change is relative to it
+        mass = self.reference.sensor_mass_kg + p.sensor_mass_change_kg
+        if mass:
+            M[np.ix_(dofs, dofs)] += mass * np.outer(n, n)
+        modes = solve_modes(p.stiffness_scale * K + ws.K_bungees, M, None, self.n_solve)
+        shapes = modes.shapes[ws.point_rows]
+        return modes.freq_hz, shapes * driving_point_scale(n @ modes.shapes[dofs],
+                                                           shapes[self.drive])
 
 
 def make_predictor(
     profile: Profile, reference: BatReference, points_m: np.ndarray, sensor_x_m: float,
     n_solve: int,
-) -> Callable[[ChangeParams], tuple[np.ndarray, np.ndarray]]:
-    """f(params) -> (freq_hz (n_solve,), shapes at the points (n_points, n_solve)).
-
-    All of the lowest ``n_solve`` modes are returned (suspension modes included); the caller
-    selects the elastic ones by index. ``sensor_x_m`` is the accelerometer's position before
-    any shift.
-    """
-    points_m = np.asarray(points_m, dtype=float)
-    cache: dict[Core | None, WoodSystem] = {}
-
-    def system(core: Core | None) -> WoodSystem:
-        if core not in cache:
-            if len(cache) > 32:
-                cache.clear()
-            cache[core] = wood_system(profile, reference, points_m, core)
-        return cache[core]
-
-    drive = int(np.argmin(np.abs(points_m - sensor_x_m)))
-
-    def predict(p: ChangeParams) -> tuple[np.ndarray, np.ndarray]:
-        ws = system(p.core)
-        M = p.density_scale * ws.M
-        x = float(np.clip(sensor_x_m + p.sensor_shift_m, 0.0, profile.length_m))
-        dofs, n = point_vector(ws.model, x)
-        if reference.sensor_mass_kg:
-            M[np.ix_(dofs, dofs)] += reference.sensor_mass_kg * np.outer(n, n)
-        modes = solve_modes(p.stiffness_scale * ws.K + ws.K_bungees, M, None, n_solve)
-        shapes = modes.shapes[ws.point_rows]
-        return modes.freq_hz, shapes * driving_point_scale(n @ modes.shapes[dofs],
-                                                           shapes[drive])
-
-    return predict
+) -> ChangePredictor:
+    """The bat's change predictor (``ChangePredictor``)."""
+    return ChangePredictor(profile, reference, points_m, sensor_x_m, n_solve)
 
 
 def driving_point_scale(at_sensor: np.ndarray, at_drive: np.ndarray) -> np.ndarray:

@@ -1,52 +1,69 @@
 """Phase 3: the verdict on a re-tested bat (../docs/inspection.md).
 
-1. Pair the re-test's modes with the baseline's (MAC and frequency) and with the calibrated
-   reference model's.
-2. Fit, to the changes retest - baseline of frequencies and shapes, the model's changes
-   model(theta) - model(reference) under two hypotheses:
-   H0 (what every bat does between tests): uniform stiffness and density scales (moisture)
-   and a shift of the re-mounted accelerometer, 3 parameters;
-   H1: H0 plus an axial core from the barrel end (depth, diameter, fill density ratio; fill
-   modulus and plug length fixed), 6 parameters.
+1. Checks that the tests can be compared (``checks``): enough modes pair, the amplitudes
+   agree as one bat's would (units, calibration), the re-test looks like the same bat
+   (frequencies, weight), the test points see the barrel. A failed check: inconclusive.
+2. Fit, to the changes retest - baseline of frequencies, shapes and weight, the model's
+   changes model(theta) - model(reference) under two hypotheses:
+   H0 (what an unaltered bat does between tests, physically bounded): uniform moisture and
+   temperature (stiffness and density scales), end-grain moisture at either end, the
+   accelerometer re-mounted and possibly replaced, 6 parameters;
+   H1: H0 plus a filled core from the barrel end or inside the bat (plug, length, diameter,
+   fill density ratio), 10 parameters.
 3. Nested-model F test, residuals weighted by their estimated noise:
 
-       F = ((RSS_0 - RSS_1) / q) / (RSS_1 / (N - p_1)),  q = 3, p_1 = 6,
+       F = ((RSS_0 - RSS_1) / q) / max(RSS_1 / (N - p_1), 1),  q = 4, p_1 = 10,
 
-   p = P(F_{q, N-p_1} > F); altered when p < false_alarm; confidence = 1 - p.
-4. Reading: the H1 core (region, diameter, fill ratio) with standard uncertainties from the
+   p = P(F_{q, N-p_1} > F); significant when p < false_alarm; confidence = 1 - p.
+4. Decision: altered only when the change is significant, the core that explains it is a
+   practical one (``MIN_CORE_DIAMETER_IN``) and no nuisance is held at its physical bound;
+   inconclusive when the drift itself is beyond physical bounds or a nuisance at its bound
+   and a core cannot be told apart; else not altered.
+5. Reading: the H1 core (region, diameter, fill ratio) with standard uncertainties from the
    Jacobian, and the element factors it implies.
-5. The MSSO element map (``msso_map``), independent of the core fit: the re-test against the
-   baseline-updated reference with H0's moisture and sensor shift removed (``details["msso"]``).
+6. The MSSO element map (``msso_map``), independent of the core fit: the re-test against the
+   baseline-updated reference with the accepted drift removed (``details["msso"]``).
 """
 
 from __future__ import annotations
 
 import time
+from dataclasses import dataclass, replace
 
 import numpy as np
+from scipy.stats import chi2
 from scipy.stats import f as f_dist
 
 from updating.correlate.measured import MeasuredModes
 from updating.correlate.pairing import align_signs, pair_modes
+from updating.inspect.checks import (
+    amplitude_reason,
+    coverage_reason,
+    identity_reason,
+    pairing_reason,
+)
 from updating.inspect.fit import (
+    FREQ_MODEL_ERROR_REL,
     MAX_NFEV_CORE,
+    N_CORE,
+    N_NULL,
+    NULL_NAMES,
+    ChangeFit,
     Differences,
+    NullBounds,
     ParamSpace,
+    covariance,
     fit_bounded,
     fit_core,
     fit_null,
+    plane_sigma,
     residual_function,
     shape_noise,
 )
-from updating.inspect.model import (
-    ChangeParams,
-    baseline_sensor_offset,
-    make_predictor,
-    wood_system,
-)
+from updating.inspect.model import ChangeParams, ChangePredictor, baseline_sensor_offset
 from updating.inspect.msso_map import msso_map
+from updating.inspect.retest_meta import RetestConditions
 from updating.inspect.verdict import Verdict
-from updating.lsq import covariance
 from updating.model.profile import Profile
 from updating.model.reference import BatReference
 from updating.model.units import IN_TO_M
@@ -58,8 +75,26 @@ FALLBACK_FREQ_STD_PER_ZETA = 0.05
 half-power half-bandwidth)."""
 INITIAL_SHAPE_NOISE = 0.01
 MAP_MASS_NORMALISED = True
-SCAN_DEPTHS_IN = tuple(float(d) for d in np.arange(4.0, 14.5, 1.0))
-"""Core depths (in, from the barrel end) scanned to seed the core fit."""
+MIN_CORE_DIAMETER_IN = 0.3
+"""Physical floor: the fitted core's diameter, less two standard uncertainties, must reach
+this for "altered" (reported holes are 0.75-1.25 in, the smallest considered 0.5 in); a
+significant change that only a thinner or undetermined core explains is model error or
+drift, not a core."""
+
+
+F_FLOOR = 12.0
+"""Calibrated floor on F: on nuisance-rich clean bats (end-grain moisture, billet gradients,
+two planes tapped at another angle, temperature, cupped end, replaced accelerometer,
+bungees, 1-2 % noise, 8-20 points; docs/inspection.md) F's tail is far heavier than
+F(4, N - 10): 4 of 40 clean bats had p < 0.01 (F up to 13). With the floor, 0 of 40
+further clean bats were called altered; one had a practical candidate core at F = 9.8."""
+WEIGHT_DRIFT_MAX = 0.04
+"""|ln(W_retest / W_registered)| beyond which moisture (+-2.5 points, 1 %/point, plus the
+scale) cannot explain a weight change."""
+CONFUSABLE = ("barrel_end_moisture_pt", "sensor_mass_change_g", "sensor_shift_in")
+"""Nuisances that act where a core does (the barrel end): a core fit that needs one of them
+at its physical bound cannot be told from that drift. (A uniform scale at its bound beside
+a core only says the core model is not the alteration's exact shape.)"""
 
 
 def _rel_freq_std(m: MeasuredModes) -> np.ndarray:
@@ -76,10 +111,30 @@ def _check(profile: Profile, baseline: MeasuredModes, retest: MeasuredModes) -> 
         raise ValueError("test points lie outside the bat's profile")
 
 
-def differences(
-    predict, baseline: MeasuredModes, retest: MeasuredModes, min_mac: float,
-) -> tuple[Differences, list[dict]]:
-    """Pair modes (retest-baseline, baseline-reference) and form the measured changes."""
+@dataclass(frozen=True)
+class RetestPairs:
+    """Modes paired re-test to baseline to reference model.
+
+    Attributes:
+        baseline_index, retest_index: (m,) indices into the two tests' modes.
+        model_index: (m,) index among the predictor's modes.
+        mac: (m,) MAC baseline-retest; mac_model: (m,) MAC baseline-model.
+    """
+
+    baseline_index: np.ndarray
+    retest_index: np.ndarray
+    model_index: np.ndarray
+    mac: np.ndarray
+    mac_model: np.ndarray
+
+    @property
+    def n(self) -> int:
+        return int(self.baseline_index.size)
+
+
+def pair_tests(predict: ChangePredictor, baseline: MeasuredModes, retest: MeasuredModes,
+               min_mac: float) -> RetestPairs:
+    """Pair re-test to baseline (MAC and frequency) and baseline to the reference model."""
     ib, ir, mac_br = pair_modes(baseline.shapes, retest.shapes, freq_a_hz=baseline.freq_hz,
                                 freq_b_hz=retest.freq_hz, min_mac=min_mac, max_rel_df=0.15)
     f_mod, phi_mod = predict(ChangeParams())
@@ -90,32 +145,36 @@ def differences(
     to_model = dict(zip(jb.tolist(), elastic[jm].tolist(), strict=True))
     mac_model = dict(zip(jb.tolist(), mac_bm.tolist(), strict=True))
     keep = [k for k, b in enumerate(ib) if b in to_model]
-    if len(keep) < 3:
-        raise ValueError(f"only {len(keep)} modes pair between baseline, re-test and "
-                         "reference (need 3)")
-    ib, ir, mac_br = ib[keep], ir[keep], mac_br[keep]
-    jmod = np.array([to_model[b] for b in ib])
+    ib, ir = np.asarray(ib, int)[keep], np.asarray(ir, int)[keep]
+    return RetestPairs(ib, ir, np.array([to_model[b] for b in ib], dtype=int),
+                     np.asarray(mac_br, float)[keep],
+                     np.array([mac_model[b] for b in ib], dtype=float))
+
+
+def differences(predict: ChangePredictor, baseline: MeasuredModes, retest: MeasuredModes,
+                pairs: RetestPairs, dlnw: float | None) -> Differences:
+    """The measured changes of the paired modes (and of the weight) and their weights."""
+    ib, ir, jmod = pairs.baseline_index, pairs.retest_index, pairs.model_index
+    f_mod, phi_mod = predict(ChangeParams())
     psi_b = baseline.shapes[:, ib]
     psi_r = align_signs(psi_b, retest.shapes[:, ir])
     phi0 = align_signs(psi_b, phi_mod[:, jmod])
-    fb, fr = baseline.freq_hz[ib], retest.freq_hz[ir]
-    sig = np.hypot(_rel_freq_std(baseline)[ib], _rel_freq_std(retest)[ir])
+    order = np.searchsorted(np.flatnonzero(f_mod >= ELASTIC_MIN_HZ), jmod)
+    sig = np.sqrt(_rel_freq_std(baseline)[ib] ** 2 + _rel_freq_std(retest)[ir] ** 2
+                  + FREQ_MODEL_ERROR_REL ** 2 + plane_sigma(order) ** 2)
     rms = np.hypot(np.sqrt(np.mean(psi_b**2, axis=0)), np.sqrt(np.mean(psi_r**2, axis=0)))
-    diff = Differences(jmod, np.log(fr / fb), sig, psi_r - psi_b, rms, f_mod[jmod], phi0)
-    modes = [{"baseline_hz": float(a), "retest_hz": float(b), "mac": float(m),
-              "reference_hz": float(c), "mac_reference": float(mac_model[int(i)])}
-             for a, b, m, c, i in zip(fb, fr, mac_br, f_mod[jmod], ib, strict=True)]
-    return diff, modes
+    return Differences(jmod, np.log(retest.freq_hz[ir] / baseline.freq_hz[ib]), sig,
+                       psi_r - psi_b, rms, f_mod[jmod], phi0, dlnw,
+                       predict.wood_mass_kg(ChangeParams()))
 
 
-def _element_map(profile, reference, baseline, retest, modes, drift, offset, sigma,
-                 sigma_lnf) -> dict:
+def _element_map(profile, reference, baseline, retest, pairs: RetestPairs, drift, offset,
+                 sigma, sigma_lnf) -> dict:
     """The MSSO map of the paired modes as a dict for ``details["msso"]`` ({"error": ...}
     when the modes cannot be updated element by element)."""
-    ib = [int(np.argmin(np.abs(baseline.freq_hz - m["baseline_hz"]))) for m in modes]
-    ir = [int(np.argmin(np.abs(retest.freq_hz - m["retest_hz"]))) for m in modes]
     try:
-        mp = msso_map(profile, reference, baseline.select(ib), retest.select(ir),
+        mp = msso_map(profile, reference, baseline.select(pairs.baseline_index),
+                      retest.select(pairs.retest_index),
                       stiffness_scale=drift.stiffness_scale, density_scale=drift.density_scale,
                       sensor_shift_m=drift.sensor_shift_m, baseline_sensor_offset_m=offset,
                       shape_sigma=sigma,
@@ -133,10 +192,77 @@ def _agree(map_region, fit_region) -> bool:
     return bool(map_region[0] < fit_region[1] and fit_region[0] < map_region[1])
 
 
+@dataclass(frozen=True)
+class Hypotheses:
+    """H0 and H1 fitted, with the shape noise they were weighted with."""
+
+    null: ChangeFit
+    full: ChangeFit
+    sigma_rel: float
+    scan: dict
+
+
+def fit_hypotheses(predict: ChangePredictor, diff: Differences, space: ParamSpace,
+                   n_starts: int) -> Hypotheses:
+    """Shape noise from the null fit, then from the core fit (both refitted with it)."""
+    null = fit_null(predict, diff, space, INITIAL_SHAPE_NOISE)
+    sigma = shape_noise(null, diff, INITIAL_SHAPE_NOISE, N_NULL)
+    null = fit_null(predict, diff, space, sigma, x0=null.x)
+    full, scan = fit_core(predict, diff, space, sigma, null, n_starts)
+    sigma = shape_noise(full, diff, sigma, N_NULL + N_CORE)
+    null = fit_null(predict, diff, space, sigma, x0=null.x)
+    full, _ = fit_core(predict, diff, space, sigma, null, x0=full.x)
+    if null.rss < full.rss:  # H1 contains H0 (p = q = 0): restart H1 from there
+        x0 = np.concatenate([null.x, full.x[N_NULL:N_NULL + 2], [0.0, 0.0]])
+        full = fit_bounded(residual_function(predict, diff, space, sigma), x0, space.lower(),
+                           space.upper(), space, diff, MAX_NFEV_CORE)
+    return Hypotheses(null, full, sigma, scan)
+
+
+def _uniform_explanation(predict, diff, space, hyp: Hypotheses, q: int, dof: int,
+                         false_alarm: float) -> tuple[float, float] | None:
+    """(stiffness %, density %) when a uniform change of the wood beyond physical bounds
+    explains the change as well as the core does (another bat, not an alteration), else
+    None."""
+    wide = replace(space, bounds=space.bounds.widened())
+    fit = fit_null(predict, diff, wide, hyp.sigma_rel, x0=hyp.null.x)
+    rss1 = min(hyp.full.rss, hyp.null.rss)
+    F = max(fit.rss - rss1, 0.0) / q / max(rss1 / dof, 1.0)
+    beyond = np.any(fit.x[:2] < space.bounds.lower[:2]) or \
+        np.any(fit.x[:2] > space.bounds.upper[:2])
+    if beyond and f_dist.sf(F, q, dof) >= false_alarm:
+        return float(fit.x[0]), float(fit.x[1])
+    return None
+
+
+def _bounds_matter(predict, diff, space, hyp: Hypotheses, n: int,
+                   level: float = 0.01) -> bool:
+    """Do the data really want the null's nuisances beyond their physical bounds? The null
+    refitted with every range three times as wide must fit significantly better
+    (chi^2 test on the drop of the weighted residual, one degree per held parameter); a
+    bound that only ends a flat valley does not make the verdict inconclusive."""
+    held = NullBounds.held(hyp.null)
+    wide = fit_null(predict, diff, replace(space, bounds=space.bounds.relaxed()),
+                    hyp.sigma_rel, x0=hyp.null.x)
+    s2 = max(wide.rss / max(n - N_NULL, 1), 1.0)
+    return (hyp.null.rss - wide.rss) / s2 > chi2.ppf(1 - level, len(held))
+
+
+def _nan_verdict(predict: ChangePredictor, false_alarm: float, reasons: list[str],
+                 details: dict) -> Verdict:
+    """An inconclusive verdict (no test made)."""
+    factors = core_element_factors(predict.system().model, None)
+    return Verdict(None, float("nan"), false_alarm, float("nan"), None, None, None, {},
+                   factors.x0_m, factors.x1_m, factors.alpha, factors.beta, {}, [],
+                   details, tuple(reasons))
+
+
 def inspect_retest(
     profile: Profile, reference: BatReference, baseline: MeasuredModes,
-    retest: MeasuredModes, false_alarm: float = 0.01, *, plug_m: float = IN_TO_M,
-    fill_modulus_ratio: float = 0.0, depths_in=SCAN_DEPTHS_IN,
+    retest: MeasuredModes, false_alarm: float = 0.01, *,
+    conditions: RetestConditions | None = None, registered_weight_kg: float | None = None,
+    baseline_temperature_c: float | None = None,
+    baseline_sensor_mass_kg: float | None = None, fill_modulus_ratio: float = 0.0,
     n_starts: int = 2, min_mac: float = 0.8,
 ) -> Verdict:
     """The lab's verdict on a re-test of a bat against its baseline test and reference.
@@ -146,88 +272,171 @@ def inspect_retest(
         reference: its calibrated reference (from the baseline test).
         baseline, retest: identified elastic modes of the two tests, at the same points.
         false_alarm: significance level of the test "no local alteration".
-        plug_m, fill_modulus_ratio: assumed plug length and fill stiffness of a core.
-        depths_in: core depths (from the barrel end) scanned to start the core fit.
-        n_starts: number of depth starts refined by least squares.
+        conditions: the re-test's retest.json (weight, accelerometer mass, temperature).
+        registered_weight_kg: the bat's weight at registration (meta.json).
+        baseline_temperature_c: the lab's temperature at the baseline, if known.
+        baseline_sensor_mass_kg: the baseline's accelerometer mass, if known (with the
+            re-test's from ``conditions`` it fixes the change of accelerometer mass).
+        fill_modulus_ratio: assumed fill stiffness of a core.
+        n_starts: number of core positions refined by least squares.
         min_mac: minimum MAC to pair two modes.
     Raises:
-        ValueError: when the tests cannot be compared (points differ, too few paired modes).
+        ValueError: when the tests were measured at different points.
     """
     t0 = time.perf_counter()
+    cond = conditions or RetestConditions()
     _check(profile, baseline, retest)
     points = np.asarray(baseline.x_m, dtype=float)
     n_solve = max(baseline.freq_hz.size, retest.freq_hz.size) + 6
-    predict = make_predictor(profile, reference, points, reference.sensor_x_m, n_solve)
+    predict = ChangePredictor(profile, reference, points, reference.sensor_x_m, n_solve)
     offset = baseline_sensor_offset(predict, baseline.freq_hz, baseline.shapes)
-    predict = make_predictor(profile, reference, points, reference.sensor_x_m + offset, n_solve)
-    diff, modes = differences(predict, baseline, retest, min_mac)
-    space = ParamSpace(profile, plug_m, fill_modulus_ratio,
+    predict = predict.at_sensor(reference.sensor_x_m + offset)
+
+    # 1. can the tests be compared?
+    dlnw = None
+    if cond.weight_kg is not None and registered_weight_kg:
+        dlnw = float(np.log(cond.weight_kg / registered_weight_kg))
+    pairs = pair_tests(predict, baseline, retest, min_mac)
+    reasons = [r for r in (coverage_reason(points, profile.length_m),
+                           pairing_reason(pairs.n)) if r]
+    if pairs.n >= 1:
+        ib, ir = pairs.baseline_index, pairs.retest_index
+        psi_r = align_signs(baseline.shapes[:, ib], retest.shapes[:, ir])
+        reasons += [r for r in (
+            amplitude_reason(baseline.shapes[:, ib], psi_r, baseline.freq_hz[ib]),
+            identity_reason(np.log(retest.freq_hz[ir] / baseline.freq_hz[ib]), dlnw)) if r]
+    if reasons:
+        return _nan_verdict(predict, false_alarm, reasons,
+                            {"n_modes": pairs.n, "time_s": time.perf_counter() - t0})
+
+    # 2. H0 and H1
+    diff = differences(predict, baseline, retest, pairs, dlnw)
+    dT = None
+    if cond.temperature_c is not None and baseline_temperature_c is not None:
+        dT = cond.temperature_c - baseline_temperature_c
+    dm = None
+    if cond.sensor_mass_kg is not None and baseline_sensor_mass_kg is not None:
+        dm = cond.sensor_mass_kg - baseline_sensor_mass_kg
+    bounds = NullBounds.physical(dm, dT)
+    space = ParamSpace(profile, bounds, fill_modulus_ratio,
                        float(retest.sensor_x_m - baseline.sensor_x_m))
-    depths = np.asarray(depths_in, dtype=float)
+    hyp = fit_hypotheses(predict, diff, space, n_starts)
+    null, full, sigma = hyp.null, hyp.full, hyp.sigma_rel
 
-    # noise: shape level from the null fit, then from the core fit (both refitted with it)
-    null = fit_null(predict, diff, space, INITIAL_SHAPE_NOISE)
-    sigma = shape_noise(null, diff, INITIAL_SHAPE_NOISE, 3)
-    null = fit_null(predict, diff, space, sigma, x0=null.x)
-    full, scan = fit_core(predict, diff, space, sigma, null, depths, n_starts)
-    sigma = shape_noise(full, diff, sigma, 6)
-    null = fit_null(predict, diff, space, sigma, x0=null.x)
-    full, _ = fit_core(predict, diff, space, sigma, null, depths, x0=full.x)
-    if null.rss < full.rss:  # H1 contains H0 (p = q = 0): restart H1 from there
-        x0 = np.concatenate([null.x, [full.x[3], 0.0, 0.0]])
-        full = fit_bounded(residual_function(predict, diff, space, sigma), x0, space.lower(),
-                           space.upper(), space, diff.n_freq, MAX_NFEV_CORE)
-
-    n, p1, q = diff.n_data, 6, 3
-    dof = n - p1
+    # 3. the test
+    n, p1, q = diff.n_data, N_NULL + N_CORE, N_CORE
+    dof = max(n - p1, 1)
     rss0, rss1 = null.rss, min(full.rss, null.rss)
     # residual variance per datum, not below 1: the weights hold the noise floors
     # (SHAPE_NOISE_FLOOR), and data cleaner than them must not make model error significant
     F = max(rss0 - rss1, 0.0) / q / max(rss1 / dof, 1.0)
     p_value = float(f_dist.sf(F, q, dof))
-    altered = p_value < false_alarm
+    significant = p_value < false_alarm and F >= F_FLOOR
 
-    cov1 = covariance(full.jac, full.residual, dof)
-    cov0 = covariance(null.jac, null.residual, n - 3)
+    # 4. decision
+    cov1 = covariance(full, dof)
+    candidate = space.reading(full.x, cov1)
+    c = full.params.core
+    d_in = c.diameter_m / IN_TO_M
+    start_in, end_in = (v / IN_TO_M for v in c.interval_m(profile.length_m))
+    held0 = NullBounds.held(null)
+    held1 = [h for h in NullBounds.held(full) if h in CONFUSABLE]
+    weight_note = ""
+    if dlnw is not None:
+        weight_note = f"; weight {100 * np.expm1(dlnw):+.1f} % since registration"
+    core_text = (f"a core {d_in:.2f} in across at {start_in:.1f}-{end_in:.1f} in from the "
+                 f"knob end, fill/wood density {c.fill_density_ratio:.2f}")
+    d_low_in = d_in - 2 * candidate["sd"]["core_diameter_m"] / IN_TO_M
+    practical = d_low_in >= MIN_CORE_DIAMETER_IN
+    uniform = None
+    if significant:
+        uniform = _uniform_explanation(predict, diff, space, hyp, q, dof, false_alarm)
+    if uniform is not None:
+        altered = None
+        reasons = [f"the tests differ as two bats of this profile would (uniform stiffness "
+                   f"{uniform[0]:+.1f} %, density {uniform[1]:+.1f} %), far beyond what moisture "
+                   "and temperature do: check that the re-test is of this bat (serial) and the "
+                   "registered baseline is its own"]
+    elif significant and practical and not held1:
+        altered = True
+        reasons = [f"the change between the tests is not one moisture, temperature or the "
+                   f"accelerometer can make (F = {F:.1f}, p = {p_value:.1e}){weight_note}",
+                   f"it fits {core_text}"]
+    elif significant and practical:
+        altered = None
+        reasons = [f"the change between the tests fits {core_text}, but only with "
+                   f"{', '.join(held1)} at its physical bound: an alteration and that drift "
+                   "cannot be told apart; weigh the bat, give retest.json (weight, "
+                   "accelerometer mass, temperature) and re-test after a week at the "
+                   "baseline's conditions"]
+    elif significant and dlnw is not None and abs(dlnw) > WEIGHT_DRIFT_MAX:
+        altered = None
+        reasons = [f"the weight changed by {100 * np.expm1(dlnw):+.1f} %, more than moisture "
+                   f"does, and the tests differ (F = {F:.1f}), but not as a core would (the "
+                   f"best is {d_in:.2f} in across, at least {max(d_low_in, 0):.2f} in at 2 "
+                   "sigma): check that the re-test is of this bat and re-weigh it"]
+    elif significant:
+        altered = False
+        reasons = [f"the tests differ beyond noise (F = {F:.1f}) but only as a core "
+                   f"{d_in:.2f} in across would (at least {max(d_low_in, 0):.2f} in at 2 "
+                   f"sigma), not surely a practical core ({MIN_CORE_DIAMETER_IN} in)"
+                   f"{weight_note}"]
+    elif held0 and _bounds_matter(predict, diff, space, hyp, n):
+        altered = None
+        reasons = [f"the drift between the tests is beyond physical bounds "
+                   f"({', '.join(held0)} at its bound): re-test at the baseline's "
+                   "conditions (same accelerometer, temperature, after the wood has settled)"]
+    else:
+        altered = False
+        reasons = [f"the change between the tests is what moisture, temperature and the "
+                   f"accelerometer make (F = {F:.2f}, p = {p_value:.2f}){weight_note}"]
+
+    # 5. reading
+    cov0 = covariance(null, max(n - N_NULL, 1))
     accepted, cov = (full, cov1) if altered else (null, cov0)
     sd = np.sqrt(np.clip(np.diag(cov), 0.0, None))
     ps = accepted.params
     uncertainty = {"stiffness_scale": sd[0] / 100, "density_scale": sd[1] / 100,
                    "sensor_shift_m": sd[2] * IN_TO_M}
     region = core_d = ratio = None
-    candidate = space.reading(full.x, cov1)
     if altered:
-        core = ps.core
-        region = core.interval_m(profile.length_m)
-        core_d, ratio = core.diameter_m, core.fill_density_ratio
+        region = c.interval_m(profile.length_m)
+        core_d, ratio = c.diameter_m, c.fill_density_ratio
         uncertainty.update(candidate["sd"])
-    model = wood_system(profile, reference, points, None).model
-    factors = core_element_factors(model, ps.core if altered else None)
+    factors = core_element_factors(predict.system().model, c if altered else None)
 
     f_fit, _ = predict(full.params)
     f_null, _ = predict(null.params)
-    for k, m in enumerate(modes):
+    modes = []
+    for k in range(pairs.n):
         j = diff.model_index[k]
-        m["change_pct"] = 100 * (m["retest_hz"] / m["baseline_hz"] - 1)
-        m["moisture_fit_change_pct"] = 100 * (f_null[j] / diff.f0[k] - 1)
-        m["core_fit_change_pct"] = 100 * (f_fit[j] / diff.f0[k] - 1)
+        fb = baseline.freq_hz[pairs.baseline_index[k]]
+        fr = retest.freq_hz[pairs.retest_index[k]]
+        modes.append({"baseline_hz": float(fb), "retest_hz": float(fr),
+                      "mac": float(pairs.mac[k]), "reference_hz": float(diff.f0[k]),
+                      "mac_reference": float(pairs.mac_model[k]),
+                      "change_pct": 100 * (fr / fb - 1),
+                      "moisture_fit_change_pct": 100 * (f_null[j] / diff.f0[k] - 1),
+                      "core_fit_change_pct": 100 * (f_fit[j] / diff.f0[k] - 1)})
 
-    # the accepted model's drift: when there is a core, the moisture-only fit's uniform scales
-    # absorb part of it and the map would show that as a change of the whole bat
-    msso = _element_map(profile, reference, baseline, retest, modes, ps, offset, sigma,
+    # 6. the MSSO map, with the accepted model's drift (when there is a core, the null fit's
+    # uniform scales absorb part of it and the map would show that as a change of the bat)
+    msso = _element_map(profile, reference, baseline, retest, pairs, ps, offset, sigma,
                         diff.sigma_lnf)
     if "error" not in msso:
         msso["agrees_with_fit"] = _agree(msso["region_m"], region)
 
-    c = full.params.core
     details = {
-        "statistic": "F (moisture+core vs moisture-only, nested least squares)",
+        "statistic": "F (drift+core vs drift-only, nested least squares)",
         "dof": [q, dof], "p_value": p_value, "rss_null": rss0, "rss_core": rss1,
-        "n_modes": len(modes), "n_data": n,
+        "n_modes": pairs.n, "n_data": n,
         "shape_noise_rel": sigma,
         "freq_noise_rel": diff.sigma_lnf.tolist(),
+        "null_fit": dict(zip(NULL_NAMES, map(float, null.x), strict=True)),
+        "null_at_bound": held0, "core_fit_at_bound": held1,
+        "weight_change_rel": None if dlnw is None else float(np.expm1(dlnw)),
         "element_source": ("physical core fit (element-averaged section ratios)" if altered
-                           else "moisture-only model (no local change)"),
+                           else "drift-only model (no local change)"),
         "element_beta_shear": factors.beta_shear.tolist(),
         "candidate_core": {"region_m": [float(v) for v in c.interval_m(profile.length_m)],
                            "diameter_m": c.diameter_m,
@@ -237,13 +446,13 @@ def inspect_retest(
                               "density_scale": float(full.params.density_scale)},
         "sensor_shift_m": float(ps.sensor_shift_m - space.sensor_mount_m),
         "baseline_sensor_offset_m": offset,
-        "depth_scan": scan,
+        "position_scan": hyp.scan,
         "msso": msso,
-        "plug_m": plug_m, "fill_modulus_ratio": fill_modulus_ratio,
+        "plug_m": c.plug_m, "fill_modulus_ratio": fill_modulus_ratio,
         "time_s": time.perf_counter() - t0,
     }
     return Verdict(
-        altered=bool(altered), confidence=1.0 - p_value, false_alarm_rate=false_alarm,
+        altered=altered, confidence=1.0 - p_value, false_alarm_rate=false_alarm,
         statistic=float(F), region_m=None if region is None else (float(region[0]),
                                                                   float(region[1])),
         core_diameter_m=None if core_d is None else float(core_d),
@@ -253,5 +462,5 @@ def inspect_retest(
         alpha=factors.alpha, beta=factors.beta,
         moisture={"stiffness_scale": float(ps.stiffness_scale),
                   "density_scale": float(ps.density_scale)},
-        modes=modes, details=details,
+        modes=modes, details=details, reasons=tuple(reasons),
     )

@@ -3,8 +3,17 @@
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from enum import Enum
 
 import numpy as np
+
+
+class Status(str, Enum):
+    """The three outcomes of an inspection (the contract's ``status``)."""
+
+    ALTERED = "altered"
+    NOT_ALTERED = "not_altered"
+    INCONCLUSIVE = "inconclusive"
 
 
 @dataclass(frozen=True)
@@ -12,24 +21,24 @@ class Verdict:
     """Inspection result, SI.
 
     Attributes:
-        altered: the decision.
-        confidence: 1 - p-value of the test "no local alteration" (0..1).
+        altered: True (altered), False (not altered) or None (inconclusive: the data cannot
+            support a verdict; ``reasons`` say why and what to do).
+        confidence: 1 - p-value of the test "no local alteration" (0..1); NaN when no test
+            was made.
         false_alarm_rate: the test's significance level.
         statistic: the test statistic (e.g. F) and its name in ``details``.
         region_m: (start, end) of the altered region from the knob end, or None.
         core_diameter_m, fill_density_ratio: the fitted core, or None when not altered.
         uncertainty: standard uncertainties of the fitted quantities (same keys, SI).
-        element_x0_m, element_x1_m: (e,) element ends of the reference mesh; alpha, beta:
-            (e,) element mass and bending-stiffness factors implied by the fitted core
-            (``updating.msso.core_elements.core_element_factors`` of the H1 core:
-            element-averaged section ratios) when altered, zeros when not. They do not come
-            from MSSO: the MSSO element map is reported separately in ``details["msso"]``.
+        element_x0_m, element_x1_m: (e,) element ends; alpha, beta: (e,) element mass and
+            stiffness factors (translational mass, bending stiffness).
         moisture: {"stiffness_scale": ..., "density_scale": ...} uniform drift fitted.
         modes: paired modes, list of dicts {baseline_hz, retest_hz, mac, ...}.
         details: anything else worth reporting (fit residuals, ranks, timings).
+        reasons: one line each: why altered, why not, or why no verdict is possible.
     """
 
-    altered: bool
+    altered: bool | None
     confidence: float
     false_alarm_rate: float
     statistic: float
@@ -44,3 +53,10 @@ class Verdict:
     moisture: dict
     modes: list = field(default_factory=list)
     details: dict = field(default_factory=dict)
+    reasons: tuple[str, ...] = ()
+
+    @property
+    def status(self) -> Status:
+        if self.altered is None:
+            return Status.INCONCLUSIVE
+        return Status.ALTERED if self.altered else Status.NOT_ALTERED

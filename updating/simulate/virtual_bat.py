@@ -5,6 +5,18 @@ wood's E/G and rotary inertia, a finer mesh, an accelerometer's mass (possibly o
 labelled point), two bungees, modal damping rising with frequency, moisture drift and noise.
 Moisture: one percentage point of moisture content changes E by about -2 % and mass by about
 +1 % (docs/method.md, real bats).
+
+Optional nuisances of a real bat: a ``WoodField`` (moisture varying along the bat,
+temperature, billet gradients; ``updating.simulate.wood``), cavities besides the core (a
+cupped end, the empty part of a partial fill; ``updating.simulate.cavities``), and two bending
+planes. Wood's E along the grain is the same in every direction but its shear modulus is not
+(radial plane E/G_LR, tangential plane E/G_LT), so each bending mode is a pair; hammer and
+accelerometer at angle theta to the radial plane measure
+
+    H = cos^2(theta) H_R + sin^2(theta) H_T,
+
+each term from its own planar model (the projection of a force at theta on each plane, and of
+each plane's motion back on the sensor's axis).
 """
 
 from __future__ import annotations
@@ -15,13 +27,15 @@ import numpy as np
 
 from ema.io.frf_data import FrfTest
 from rigs.modal_model import ModalModel
-from rigs.virtual_test import simulate_frf
+from rigs.virtual_test import add_noise, simulate_frf
 from updating.model.assembly import Attachment, build_model, displacement_at
 from updating.model.material import Material
 from updating.model.modes import model_modes
 from updating.model.profile import Profile
 from updating.model.sections import Core
 from updating.model.units import IN_TO_M
+from updating.simulate.cavities import apply_cavities, cavity_stations_m
+from updating.simulate.wood import WoodField, apply_wood_field
 
 DEFAULT_FREQ_HZ = np.arange(0.0, 3200.0 + 0.25, 0.5)
 
@@ -49,6 +63,11 @@ class VirtualBat:
         zeta1, zeta_exponent: damping ratio of mode r is zeta1 (f_r / f_1) ** zeta_exponent.
         rel_noise, floor_noise: measurement noise (see rigs.virtual_test.simulate_frf).
         element_length_m: mesh of the truth model.
+        wood: modulus and density factors along the bat (moisture profile, temperature,
+            billet), or None (uniform wood).
+        cavities: cavities besides ``core`` (``Core`` each; a cup has plug 0).
+        e_over_g_t: E/G of the tangential bending plane; None: one plane (``material``'s).
+        theta_deg: angle of hammer and accelerometer to the radial plane, degrees.
     """
 
     profile: Profile
@@ -66,6 +85,18 @@ class VirtualBat:
     rel_noise: float = 0.005
     floor_noise: float = 1e-3
     element_length_m: float = 0.5 * IN_TO_M
+    wood: WoodField | None = None
+    cavities: tuple[Core, ...] = ()
+    e_over_g_t: float | None = None
+    theta_deg: float = 0.0
+
+    def planes(self) -> tuple[tuple[str, float], ...]:
+        """(plane, weight) pairs of the measured FRF: cos^2 theta radial, sin^2 theta
+        tangential; one plane when ``e_over_g_t`` is None."""
+        if self.e_over_g_t is None:
+            return (("radial", 1.0),)
+        t = np.radians(self.theta_deg)
+        return (("radial", float(np.cos(t) ** 2)), ("tangential", float(np.sin(t) ** 2)))
 
     def sensor_point(self) -> int:
         if self.sensor_index >= 0:
@@ -73,21 +104,36 @@ class VirtualBat:
         target = self.profile.length_m - IN_TO_M
         return int(np.argmin(np.abs(np.asarray(self.points_m) - target)))
 
-    def truth_model(self):
-        """The FE model that generates the data (attachments included)."""
+    def sensor_x_m(self) -> float:
+        """Where the accelerometer really sits: its labelled point plus the offset, kept on
+        the bat (a sensor on the end face cannot move past it)."""
+        x = float(np.asarray(self.points_m, dtype=float)[self.sensor_point()])
+        return float(np.clip(x + self.sensor_offset_m, 0.0, self.profile.length_m))
+
+    def truth_model(self, plane: str = "radial"):
+        """The FE model of one bending plane that generates the data (attachments included)."""
         stiff, dens = moisture_scales(self.moisture_pct)
         material = self.material.scaled(stiff, dens)
+        if plane == "tangential":
+            if self.e_over_g_t is None:
+                raise ValueError("a one-plane bat has no tangential plane")
+            material = replace(material, e_over_g=self.e_over_g_t)
+        elif plane != "radial":
+            raise ValueError(f"unknown bending plane {plane!r}")
         points = np.asarray(self.points_m, dtype=float)
-        sensor_x = points[self.sensor_point()] + self.sensor_offset_m
+        sensor_x = self.sensor_x_m()
         attach = []
         if self.sensor_mass_kg:
             attach.append(Attachment(sensor_x, mass_kg=self.sensor_mass_kg))
         if self.bungee_k_n_per_m:
             for x in (IN_TO_M, self.profile.length_m - IN_TO_M):
                 attach.append(Attachment(x, k_n_per_m=self.bungee_k_n_per_m))
-        return build_model(self.profile, material, beam=self.beam,
-                           element_length_m=self.element_length_m, stations_m=points,
-                           core=self.core, attachments=tuple(attach))
+        stations = np.concatenate([points, cavity_stations_m(self.cavities,
+                                                             self.profile.length_m)])
+        model = build_model(self.profile, material, beam=self.beam,
+                            element_length_m=self.element_length_m, stations_m=stations,
+                            core=self.core, attachments=tuple(attach))
+        return apply_wood_field(apply_cavities(model, material, self.cavities), self.wood)
 
 
 def damping_ratios(freq_hz: np.ndarray, zeta1: float, exponent: float) -> np.ndarray:
@@ -101,16 +147,18 @@ def damping_ratios(freq_hz: np.ndarray, zeta1: float, exponent: float) -> np.nda
     return z
 
 
-def modal_model(bat: VirtualBat, max_mode_hz: float = 12000.0) -> tuple[ModalModel, np.ndarray]:
+def modal_model(
+    bat: VirtualBat, max_mode_hz: float = 12000.0, plane: str = "radial",
+) -> tuple[ModalModel, np.ndarray]:
     """The truth's modes below ``max_mode_hz`` at the impact points, and the accelerometer's
     own shape row (1, m) at its true position (which may be off its labelled point)."""
-    model = bat.truth_model()
+    model = bat.truth_model(plane)
     modes = model_modes(model, n_modes=min(model.n_dof, 60))
     keep = modes.freq_hz <= max_mode_hz
     shapes = modes.shapes[:, keep]
     f_modes = modes.freq_hz[keep]
     points = np.asarray(bat.points_m, dtype=float)
-    sensor_x = points[bat.sensor_point()] + bat.sensor_offset_m
+    sensor_x = bat.sensor_x_m()
     modal = ModalModel(f_modes, damping_ratios(f_modes, bat.zeta1, bat.zeta_exponent),
                        displacement_at(model, shapes, points), points)
     return modal, displacement_at(model, shapes, [sensor_x])
@@ -120,12 +168,18 @@ def simulate_test(
     bat: VirtualBat, freq_hz: np.ndarray = DEFAULT_FREQ_HZ, seed: int | None = None,
     max_mode_hz: float = 12000.0,
 ) -> FrfTest:
-    """Simulate the roving-hammer, fixed-accelerometer test of ``bat``: one FRF per point."""
-    modal, sensor_shape = modal_model(bat, max_mode_hz)
-    points = modal.x_m
+    """Simulate the roving-hammer, fixed-accelerometer test of ``bat``: one FRF per point
+    (both bending planes weighted by ``bat.planes()``, then the noise)."""
     s = bat.sensor_point()
-    h = simulate_frf(modal, freq_hz, np.array([s]), np.arange(points.size), bat.rel_noise,
-                     bat.floor_noise, seed, resp_shapes=sensor_shape)
+    points = np.asarray(bat.points_m, dtype=float)
+    h = 0.0
+    for plane, weight in bat.planes():
+        if weight == 0.0:
+            continue
+        modal, sensor_shape = modal_model(bat, max_mode_hz, plane)
+        h = h + weight * simulate_frf(modal, freq_hz, np.array([s]), np.arange(points.size),
+                                      0.0, 0.0, resp_shapes=sensor_shape)
+    h = add_noise(h, bat.rel_noise, bat.floor_noise, seed)
     nodes = np.arange(1, points.size + 1)
     return FrfTest(
         freq_hz=np.asarray(freq_hz, dtype=float), frf=h, response_nodes=nodes[[s]],
@@ -163,7 +217,7 @@ def simulate_modes(
     points = np.asarray(bat.points_m, dtype=float)
     shapes = displacement_at(model, modes.shapes[:, elastic], points)
     s = bat.sensor_point()
-    at_sensor = displacement_at(model, modes.shapes[:, elastic], [points[s] + bat.sensor_offset_m])
+    at_sensor = displacement_at(model, modes.shapes[:, elastic], [bat.sensor_x_m()])
     shapes = shapes * driving_point_scale(at_sensor[0], shapes[s])
     rng = np.random.default_rng(seed)
     f = modes.freq_hz[elastic] * (1 + freq_noise * rng.standard_normal(elastic.size))

@@ -1,0 +1,60 @@
+"""The verdict on nuisance-rich virtual bats, files to verdict (``batlab.pipeline``):
+each nuisance hidden alone and all together in unaltered bats -> "not_altered"; each kind of
+alteration hidden among all the nuisances -> "altered" with its region; the data-integrity
+slips -> "inconclusive", never "altered". CI-sized (one bat per case; the fleet-sized
+numbers are in docs/inspection.md, from benchmarks/bench_inspect_field.py)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from batlab import pipeline
+from updating.simulate import nuisances as nz
+from updating.simulate.alterations import KINDS
+from updating.simulate.field_fleet import draw_case, write_case
+
+SEED = 7000
+
+
+def inspect_case(tmp_path, seed: int, kind: str = "none", nuisances=nz.NUISANCES,
+                 integrity: str | None = None, retest_meta: bool = True):
+    case = draw_case(np.random.default_rng(seed), kind, nuisances, integrity,
+                     serial=f"T-{seed}")
+    paths = write_case(case, tmp_path, seed, retest_meta_keys=None if retest_meta else [])
+    res = pipeline.inspect_files(paths["profile"], paths["meta"], paths["baseline"],
+                                 paths["retest"], 0.01, retest_meta_path=paths["retest_meta"])
+    return case, res.verdict
+
+
+@pytest.mark.parametrize("k,nuisance", list(enumerate(nz.NUISANCES + nz.OPTIONAL_NUISANCES)))
+def test_each_nuisance_alone_is_not_an_alteration(tmp_path, k, nuisance):
+    """Only that nuisance between the tests (uniform_drift: 1.5-2 points, E -3..-4 %, weight
+    +1.5..2 %); the others at the simple defaults."""
+    _, v = inspect_case(tmp_path, SEED + k, nuisances=(nuisance,))
+    assert v.status.value == "not_altered", v.reasons
+    assert v.region_m is None and not v.alpha.any()
+
+
+@pytest.mark.parametrize("k,with_meta", [(0, True), (1, False)])
+def test_all_nuisances_together_are_not_an_alteration(tmp_path, k, with_meta):
+    _, v = inspect_case(tmp_path, SEED + 100 + k, retest_meta=with_meta)
+    assert v.altered is False, v.reasons
+
+
+@pytest.mark.parametrize("k,kind", list(enumerate(KINDS)))
+def test_each_alteration_among_all_nuisances_is_found(tmp_path, k, kind):
+    """Every nuisance on, and one alteration: altered, the region overlapping the truth's."""
+    case, v = inspect_case(tmp_path, SEED + 200 + k, kind)
+    assert v.status.value == "altered", v.reasons
+    lo, hi = (x * 0.0254 for x in case.truth["region_in"])
+    assert v.region_m[0] < hi and lo < v.region_m[1]
+    assert len(v.reasons) == 2 and "core" in v.reasons[1]
+
+
+@pytest.mark.parametrize("k,slip", list(enumerate(
+    ("receptance_as_accelerance", "g_per_n_as_si", "other_bat", "no_barrel_points"))))
+def test_integrity_slips_are_inconclusive(tmp_path, k, slip):
+    _, v = inspect_case(tmp_path, SEED + 300 + k, integrity=slip)
+    assert v.status.value == "inconclusive" and v.altered is None, v.reasons
+    assert v.reasons and v.region_m is None

@@ -1,0 +1,131 @@
+"""How the wood of one real bat differs from a uniform beam, along its length.
+
+A ``WoodField`` gives factors on Young's modulus (and the shear modulus with it) and on
+density as functions of x from the knob end. The virtual rig multiplies the truth model's
+section properties by them at every quadrature point (``apply_wood_field``): EI and kGA by
+the modulus factor, rhoA and rhoI by the density factor. Factors compose by multiplication
+(``WoodField.times``). Sizes (docs/method.md, "Real bats"):
+
+- moisture: one point of moisture content changes E by about -2 % and weight by about +1 %;
+  end grain exchanges water many times faster than side grain, so within a few inches of
+  each end the change is up to about twice the middle's (``moisture_field``);
+- temperature: E and G fall by 0.1-0.3 % per degree C (``temperature_field``);
+- billet: E and density vary smoothly along the billet by a few percent, the same in every
+  test of that bat (``billet_field``).
+
+The factors act on the whole section, fill included; for a cored bat that misplaces the
+fill's share of a 1-2 % moisture change (a few 0.01 % of the bat's mass), far below noise.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from updating.model.assembly import BatModel, parts_from_samples
+from updating.model.sections import SectionProps
+from updating.model.units import IN_TO_M
+
+MOISTURE_E_PER_POINT = -0.02
+"""Relative change of E per percentage point of moisture content."""
+MOISTURE_MASS_PER_POINT = 0.01
+"""Relative change of density per percentage point of moisture content."""
+
+
+@dataclass(frozen=True)
+class WoodField:
+    """Modulus and density factors sampled along the bat (linear interpolation between).
+
+    Attributes:
+        x_m: (n,) ascending positions from the knob end, m.
+        e_factor: (n,) factor on E and G there.
+        rho_factor: (n,) factor on density there.
+    """
+
+    x_m: np.ndarray
+    e_factor: np.ndarray
+    rho_factor: np.ndarray
+
+    def at(self, x_m) -> tuple[np.ndarray, np.ndarray]:
+        """(modulus factor, density factor) at positions ``x_m``."""
+        x = np.asarray(x_m, dtype=float)
+        return (np.interp(x, self.x_m, self.e_factor), np.interp(x, self.x_m, self.rho_factor))
+
+    def times(self, other: WoodField | None) -> WoodField:
+        """The product of two fields, on the union of their sample positions."""
+        if other is None:
+            return self
+        x = np.union1d(self.x_m, other.x_m)
+        e1, r1 = self.at(x)
+        e2, r2 = other.at(x)
+        return WoodField(x, e1 * e2, r1 * r2)
+
+
+def grid_m(length_m: float, step_in: float = 0.25) -> np.ndarray:
+    """Sample positions every ``step_in`` inches over the bat, both ends included."""
+    n = max(2, int(np.ceil(length_m / (step_in * IN_TO_M))) + 1)
+    return np.linspace(0.0, length_m, n)
+
+
+def uniform_field(length_m: float, e_factor: float = 1.0, rho_factor: float = 1.0) -> WoodField:
+    x = np.array([0.0, length_m])
+    return WoodField(x, np.full(2, e_factor), np.full(2, rho_factor))
+
+
+def moisture_profile_pct(
+    x_m: np.ndarray, length_m: float, middle_pct: float, knob_end_ratio: float = 1.0,
+    barrel_end_ratio: float = 1.0, decay_in: float = 2.0,
+) -> np.ndarray:
+    """Moisture-content change along the bat, percentage points.
+
+        dMC(x) = m [1 + (r_k - 1) exp(-x / l) + (r_b - 1) exp(-(L - x) / l)]
+
+    with m the middle's change, r_k and r_b the end-to-middle ratios at the knob and barrel
+    ends (about 2 for end grain), l the decay length.
+    """
+    x = np.asarray(x_m, dtype=float)
+    lam = decay_in * IN_TO_M
+    return middle_pct * (1 + (knob_end_ratio - 1) * np.exp(-x / lam)
+                         + (barrel_end_ratio - 1) * np.exp(-(length_m - x) / lam))
+
+
+def moisture_field(
+    length_m: float, middle_pct: float, knob_end_ratio: float = 1.0,
+    barrel_end_ratio: float = 1.0, decay_in: float = 2.0,
+) -> WoodField:
+    """Coupled E and density factors of a moisture change (``moisture_profile_pct``):
+    E x (1 - 0.02 dMC), density x (1 + 0.01 dMC)."""
+    x = grid_m(length_m)
+    d = moisture_profile_pct(x, length_m, middle_pct, knob_end_ratio, barrel_end_ratio,
+                             decay_in)
+    return WoodField(x, 1 + MOISTURE_E_PER_POINT * d, 1 + MOISTURE_MASS_PER_POINT * d)
+
+
+def temperature_field(length_m: float, delta_c: float, per_c: float = 0.002) -> WoodField:
+    """E and G x (1 - per_c dT): a test ``delta_c`` degrees warmer than the reference state."""
+    return uniform_field(length_m, 1 - per_c * delta_c, 1.0)
+
+
+def billet_field(
+    length_m: float, e_amplitude: float, rho_amplitude: float, phase: float,
+) -> WoodField:
+    """Smooth billet gradients: E x (1 + a_E g(x)), density x (1 + a_rho g(x)),
+    g(x) = cos(pi x / L + phase), a half-wave across the bat (one end stiffer and denser
+    than the other when the amplitudes share a sign)."""
+    x = grid_m(length_m)
+    g = np.cos(np.pi * x / length_m + phase)
+    return WoodField(x, 1 + e_amplitude * g, 1 + rho_amplitude * g)
+
+
+def apply_wood_field(model: BatModel, field: WoodField | None) -> BatModel:
+    """The model with its section properties multiplied by the field at every quadrature
+    sample (EI, kGA by the modulus factor; rhoA, rhoI by the density factor), rebuilt."""
+    if field is None:
+        return model
+    s = model.samples
+    e, r = field.at(s.x_m)
+    props = SectionProps(s.props.ei * e, s.props.kga * e, s.props.rhoa * r, s.props.rhoi * r)
+    samples = replace(s, props=props)
+    phi, parts = parts_from_samples(model.node_x_m, samples, model.beam, model.rotary_inertia)
+    return replace(model, samples=samples, phi=phi, parts=parts)
