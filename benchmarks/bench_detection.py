@@ -225,8 +225,9 @@ def report(rows: list[dict], balance_limit_in: float) -> str:
     if conf:
         top = max(conf)
         det = np.mean([c > top for c in conf_alt]) if conf_alt else float("nan")
-        lines.append(f"- at zero false alarms on these clean re-tests (confidence > {top:.6f}):"
-                     f" {100 * det:.0f} % of altered re-tests")
+        lines.append(f"- at zero false alarms on these clean re-tests (confidence above the "
+                     f"highest clean one, 1 - {1 - top:.1e}): {100 * det:.0f} % of altered "
+                     "re-tests")
     for name, idx in (("scale", 0), ("balance point", 1)):
         c = [lab_statistics(r["truth"])[idx] for r in clean]
         a = [lab_statistics(r["truth"])[idx] for r in altered]
