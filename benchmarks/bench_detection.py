@@ -171,6 +171,16 @@ def reading_table(altered: list[dict]) -> str:
     return "\n".join(out)
 
 
+def cell_order(name: str) -> tuple:
+    """Sort grid cells by diameter then length ("0.50 x 3 in" before "0.50 x 10 in"),
+    other names after them alphabetically."""
+    try:
+        d, rest = name.split(" x ")
+        return (0, float(d), float(rest.split()[0]), "")
+    except ValueError:
+        return (1, 0.0, 0.0, name)
+
+
 def cell_name(truth: dict) -> str:
     a, b = truth["region_in"]
     return f"{truth['core_diameter_in']:.2f} x {b - a:.0f} in"
@@ -192,7 +202,7 @@ def report(rows: list[dict], balance_limit_in: float) -> str:
              f"/{len(clean)} | | |", ""]
 
     def rate_table(title, keyfn, subset):
-        keys = sorted({keyfn(r) for r in subset}, key=str)
+        keys = sorted({keyfn(r) for r in subset}, key=cell_order)
         out = [f"| {title} | bats | " + " | ".join(METHODS) + " | batlab inconclusive |",
                "|---|---|" + "---|" * (len(METHODS) + 1)]
         found = {}
