@@ -63,7 +63,7 @@ def readable(out: dict) -> str:
         if out.get("fill_density_ratio") is not None:
             lines.append(f"  fill density / wood density {out['fill_density_ratio']:.2f}")
     els = out.get("elements") or []
-    if els:
+    if any(e["alpha"] or e["beta"] for e in els):
         big = max(els, key=lambda e: abs(e["alpha"]) + abs(e["beta"]))
         lines.append(f"  {len(els)} elements; largest change at {big['x0_in']:.1f}-"
                      f"{big['x1_in']:.1f} in: alpha {big['alpha']:+.4f}, beta {big['beta']:+.4f}")

@@ -35,7 +35,7 @@ def test_barrel_covered_and_sensor_off_the_end_face(seed, n):
     assert pts.size == n and np.all(np.diff(pts) > 0.4)
     assert 1.0 <= L - drive <= 2.0 and drive == pts[-1]  # sensor 1-2 in from the end
     assert pts[0] >= 1.0 and pts[-1] <= L - 1.0  # no end face tapped
-    zone = pts[pts >= L - BARREL_ZONE_IN]
+    zone = pts[pts >= L - BARREL_ZONE_IN - 0.01]  # points are rounded to 0.01 in
     gaps = np.diff(zone)
     assert zone[0] - (L - BARREL_ZONE_IN) <= 1.5  # a core's start can fall anywhere there
     assert gaps.max() <= (2.0 if n >= 11 else 3.0) + 1e-6
