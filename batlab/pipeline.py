@@ -225,6 +225,20 @@ def calibrate(profile: Profile, meta: BatMeta, baseline: FittedTest):
     return diagnose(profile, meta, baseline.modes, suspension_hz=susp)
 
 
+def fit_frf_file(frf_path, method: str, progress: Progress = _quiet):
+    """(ModalFit, MeasuredModes) of a test file by ``ema.fit.fit_test`` with ``method``; a
+    test with no elastic mode is an error naming the file."""
+    from ema.fit import fit_test
+
+    test = read_frf(frf_path)
+    progress(f"fitting the modes of {frf_path} ...")
+    fit = fit_test(test, method=method)
+    measured = from_fit(fit, sensor_x_m(test))
+    if measured.freq_hz.size == 0:
+        raise ValueError(f"{frf_path}: the fitter found no elastic mode above 20 Hz")
+    return fit, measured
+
+
 def diagnose_files(
     profile_path, meta_path, frf_path, method: str = "lscf", min_gain_pct: float | None = None,
     progress: Progress = _quiet, solid: bool = False,
@@ -233,16 +247,10 @@ def diagnose_files(
     (``updating.diagnose.run.diagnose``), its modes fitted by ``ema.fit.fit_test`` with
     ``method``; with ``solid``, a second pass tries the 3D solid's per-mode corrections
     (``updating.diagnose.solid.diagnose_with_solid``, about a minute)."""
-    from ema.fit import fit_test
     from updating.diagnose.run import MIN_GAIN_PCT, diagnose
 
     profile, meta = read_bat_files(profile_path, meta_path)
-    test = read_frf(frf_path)
-    progress(f"fitting the modes of {frf_path} ...")
-    fit = fit_test(test, method=method)
-    measured = from_fit(fit, sensor_x_m(test))
-    if measured.freq_hz.size == 0:
-        raise ValueError(f"{frf_path}: the fitter found no elastic mode above 20 Hz")
+    fit, measured = fit_frf_file(frf_path, method, progress)
     progress(f"{measured.freq_hz.size} elastic modes; ranking the causes ...")
     susp = getattr(fit, "suspension_freq_hz", None)
     gain = MIN_GAIN_PCT if min_gain_pct is None else min_gain_pct
@@ -265,17 +273,11 @@ def check_rig_files(
     """`batlab check-rig`: a reference bar's test against the bar's model
     (``updating.diagnose.rig_check.check_rig``); tolerances as fractions, None for the
     defaults."""
-    from ema.fit import fit_test
     from updating.diagnose.rig_check import FREQ_TOL, MAX_DAMPING, SCALE_TOL, check_rig
     from updating.model.bar import read_bar_json
 
     bar = read_bar_json(bar_path)
-    test = read_frf(frf_path)
-    progress(f"fitting the modes of {frf_path} ...")
-    fit = fit_test(test, method=method)
-    measured = from_fit(fit, sensor_x_m(test))
-    if measured.freq_hz.size == 0:
-        raise ValueError(f"{frf_path}: the fitter found no elastic mode above 20 Hz")
+    fit, measured = fit_frf_file(frf_path, method, progress)
     ml = getattr(fit, "mass_line", None)
     ml_dp = None
     if ml is not None and np.size(ml) and fit.driving_frf is not None:

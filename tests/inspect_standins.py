@@ -9,6 +9,8 @@ real stage once it exists.
 
 from __future__ import annotations
 
+import shutil
+from pathlib import Path
 from types import SimpleNamespace
 
 import numpy as np
@@ -78,3 +80,25 @@ def use_standins(monkeypatch, fit: bool = True, calibrate: bool = True,
         monkeypatch.setattr(pipeline, "calibrate", fake_calibrate)
     if inspect:
         monkeypatch.setattr(pipeline, "inspect_modes", fake_inspect)
+
+
+SAMPLE = Path("data_samples/smooth_bat")
+
+
+def stand_in_lab(tmp_path: Path, monkeypatch) -> Path:
+    """A lab folder with the sample bat's files and a fresh registry ($BATLAB_DB), stand-in
+    numerics."""
+    use_standins(monkeypatch)
+    for name in ("profile.csv", "meta.json", "baseline.uff", "retest_corked.uff"):
+        shutil.copyfile(SAMPLE / name, tmp_path / name)
+    monkeypatch.setenv("BATLAB_DB", str(tmp_path / "reg.sqlite"))
+    return tmp_path
+
+
+def run_cli(args, capsys) -> tuple[int, str, str]:
+    """(exit code, stdout, stderr) of ``batlab`` with ``args``."""
+    from batlab.cli import main
+
+    code = main([str(a) for a in args])
+    out = capsys.readouterr()
+    return code, out.out, out.err

@@ -14,32 +14,19 @@ import numpy as np
 import pytest
 
 from batlab import pipeline
-from batlab.cli import main
 from ema.io.frf_data import FrfTest
 from ema.io.frf_io import read_test, write_test
-from tests.inspect_standins import use_standins
+from tests.inspect_standins import SAMPLE, run_cli, stand_in_lab
 from updating.inspect.verdict import Verdict
 from updating.model.units import IN_TO_M
 
-SAMPLE = Path("data_samples/smooth_bat")
 CONTRACT_KEYS = {"serial", "status", "altered", "reasons", "region_in", "core_diameter_in",
                  "fill_density_ratio", "elements"}
 
 
 @pytest.fixture
 def lab(tmp_path, monkeypatch):
-    """A lab folder with the sample bat and a fresh registry; stand-in numerics."""
-    use_standins(monkeypatch)
-    for name in ("profile.csv", "meta.json", "baseline.uff", "retest_corked.uff"):
-        shutil.copyfile(SAMPLE / name, tmp_path / name)
-    monkeypatch.setenv("BATLAB_DB", str(tmp_path / "reg.sqlite"))
-    return tmp_path
-
-
-def run_cli(args, capsys):
-    code = main([str(a) for a in args])
-    out = capsys.readouterr()
-    return code, out.out, out.err
+    return stand_in_lab(tmp_path, monkeypatch)
 
 
 def stateless(lab, retest="retest_corked.uff", extra=()):

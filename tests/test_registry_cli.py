@@ -9,31 +9,18 @@ import os
 import re
 import shutil
 import sqlite3
-from pathlib import Path
 
 import pandas as pd
 import pytest
 
-from batlab.cli import main
-from tests.inspect_standins import use_standins
+from tests.inspect_standins import SAMPLE, run_cli, stand_in_lab
 
-SAMPLE = Path("data_samples/smooth_bat")
 DATE_LINE = re.compile(r"<tr><td>Report generated \(UTC\)</td><td>[^<]*</td></tr>")
 
 
 @pytest.fixture
 def lab(tmp_path, monkeypatch):
-    use_standins(monkeypatch)
-    for name in ("profile.csv", "meta.json", "baseline.uff", "retest_corked.uff"):
-        shutil.copyfile(SAMPLE / name, tmp_path / name)
-    monkeypatch.setenv("BATLAB_DB", str(tmp_path / "reg.sqlite"))
-    return tmp_path
-
-
-def run_cli(args, capsys):
-    code = main([str(a) for a in args])
-    out = capsys.readouterr()
-    return code, out.out, out.err
+    return stand_in_lab(tmp_path, monkeypatch)
 
 
 def register(lab, capsys, extra=()):
