@@ -27,6 +27,8 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 import numpy as np  # noqa: E402
 
 from batlab import pipeline  # noqa: E402
+from updating.inspect.run import F_FLOOR, MIN_CORE_DIAMETER_IN  # noqa: E402
+from updating.model.units import IN_TO_M  # noqa: E402
 from updating.simulate.alterations import KINDS  # noqa: E402
 from updating.simulate.field_fleet import draw_case, write_case  # noqa: E402
 from updating.simulate.integrity import INTEGRITY  # noqa: E402
@@ -69,6 +71,30 @@ def one(seed: int, kind: str, integrity: str | None, with_meta: bool) -> dict:
     return row
 
 
+def d_low_in(row: dict) -> float | None:
+    """The H1 candidate core's diameter less two standard uncertainties, in (the "practical
+    core" test of the decision), or None when no candidate was fitted."""
+    c = row.get("candidate") or {}
+    sd = (c.get("uncertainty") or {}).get("core_diameter_m")
+    if c.get("diameter_m") is None or sd is None:
+        return None
+    return (c["diameter_m"] - 2 * sd) / IN_TO_M
+
+
+def clean_margin(clean: list[dict]) -> str:
+    """How close the clean bats came to "altered": the largest F among those whose candidate
+    core was practical, and the largest lower diameter bound among those whose F passed the
+    floor (each gate alone would have let that bat through)."""
+    prac = [r["F"] for r in clean if (d_low_in(r) or 0.0) >= MIN_CORE_DIAMETER_IN
+            and r.get("F") is not None]
+    over = [d_low_in(r) or 0.0 for r in clean if (r.get("F") or 0.0) >= F_FLOOR]
+    f_txt = f"{max(prac):.1f}" if prac else "none"
+    d_txt = f"{max(over):.2f} in" if over else "none"
+    return (f"  margin: largest F with a practical candidate core {f_txt} (floor {F_FLOOR:g}); "
+            f"largest diameter - 2 sd with F over the floor {d_txt} "
+            f"(floor {MIN_CORE_DIAMETER_IN} in)")
+
+
 def summarise(rows: list[dict]) -> str:
     lines = []
     skipped = [r for r in rows if r["status"] == "sim_error"]
@@ -83,6 +109,7 @@ def summarise(rows: list[dict]) -> str:
         fa = sum(r["status"] == "altered" for r in clean)
         inc = sum(r["status"] in ("inconclusive", "refused") for r in clean)
         lines.append(f"clean {n}: false alarms {fa}, inconclusive {inc} ({100 * inc / n:.0f} %)")
+        lines.append(clean_margin(clean))
     if alt:
         n = len(alt)
         det = [r for r in alt if r["status"] == "altered"]
