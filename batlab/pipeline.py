@@ -366,9 +366,11 @@ def jsonable(value):
 def verdict_record(serial: str, verdict: Verdict) -> dict:
     """What the registry keeps of an inspection: the contract dict and the verdict's details."""
     out = contract_dict(serial, verdict)
+    details = {} if verdict.details is None else verdict.details.to_json_dict()
     out.update(jsonable({"statistic": verdict.statistic, "moisture": verdict.moisture,
-                         "uncertainty": verdict.uncertainty, "modes": verdict.modes,
-                         "details": verdict.details}))
+                         "uncertainty": verdict.uncertainty,
+                         "modes": [m.to_json_dict() for m in verdict.modes],
+                         "details": details}))
     return out
 
 

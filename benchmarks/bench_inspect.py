@@ -52,13 +52,14 @@ def localisation(case, v) -> dict:
     """Localisation of the core by the MSSO map and by the fitted core's element ratios."""
     model = case.reference.build(case.profile, v.element_x0_m[1:])
     t = core_element_factors(model, case.core)
-    m = v.details["msso"]
-    out = {"map_time_s": m.get("time_s", np.nan), "map_z": m.get("peak_z", np.nan),
-           "map_region": m.get("region_m") is not None}
-    if case.core is None or "error" in m:
+    m = v.details.msso.result
+    out = {"map_time_s": np.nan if m is None else m.time_s,
+           "map_z": np.nan if m is None else m.peak_z,
+           "map_region": m is not None and m.region_m is not None}
+    if case.core is None or m is None:
         return out
-    a, b = np.asarray(m["alpha"]), np.asarray(m["beta"])
-    out["map"] = _loc(v.element_x0_m, v.element_x1_m, a, b, t.alpha, t.beta, m["region_m"])
+    out["map"] = _loc(v.element_x0_m, v.element_x1_m, m.alpha, m.beta, t.alpha, t.beta,
+                      m.region_m)
     out["fit"] = _loc(v.element_x0_m, v.element_x1_m, v.alpha, v.beta, t.alpha, t.beta,
                       v.region_m)
     return out

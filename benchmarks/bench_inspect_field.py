@@ -56,10 +56,12 @@ def one(seed: int, kind: str, integrity: str | None, with_meta: bool) -> dict:
             return row
         row["time_s"] = time.perf_counter() - t0
     out = pipeline.contract_dict(case.meta["serial"], res.verdict)
-    d = res.verdict.details
+    fit = res.verdict.details.fit
     row.update(status=out["status"], reasons=out["reasons"], F=res.verdict.statistic,
-               p=d.get("p_value"), weight_change_rel=d.get("weight_change_rel"),
-               null_fit=d.get("null_fit"), candidate=d.get("candidate_core"))
+               p=None if fit is None else fit.p_value,
+               weight_change_rel=None if fit is None else fit.weight_change_rel,
+               null_fit=None if fit is None else fit.null_fit,
+               candidate=None if fit is None else fit.candidate_core.to_json_dict())
     t = case.truth
     if kind != "none" and out["status"] == "altered":
         row["start_err_in"] = out["region_in"][0] - t["region_in"][0]

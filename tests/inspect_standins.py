@@ -16,6 +16,7 @@ from types import SimpleNamespace
 import numpy as np
 from scipy.signal import find_peaks
 
+from updating.inspect.details import InspectionDetails, ModePair
 from updating.inspect.verdict import Verdict
 from updating.model.reference import BatReference
 from updating.model.units import IN_TO_M
@@ -65,9 +66,9 @@ def fake_inspect(profile, reference, baseline, retest, false_alarm, conditions=N
         fill_density_ratio=0.3, uncertainty={"core_diameter_m": 1e-3},
         element_x0_m=x0, element_x1_m=x1, alpha=alpha, beta=beta,
         moisture={"stiffness_scale": float(np.median(ratio) ** 2), "density_scale": 1.0},
-        modes=[{"baseline_hz": float(a), "retest_hz": float(b)}
-               for a, b in zip(baseline.freq_hz[:n], retest.freq_hz[:n], strict=True)],
-        details={"n_modes": n})
+        modes=tuple(ModePair(float(a), float(b))
+                    for a, b in zip(baseline.freq_hz[:n], retest.freq_hz[:n], strict=True)),
+        details=InspectionDetails(n))
 
 
 def use_standins(monkeypatch, fit: bool = True, calibrate: bool = True,

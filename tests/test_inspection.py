@@ -100,7 +100,7 @@ def test_noise_free_moisture_and_sensor_shift_recovered(seed):
     assert v.moisture["stiffness_scale"] == pytest.approx(stiff, abs=3e-4)
     assert v.moisture["density_scale"] == pytest.approx(dens, abs=3e-4)
     shift = case.retest.sensor_offset_m - case.baseline.sensor_offset_m
-    assert v.details["sensor_shift_m"] == pytest.approx(shift, abs=0.01 * IN_TO_M)
+    assert v.details.fit.sensor_shift_m == pytest.approx(shift, abs=0.01 * IN_TO_M)
 
 
 @pytest.mark.parametrize("seed,kind", [(11, "none"), (12, "cork"), (13, "heavy"),
@@ -117,7 +117,7 @@ def test_hidden_core_found_and_read(seed, kind):
     assert v.altered is (kind != "none"), v.reasons
     assert v.status.value == ("altered" if kind != "none" else "not_altered")
     assert v.reasons and all("\n" not in r for r in v.reasons)
-    assert v.confidence == pytest.approx(1 - v.details["p_value"])
+    assert v.confidence == pytest.approx(1 - v.details.p_value)
     assert np.allclose(v.element_x0_m[1:], v.element_x1_m[:-1])
     assert v.element_x1_m[-1] == pytest.approx(case.profile.length_m)
     if kind == "none":

@@ -29,8 +29,9 @@ def _true_factors(case, v):
 @pytest.mark.parametrize("seed,kind", [(12, "cork"), (13, "heavy"), (16, "cork")])
 def test_map_peaks_in_the_cored_region(seed, kind):
     case, v = _inspect(seed, kind)
-    m = v.details["msso"]
-    alpha, beta = np.asarray(m["alpha"]), np.asarray(m["beta"])
+    em = v.details.msso
+    m = em.result
+    alpha, beta = m.alpha, m.beta
     assert alpha.shape == beta.shape == v.alpha.shape
     t = _true_factors(case, v)
     cored = t.alpha != 0
@@ -41,19 +42,20 @@ def test_map_peaks_in_the_cored_region(seed, kind):
     assert np.sum(beta[cored] ** 2) > 0.6 * np.sum(beta**2)
     # the map's significant region overlaps the true one and agrees with the physical fit
     L = case.profile.length_m
-    lo, hi = m["region_m"]
+    lo, hi = m.region_m
     assert lo < L - case.core.plug_m and hi > L - case.core.depth_m
-    assert m["peak_z"] > 5 and m["agrees_with_fit"]
+    assert m.peak_z > 5 and em.agrees_with_fit
     # the contract's elements stay the fitted core's section ratios
-    assert v.altered and "core fit" in v.details["element_source"]
+    assert v.altered and "core fit" in v.details.fit.element_source
 
 
 @pytest.mark.parametrize("seed", [11, 15])
 def test_unaltered_map_within_noise(seed):
     case, v = _inspect(seed, "none")
-    m = v.details["msso"]
-    alpha, beta = np.asarray(m["alpha"]), np.asarray(m["beta"])
-    assert not v.altered and m["region_m"] is None and m["agrees_with_fit"]
-    assert m["peak_z"] < 3
-    assert np.all(np.abs(alpha) < 3 * np.asarray(m["alpha_std"]))
-    assert np.all(np.abs(beta) < 3 * np.asarray(m["beta_std"]))
+    em = v.details.msso
+    m = em.result
+    alpha, beta = m.alpha, m.beta
+    assert not v.altered and m.region_m is None and em.agrees_with_fit
+    assert m.peak_z < 3
+    assert np.all(np.abs(alpha) < 3 * m.alpha_std)
+    assert np.all(np.abs(beta) < 3 * m.beta_std)

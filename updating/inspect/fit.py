@@ -39,6 +39,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from updating.inspect.details import PositionScan
 from updating.inspect.model import ChangeParams
 from updating.lsq import covariance as lsq_covariance
 from updating.lsq import solve_bounded
@@ -377,12 +378,13 @@ def position_scan(
 def fit_core(
     predict, diff: Differences, space: ParamSpace, sigma_rel: float, null: ChangeFit,
     n_starts: int = 2, x0: np.ndarray | None = None,
-) -> tuple[ChangeFit, dict]:
-    """The null model and a core; multi-start from the position scan (or from x0)."""
+) -> tuple[ChangeFit, PositionScan]:
+    """The null model and a core; multi-start from the position scan (or from x0, with an
+    empty scan)."""
     fun = residual_function(predict, diff, space, sigma_rel)
     lo, hi = space.lower(), space.upper()
     if x0 is not None:
-        return fit_bounded(fun, x0, lo, hi, space, diff, MAX_NFEV_CORE), {}
+        return fit_bounded(fun, x0, lo, hi, space, diff, MAX_NFEV_CORE), PositionScan()
     norms, seeds = position_scan(predict, diff, space, sigma_rel, null)
     starts: list[np.ndarray] = []
     for i in np.argsort(norms):
@@ -395,11 +397,10 @@ def fit_core(
             break
     fits = [fit_bounded(fun, s, lo, hi, space, diff, MAX_NFEV_START) for s in starts]
     best = min(fits, key=lambda f: f.rss)
-    info = {"scan_norm": [float(n) for n in norms],
-            "starts_plug_length_in": [[float(s[N_NULL]), float(s[N_NULL + 1])]
-                                      for s in starts],
-            "start_rss": [f.rss for f in fits]}
-    return best, info
+    scan = PositionScan(tuple(float(n) for n in norms),
+                        tuple((float(s[N_NULL]), float(s[N_NULL + 1])) for s in starts),
+                        tuple(float(f.rss) for f in fits))
+    return best, scan
 
 
 SHAPE_NOISE_FLOOR = 1e-3

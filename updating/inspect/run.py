@@ -22,7 +22,7 @@
 5. Reading: the H1 core (region, diameter, fill ratio) with standard uncertainties from the
    Jacobian, and the element factors it implies.
 6. The MSSO element map (``msso_map``), independent of the core fit: the re-test against the
-   baseline-updated reference with the accepted drift removed (``details["msso"]``).
+   baseline-updated reference with the accepted drift removed (``details.msso``).
 """
 
 from __future__ import annotations
@@ -41,6 +41,14 @@ from updating.inspect.checks import (
     coverage_reason,
     identity_reason,
     pairing_reason,
+)
+from updating.inspect.details import (
+    CoreCandidate,
+    ElementMap,
+    FitEvidence,
+    InspectionDetails,
+    ModePair,
+    PositionScan,
 )
 from updating.inspect.fit import (
     FREQ_MODEL_ERROR_REL,
@@ -169,9 +177,9 @@ def differences(predict: ChangePredictor, baseline: MeasuredModes, retest: Measu
 
 
 def _element_map(profile, reference, baseline, retest, pairs: RetestPairs, drift, offset,
-                 sigma, sigma_lnf) -> dict:
-    """The MSSO map of the paired modes as a dict for ``details["msso"]`` ({"error": ...}
-    when the modes cannot be updated element by element)."""
+                 sigma, sigma_lnf) -> ElementMap:
+    """The MSSO map of the paired modes (its ``error`` when the modes cannot be updated
+    element by element)."""
     try:
         mp = msso_map(profile, reference, baseline.select(pairs.baseline_index),
                       retest.select(pairs.retest_index),
@@ -181,8 +189,8 @@ def _element_map(profile, reference, baseline, retest, pairs: RetestPairs, drift
                       freq_sigma=float(np.median(sigma_lnf)) / np.sqrt(2),
                       mass_normalised=MAP_MASS_NORMALISED)
     except ValueError as exc:
-        return {"error": str(exc)}
-    return mp.to_dict()
+        return ElementMap(error=str(exc))
+    return ElementMap(mp)
 
 
 def _agree(map_region, fit_region) -> bool:
@@ -199,7 +207,7 @@ class Hypotheses:
     null: ChangeFit
     full: ChangeFit
     sigma_rel: float
-    scan: dict
+    scan: PositionScan
 
 
 def fit_hypotheses(predict: ChangePredictor, diff: Differences, space: ParamSpace,
@@ -249,11 +257,11 @@ def _bounds_matter(predict, diff, space, hyp: Hypotheses, n: int,
 
 
 def _nan_verdict(predict: ChangePredictor, false_alarm: float, reasons: list[str],
-                 details: dict) -> Verdict:
+                 details: InspectionDetails) -> Verdict:
     """An inconclusive verdict (no test made)."""
     factors = core_element_factors(predict.system().model, None)
     return Verdict(None, float("nan"), false_alarm, float("nan"), None, None, None, {},
-                   factors.x0_m, factors.x1_m, factors.alpha, factors.beta, {}, [],
+                   factors.x0_m, factors.x1_m, factors.alpha, factors.beta, {}, (),
                    details, tuple(reasons))
 
 
@@ -307,7 +315,7 @@ def inspect_retest(
             identity_reason(np.log(retest.freq_hz[ir] / baseline.freq_hz[ib]), dlnw)) if r]
     if reasons:
         return _nan_verdict(predict, false_alarm, reasons,
-                            {"n_modes": pairs.n, "time_s": time.perf_counter() - t0})
+                            InspectionDetails(pairs.n, time.perf_counter() - t0))
 
     # 2. H0 and H1
     diff = differences(predict, baseline, retest, pairs, dlnw)
@@ -412,45 +420,38 @@ def inspect_retest(
         j = diff.model_index[k]
         fb = baseline.freq_hz[pairs.baseline_index[k]]
         fr = retest.freq_hz[pairs.retest_index[k]]
-        modes.append({"baseline_hz": float(fb), "retest_hz": float(fr),
-                      "mac": float(pairs.mac[k]), "reference_hz": float(diff.f0[k]),
-                      "mac_reference": float(pairs.mac_model[k]),
-                      "change_pct": 100 * (fr / fb - 1),
-                      "moisture_fit_change_pct": 100 * (f_null[j] / diff.f0[k] - 1),
-                      "core_fit_change_pct": 100 * (f_fit[j] / diff.f0[k] - 1)})
+        modes.append(ModePair(
+            float(fb), float(fr), mac=float(pairs.mac[k]), reference_hz=float(diff.f0[k]),
+            mac_reference=float(pairs.mac_model[k]), change_pct=float(100 * (fr / fb - 1)),
+            moisture_fit_change_pct=float(100 * (f_null[j] / diff.f0[k] - 1)),
+            core_fit_change_pct=float(100 * (f_fit[j] / diff.f0[k] - 1))))
 
     # 6. the MSSO map, with the accepted model's drift (when there is a core, the null fit's
     # uniform scales absorb part of it and the map would show that as a change of the bat)
     msso = _element_map(profile, reference, baseline, retest, pairs, ps, offset, sigma,
                         diff.sigma_lnf)
-    if "error" not in msso:
-        msso["agrees_with_fit"] = _agree(msso["region_m"], region)
+    if msso.result is not None:
+        msso = replace(msso, agrees_with_fit=_agree(msso.region_m, region))
 
-    details = {
-        "statistic": "F (drift+core vs drift-only, nested least squares)",
-        "dof": [q, dof], "p_value": p_value, "rss_null": rss0, "rss_core": rss1,
-        "n_modes": pairs.n, "n_data": n,
-        "shape_noise_rel": sigma,
-        "freq_noise_rel": diff.sigma_lnf.tolist(),
-        "null_fit": dict(zip(NULL_NAMES, map(float, null.x), strict=True)),
-        "null_at_bound": held0, "core_fit_at_bound": held1,
-        "weight_change_rel": None if dlnw is None else float(np.expm1(dlnw)),
-        "element_source": ("physical core fit (element-averaged section ratios)" if altered
-                           else "drift-only model (no local change)"),
-        "element_beta_shear": factors.beta_shear.tolist(),
-        "candidate_core": {"region_m": [float(v) for v in c.interval_m(profile.length_m)],
-                           "diameter_m": c.diameter_m,
-                           "fill_density_ratio": c.fill_density_ratio,
-                           "uncertainty": candidate["sd"]},
-        "core_fit_moisture": {"stiffness_scale": float(full.params.stiffness_scale),
-                              "density_scale": float(full.params.density_scale)},
-        "sensor_shift_m": float(ps.sensor_shift_m - space.sensor_mount_m),
-        "baseline_sensor_offset_m": offset,
-        "position_scan": hyp.scan,
-        "msso": msso,
-        "plug_m": c.plug_m, "fill_modulus_ratio": fill_modulus_ratio,
-        "time_s": time.perf_counter() - t0,
-    }
+    region_c = c.interval_m(profile.length_m)
+    evidence = FitEvidence(
+        statistic="F (drift+core vs drift-only, nested least squares)",
+        dof=(q, dof), p_value=p_value, rss_null=rss0, rss_core=rss1, n_data=n,
+        shape_noise_rel=sigma, freq_noise_rel=tuple(diff.sigma_lnf.tolist()),
+        null_fit=dict(zip(NULL_NAMES, map(float, null.x), strict=True)),
+        null_at_bound=tuple(held0), core_fit_at_bound=tuple(held1),
+        weight_change_rel=None if dlnw is None else float(np.expm1(dlnw)),
+        element_source=("physical core fit (element-averaged section ratios)" if altered
+                        else "drift-only model (no local change)"),
+        element_beta_shear=tuple(factors.beta_shear.tolist()),
+        candidate_core=CoreCandidate((float(region_c[0]), float(region_c[1])), c.diameter_m,
+                                     c.fill_density_ratio, candidate["sd"]),
+        core_fit_moisture={"stiffness_scale": float(full.params.stiffness_scale),
+                           "density_scale": float(full.params.density_scale)},
+        sensor_shift_m=float(ps.sensor_shift_m - space.sensor_mount_m),
+        baseline_sensor_offset_m=offset, position_scan=hyp.scan, msso=msso,
+        plug_m=c.plug_m, fill_modulus_ratio=fill_modulus_ratio)
+    details = InspectionDetails(pairs.n, time.perf_counter() - t0, evidence)
     return Verdict(
         altered=altered, confidence=1.0 - p_value, false_alarm_rate=false_alarm,
         statistic=float(F), region_m=None if region is None else (float(region[0]),
@@ -462,5 +463,5 @@ def inspect_retest(
         alpha=factors.alpha, beta=factors.beta,
         moisture={"stiffness_scale": float(ps.stiffness_scale),
                   "density_scale": float(ps.density_scale)},
-        modes=modes, details=details, reasons=tuple(reasons),
+        modes=tuple(modes), details=details, reasons=tuple(reasons),
     )

@@ -2,10 +2,12 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from enum import Enum
 
 import numpy as np
+
+from updating.inspect.details import InspectionDetails, ModePair
 
 
 class Status(str, Enum):
@@ -33,8 +35,9 @@ class Verdict:
         element_x0_m, element_x1_m: (e,) element ends; alpha, beta: (e,) element mass and
             stiffness factors (translational mass, bending stiffness).
         moisture: {"stiffness_scale": ..., "density_scale": ...} uniform drift fitted.
-        modes: paired modes, list of dicts {baseline_hz, retest_hz, mac, ...}.
-        details: anything else worth reporting (fit residuals, ranks, timings).
+        modes: the paired modes (``ModePair``: baseline_hz, retest_hz, mac, ...).
+        details: everything else worth reporting (``InspectionDetails``: the test, the fits'
+            residuals, the position scan, the MSSO map, timings), None when not recorded.
         reasons: one line each: why altered, why not, or why no verdict is possible.
     """
 
@@ -51,8 +54,8 @@ class Verdict:
     alpha: np.ndarray
     beta: np.ndarray
     moisture: dict
-    modes: list = field(default_factory=list)
-    details: dict = field(default_factory=dict)
+    modes: tuple[ModePair, ...] = ()
+    details: InspectionDetails | None = None
     reasons: tuple[str, ...] = ()
 
     @property
@@ -60,3 +63,4 @@ class Verdict:
         if self.altered is None:
             return Status.INCONCLUSIVE
         return Status.ALTERED if self.altered else Status.NOT_ALTERED
+

@@ -10,6 +10,7 @@ piece of the profile that the element overlaps (steps included exactly).
 from __future__ import annotations
 
 from dataclasses import dataclass, field, replace
+from typing import Literal
 
 import numpy as np
 
@@ -18,6 +19,9 @@ from updating.model.material import Material
 from updating.model.profile import Profile
 from updating.model.sections import Core, SectionProps, section_props
 from updating.model.units import IN_TO_M
+
+Beam = Literal["euler", "timoshenko"]
+"""Beam theory of the elements: Euler-Bernoulli, or Timoshenko (shear deformation)."""
 
 GAUSS_POINTS = 6  # exact for the degree-10 integrands of a linearly tapered section
 
@@ -50,7 +54,7 @@ class BatModel:
     """
 
     node_x_m: np.ndarray
-    beam: str
+    beam: Beam
     rotary_inertia: bool
     samples: Samples
     phi: np.ndarray
@@ -153,7 +157,7 @@ def sample_sections(
 
 
 def parts_from_samples(
-    node_x_m: np.ndarray, samples: Samples, beam: str, rotary_inertia: bool,
+    node_x_m: np.ndarray, samples: Samples, beam: Beam, rotary_inertia: bool,
 ) -> tuple[np.ndarray, ElementParts]:
     """Shear parameter per element and the integrated element parts."""
     if beam not in ("euler", "timoshenko"):
@@ -174,7 +178,7 @@ def parts_from_samples(
 
 
 def build_model(
-    profile: Profile, material: Material, *, beam: str = "euler",
+    profile: Profile, material: Material, *, beam: Beam = "euler",
     rotary_inertia: bool | None = None, n_elements: int | None = None,
     element_length_m: float | None = None, stations_m=(), core: Core | None = None,
     attachments: tuple[Attachment, ...] = (),

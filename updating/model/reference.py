@@ -10,7 +10,7 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
-from updating.model.assembly import Attachment, BatModel, build_model
+from updating.model.assembly import Attachment, BatModel, Beam, build_model
 from updating.model.material import Material
 from updating.model.profile import Profile
 from updating.model.sections import Core
@@ -41,7 +41,7 @@ class BatReference:
     rho_kg_m3: float
     e_over_g: float = 2.6
     nu: float = 0.3
-    beam: str = "euler"
+    beam: Beam = "euler"
     rotary_inertia: bool = False
     sensor_mass_kg: float = 0.0
     sensor_x_m: float = 0.0

@@ -17,6 +17,7 @@ from __future__ import annotations
 import json
 from dataclasses import dataclass, replace
 from pathlib import Path
+from typing import Literal
 
 import numpy as np
 
@@ -31,6 +32,8 @@ from updating.model.sections import Core
 from updating.model.units import IN_TO_M, LB_TO_KG
 from updating.simulate.virtual_bat import DEFAULT_FREQ_HZ, VirtualBat, simulate_modes, simulate_test
 
+Kind = Literal["none", "cork", "heavy", "neutral"]
+"""A fleet bat's alteration: none, or a core filled as in ``FILLS``."""
 FILLS = {"cork": (0.2, 0.4), "heavy": (1.5, 2.2), "neutral": (0.9, 1.1)}
 
 
@@ -42,7 +45,7 @@ class Case:
     baseline: VirtualBat
     retest: VirtualBat
     reference: BatReference
-    kind: str  # "none", "cork", "heavy" or "neutral"
+    kind: Kind
 
     @property
     def core(self) -> Core | None:
@@ -69,7 +72,7 @@ def pro_profile(rng: np.random.Generator, caliper_noise_in: float = 0.0) -> Prof
     return make_profile(x * IN_TO_M, d * IN_TO_M, "random bat")
 
 
-def random_retest(rng: np.random.Generator, base: VirtualBat, kind: str) -> VirtualBat:
+def random_retest(rng: np.random.Generator, base: VirtualBat, kind: Kind) -> VirtualBat:
     """The re-test weeks later: a random core of ``kind`` (or none), moisture drift up to
     +-1 point, the accelerometer re-mounted up to 0.1 in from where it was."""
     core = None
@@ -81,7 +84,7 @@ def random_retest(rng: np.random.Generator, base: VirtualBat, kind: str) -> Virt
                    sensor_offset_m=base.sensor_offset_m + rng.uniform(-0.1, 0.1) * IN_TO_M)
 
 
-def random_case(rng: np.random.Generator, kind: str = "none") -> Case:
+def random_case(rng: np.random.Generator, kind: Kind = "none") -> Case:
     """A random bat; ``kind`` "none" (unaltered) or a fill in FILLS."""
     truth_profile = pro_profile(rng)
     profile = Profile(truth_profile.x_m, truth_profile.diameter_m
@@ -147,14 +150,14 @@ class LabCase:
     meta: dict
     baseline: VirtualBat
     retest: VirtualBat
-    kind: str
+    kind: Kind
 
     @property
     def core(self) -> Core | None:
         return self.retest.core
 
 
-def lab_case(rng: np.random.Generator, kind: str = "none", serial: str = "SIM-0001") -> LabCase:
+def lab_case(rng: np.random.Generator, kind: Kind = "none", serial: str = "SIM-0001") -> LabCase:
     """A random bat for the full path (FRF files to verdict), ``kind`` "none" or a fill.
 
     Truth: a random pro profile, a random species with E within +-15 % and density within

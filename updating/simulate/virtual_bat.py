@@ -28,7 +28,7 @@ import numpy as np
 from ema.io.frf_data import FrfTest
 from rigs.modal_model import ModalModel
 from rigs.virtual_test import add_noise, simulate_frf
-from updating.model.assembly import Attachment, build_model, displacement_at
+from updating.model.assembly import Attachment, Beam, build_model, displacement_at
 from updating.model.material import Material
 from updating.model.modes import model_modes
 from updating.model.profile import Profile
@@ -77,7 +77,7 @@ class VirtualBat:
     sensor_offset_m: float = 0.0
     sensor_mass_kg: float = 0.0
     bungee_k_n_per_m: float = 0.0
-    beam: str = "timoshenko"
+    beam: Beam = "timoshenko"
     core: Core | None = None
     moisture_pct: float = 0.0
     zeta1: float = 0.005
