@@ -6,6 +6,7 @@ import json
 import sys
 
 from ema.fit import MIN_SNR
+from updating.model.units import IN_TO_M, KG_M2_TO_LB_IN2, LB_TO_KG
 
 HELP = "fit natural frequencies, damping and mass-normalised mode shapes to a test's FRFs"
 EXAMPLE = "batlab fit baseline.uff --json"
@@ -119,12 +120,17 @@ def _table(fit) -> str:
     if fit.suspension_freq_hz.size:
         lines.append("suspension modes: " + ", ".join(
             f"{f:.2f} Hz" for f in fit.suspension_freq_hz))
+    # lab units first (lb, in, lb in^2), SI in brackets (the file and --json are SI)
     if rb.mass_kg is not None:
-        lines.append(f"rigid body from the scaling: mass {rb.mass_kg:.4f} kg, centre of mass "
-                     f"{rb.x_cg_m:.4f} m, pitch inertia {rb.pitch_inertia_kg_m2:.5f} kg m^2")
+        lines.append(
+            f"rigid body from the scaling: weight {rb.mass_kg / LB_TO_KG:.4f} lb "
+            f"({rb.mass_kg:.4f} kg), centre of mass {rb.x_cg_m / IN_TO_M:.2f} in from node x = 0 "
+            f"({rb.x_cg_m:.4f} m), pitch inertia {rb.pitch_inertia_kg_m2 * KG_M2_TO_LB_IN2:.1f} "
+            f"lb in^2 ({rb.pitch_inertia_kg_m2:.5f} kg m^2)")
     if rb.mass_upper_bound_kg is not None:
         lines.append(f"mass line at the driving point bounds the mass from below: "
-                     f"M >= 1/a(x_d) = {rb.mass_upper_bound_kg:.4f} kg")
+                     f"M >= 1/a(x_d) = {rb.mass_upper_bound_kg / LB_TO_KG:.4f} lb "
+                     f"({rb.mass_upper_bound_kg:.4f} kg)")
     return "\n".join(lines)
 
 
