@@ -1,6 +1,5 @@
 """`batlab diagnose` end to end: FRFs -> modal fit -> diagnosis, and its bad-input handling."""
 
-import importlib.util
 import json
 
 import numpy as np
@@ -15,7 +14,6 @@ from updating.model.profile import make_profile, write_profile_csv
 from updating.model.units import IN_TO_M, LB_TO_KG, PSI_TO_PA
 from updating.simulate.virtual_bat import VirtualBat, simulate_test
 
-HAS_FITTER = importlib.util.find_spec("ema.fit") is not None
 X_IN = np.array([0, 0.5, 1.0, 2, 8, 14, 20, 24, 28, 33.5, 34])
 D_IN = np.array([1.6, 1.6, 1.0, 0.95, 0.97, 1.2, 1.9, 2.4, 2.55, 2.55, 2.45])
 POINTS_IN = np.arange(1, 34, 2).astype(float)
@@ -43,7 +41,6 @@ def args_of(paths) -> list[str]:
             "--frf", str(paths["frf"])]
 
 
-@pytest.mark.skipif(not HAS_FITTER, reason="the EMA fitter (ema.fit) is not on this branch yet")
 def test_end_to_end_through_frfs(tmp_path, capsys):
     ash = material_from_imperial(1.74e6, 0.0217)
     wood = Material(ash.E_pa * 1.07, ash.rho_kg_m3 * 0.96, 14.0)
@@ -65,16 +62,6 @@ def test_end_to_end_through_frfs(tmp_path, capsys):
     assert main(args_of(paths)) == 0
     table = capsys.readouterr().out
     assert "shear_deformation" in table and "RMS frequency error" in table
-
-
-@pytest.mark.skipif(HAS_FITTER, reason="the EMA fitter is present")
-def test_without_the_fitter_one_line_error(tmp_path, capsys):
-    ash = material_from_imperial(1.74e6, 0.0217)
-    paths = write_bat(tmp_path, Material(ash.E_pa, ash.rho_kg_m3, 13.0), 3.0, 100.0, 1)
-    assert main(args_of(paths) + ["--json"]) == 2
-    captured = capsys.readouterr()
-    assert captured.out == "" and "ema.fit" in captured.err
-    assert len(captured.err.strip().splitlines()) == 1
 
 
 @pytest.mark.parametrize("broken", ["profile", "meta", "frf"])
