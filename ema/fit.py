@@ -21,7 +21,8 @@ the data is clipped to it, with a note):
 6. modes below ``suspension_max_hz`` are the suspension's rigid-body modes: reported apart,
    and used for the mass check (``ema.shapes.mass_line``). A band starting below
    ``suspension_max_hz`` fits them as modes and drops the lower residual terms (which would
-   trade off against them); otherwise the lower residual is the mass line;
+   trade off against them); otherwise the lower residual is the mass line, re-estimated on
+   the band below the second bending mode (``ema.shapes.mass_line.low_band_mass_line``);
 7. per-mode warnings (under-resolved damping, leakage, low coherence: ``ema.mode_checks``;
    possibly merged pair: a rejected second pole next to it) and close pairs.
 
@@ -53,7 +54,12 @@ from ema.poles.rejected import Rejection
 from ema.poles.stabilisation import Stability
 from ema.shapes.complexity import mpc, mpd, real_modes
 from ema.shapes.lsfd import QUANTITY_POWER, LsfdResult, lsfd
-from ema.shapes.mass_line import RigidBody, rigid_body_from_mass_line, rigid_body_from_modes
+from ema.shapes.mass_line import (
+    RigidBody,
+    low_band_mass_line,
+    rigid_body_from_mass_line,
+    rigid_body_from_modes,
+)
 from ema.shapes.scaling import fix_sign, mass_normalised_shapes, unscaled_shapes
 
 METHODS = ("lscf", "peak")
@@ -85,7 +91,8 @@ class ModalFit:
         synthesis_error: (n_resp, n_ref) relative misfit ||H - H_synth|| / ||H|| in the band.
         synthesis_error_total: the same over all FRFs together.
         residue: (n_resp, n_ref, m) complex residues A_r (receptance pole-residue form).
-        mass_line: (n_resp, n_ref) lower residual L0, 1/kg (the rigid-body flexibility).
+        mass_line: (n_resp, n_ref) lower residual L0, 1/kg (the rigid-body flexibility; from
+            the band below the second bending mode, ``ema.shapes.mass_line``).
         suspension_freq_hz, suspension_damping_ratio: modes below ``suspension_max_hz``.
         suspension_shapes: (n_nodes, s) their real mass-normalised shapes.
         rigid_body: mass / centre of mass / pitch inertia implied by the scaling.
@@ -487,6 +494,11 @@ def fit_test(
     residue = fit.residue[:, :m].reshape(n_resp, n_ref, m)
     shapes, real = _shapes(test, lay, residue, poles)
     mass_line = fit.lower[:, 0].reshape(n_resp, n_ref)
+    if lower and lay.driving is not None:  # L0 re-estimated below the second bending mode
+        est = low_band_mass_line(freq, test.frf.reshape(freq.size, -1), poles, test.quantity,
+                                 band[0], lay.driving[0] * n_ref + lay.driving[1])
+        if est is not None:
+            mass_line = est.mass_line.reshape(n_resp, n_ref)
 
     zr = p.damping_ratio
     window = np.zeros(m)
