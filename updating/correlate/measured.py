@@ -29,6 +29,9 @@ class MeasuredModes:
         sensor_x_m: position of the accelerometer (the driving point), m (NaN: none, as for
             modes sampled from a model).
         freq_std_hz: (m,) standard uncertainty of the frequencies, or None.
+        mass_line: (n_points,) the driving point's row of the rigid-body flexibility at the
+            points, 1/kg (the mass line, ``ema.shapes.mass_line``: 1/M + (x - x_c)(x_d -
+            x_c)/I of the bat with its accelerometer), or None when the test did not give it.
     """
 
     freq_hz: np.ndarray
@@ -37,6 +40,7 @@ class MeasuredModes:
     damping_ratio: np.ndarray
     sensor_x_m: float
     freq_std_hz: np.ndarray | None = None
+    mass_line: np.ndarray | None = None
 
     @property
     def omega2(self) -> np.ndarray:
@@ -48,19 +52,42 @@ class MeasuredModes:
         idx = np.asarray(idx)
         std = None if self.freq_std_hz is None else self.freq_std_hz[idx]
         return MeasuredModes(self.freq_hz[idx], self.shapes[:, idx], self.x_m,
-                             self.damping_ratio[idx], self.sensor_x_m, std)
+                             self.damping_ratio[idx], self.sensor_x_m, std, self.mass_line)
 
 
 def from_fit(fit, sensor_x_m: float, min_hz: float = 20.0) -> MeasuredModes:
     """Elastic modes (above ``min_hz``) of an ``ema`` modal fit (duck-typed: freq_hz,
-    damping_ratio, real_shapes, x_m, optional freq_std_hz); ``sensor_x_m`` is the driving
-    point's position."""
+    damping_ratio, real_shapes, x_m, optional freq_std_hz and the mass line);
+    ``sensor_x_m`` is the driving point's position."""
     keep = np.flatnonzero(np.asarray(fit.freq_hz) >= min_hz)
     std = getattr(fit, "freq_std_hz", None)
     return MeasuredModes(
         np.asarray(fit.freq_hz)[keep], np.asarray(fit.real_shapes)[:, keep],
         np.asarray(fit.x_m), np.asarray(fit.damping_ratio)[keep], float(sensor_x_m),
-        None if std is None else np.asarray(std)[keep])
+        None if std is None else np.asarray(std)[keep], driving_mass_line(fit))
+
+
+def driving_mass_line(fit) -> np.ndarray | None:
+    """The driving point's row of the rigid-body flexibility at the shape nodes (1/kg): from
+    the suspension modes when the fit has two (sum_s phi_s(x) phi_s(x_d)), else the lower
+    residual's row (``ema.fit.ModalFit.mass_line``); None without a driving point or
+    when neither is there."""
+    d = getattr(fit, "driving_index", None)
+    frf = getattr(fit, "driving_frf", None)
+    if d is None or frf is None:
+        return None
+    n = np.asarray(fit.x_m).size
+    susp = np.asarray(getattr(fit, "suspension_shapes", np.zeros((n, 0))), dtype=float)
+    if susp.ndim == 2 and susp.shape == (n, susp.shape[1]) and susp.shape[1] >= 2:
+        return susp @ susp[d]
+    ml = getattr(fit, "mass_line", None)
+    if ml is None:
+        return None
+    ml = np.asarray(ml, dtype=float)
+    row = ml[frf[0], :] if ml.shape[1] == n else ml[:, frf[1]]
+    if row.size != n or not np.any(row):
+        return None
+    return row.copy()
 
 
 def sampled_modes(modes: Modes, dofs: np.ndarray, node_x_m: np.ndarray) -> MeasuredModes:

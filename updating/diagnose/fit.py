@@ -5,12 +5,20 @@ Residuals (dimensionless; frequencies are what the RMS error measures):
     e_r  = f_r(model) / f_r(measured) - 1                        paired elastic modes
     s_ir = (sigma_f / sigma_s) (y_ir - sign_r u_ir) / rms(y_r)    shape entries
     b_j  = (sigma_f / sigma_b) (f_j(model) / f_j(suspension) - 1)  suspension modes (if any)
+    g_j  = (sigma_f / sigma_g) (G_j(model) - a_j)                 mass line (if measured)
+    p    = (sigma_f / sigma_p) (m_s(model) - m_s(data sheet))     accelerometer (if given)
 
 u_r is the model's mass-normalised shape at the test points, y_r the measured one (both in
 1/sqrt(kg), so the shapes carry the absolute mass scale: the scale weight fixes the total, the
 accelerometer shows in the amplitude and curvature near the driving point). sigma_f is the
 relative frequency uncertainty, sigma_s that of a shape entry relative to its mode's RMS,
-sigma_b that of a (heavily damped) suspension frequency.
+sigma_b that of a (heavily damped) suspension frequency. a_j is the measured mass line (the
+rigid-body flexibility 1/M + (x_j - x_c)(x_s - x_c)/I of the bat with its accelerometer, 1/kg,
+from the FRFs' lower residual: ema.shapes.mass_line) and G_j the model's
+(updating.diagnose.model.rigid_flexibility); sigma_g the scatter of a_j about its straight
+line (physics makes it one). E does not enter it: it is what separates the accelerometer's
+mass from the modulus. m_s(data sheet) is meta.json's accelerometer_mass_g (sigma_p 0.3 g);
+the model's m_s is 0 when the sensor_mass extension is off.
 Solved by scipy's trust-region reflective least squares with the analytic Jacobian
 (updating.diagnose.model), through updating.lsq; parameter covariance s^2 (J^T J)^+ with
 s^2 = SSR / (N - p) (updating.lsq.covariance).
@@ -31,6 +39,7 @@ from updating.diagnose.model import (
     free_parameters,
     from_vector,
     modal_sensitivities,
+    rigid_flexibility,
     to_vector,
 )
 from updating.lsq import covariance, solve_bounded
@@ -53,6 +62,10 @@ class Observations:
         combined: (n_points, m) for the larger member of a pair its shape scaled to carry
             the pair's amplitude sqrt(|y_1|^2 + |y_2|^2) (what a one-plane model predicts),
             else the measured shape; None: the shapes.
+        mass_line: (n_points,) measured mass line at the test points, 1/kg, or None.
+        sigma_ml: its standard uncertainty per point, 1/kg.
+        sensor_prior_g: the accelerometer's mass from the lab's data sheet, g, or None.
+        sigma_prior_g: its standard uncertainty, g.
     """
 
     freq_hz: np.ndarray
@@ -64,6 +77,10 @@ class Observations:
     sigma_b: float = 0.01
     code: np.ndarray | None = None
     combined: np.ndarray | None = None
+    mass_line: np.ndarray | None = None
+    sigma_ml: float = 1.0
+    sensor_prior_g: float | None = None
+    sigma_prior_g: float = 0.3
 
     @property
     def n_model_modes(self) -> int:
@@ -110,6 +127,8 @@ class DiagnosisFit:
         ssr_freq, ssr_shape: sums of squared frequency and shape residuals (the
             suspension residuals, present only with that extension, are left out so that
             fits of different extensions compare).
+        ssr_mass: sum of squared mass-line and data-sheet residuals (present in every fit).
+        mass_line: (n_points,) the model's mass line at the test points, 1/kg.
     """
 
     active: frozenset[str]
@@ -123,10 +142,12 @@ class DiagnosisFit:
     rms_pct: float
     ssr_freq: float
     ssr_shape: float
+    ssr_mass: float = 0.0
+    mass_line: np.ndarray | None = None
 
     def chi2(self, sigma_f: float) -> float:
-        """(ssr_freq + ssr_shape) / sigma_f^2."""
-        return (self.ssr_freq + self.ssr_shape) / sigma_f**2
+        """(ssr_freq + ssr_shape + ssr_mass) / sigma_f^2."""
+        return (self.ssr_freq + self.ssr_shape + self.ssr_mass) / sigma_f**2
 
     def std(self, name: str) -> float:
         """Standard uncertainty of a free parameter (in its own units: ln or grams or kN/m)."""
@@ -160,6 +181,29 @@ def residuals(sol: ModalSensitivities, obs: Observations, with_suspension: bool)
     return np.concatenate(res), np.vstack(jac)
 
 
+def scale_residuals(
+    setup: Setup, active: frozenset[str], state: State, names: tuple[str, ...],
+    obs: Observations,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(residuals, Jacobian (N, p), the model's mass line) of the mass line and the
+    data-sheet accelerometer mass (module docstring); empty when neither is given."""
+    g, dg = rigid_flexibility(setup, active, state, names)
+    res, jac = [np.zeros(0)], [np.zeros((0, len(names)))]
+    if obs.mass_line is not None:
+        w = obs.sigma_f / obs.sigma_ml
+        res.append(w * (g - obs.mass_line))
+        jac.append(w * dg.T)
+    if obs.sensor_prior_g is not None:
+        w = obs.sigma_f / obs.sigma_prior_g
+        mass_g = 1e3 * state.sensor_mass_kg if "sensor_mass" in active else 0.0
+        res.append(np.array([w * (mass_g - obs.sensor_prior_g)]))
+        row = np.zeros((1, len(names)))
+        if "sensor_g" in names:
+            row[0, names.index("sensor_g")] = w
+        jac.append(row)
+    return np.concatenate(res), np.vstack(jac), g
+
+
 def fit_model(
     setup: Setup, active: frozenset[str], obs: Observations, start: State,
 ) -> DiagnosisFit:
@@ -167,15 +211,17 @@ def fit_model(
     names = free_parameters(active, setup)
     n_modes = obs.n_model_modes
     with_susp = "suspension" in active
-    cache: dict[bytes, tuple[np.ndarray, np.ndarray, ModalSensitivities]] = {}
+    cache: dict[bytes, tuple[np.ndarray, np.ndarray, ModalSensitivities, np.ndarray]] = {}
 
     def evaluate(x):
         key = np.asarray(x, dtype=float).tobytes()
         if key not in cache:
             cache.clear()
-            sol = modal_sensitivities(setup, active, from_vector(start, names, x), n_modes,
-                                      names)
-            cache[key] = (*residuals(sol, obs, with_susp), sol)
+            state = from_vector(start, names, x)
+            sol = modal_sensitivities(setup, active, state, n_modes, names)
+            res, jac = residuals(sol, obs, with_susp)
+            r_m, j_m, g = scale_residuals(setup, active, state, names, obs)
+            cache[key] = (np.concatenate([res, r_m]), np.vstack([jac, j_m]), sol, g)
         return cache[key]
 
     if names:
@@ -187,7 +233,10 @@ def fit_model(
             ftol=1e-12, gtol=1e-12, max_nfev=60).x
     else:
         x = np.zeros(0)
-    res, jac, sol = evaluate(x)
+    res, jac, sol, g = evaluate(x)
+    n_mass = (0 if obs.mass_line is None else obs.mass_line.size) + (
+        obs.sensor_prior_g is not None)
+    mass_res = res[res.size - n_mass:]
     idx, rows, _ = columns(sol, obs)
     m = obs.freq_hz.size
     k = m + obs.shapes.shape[0] * rows.size
@@ -198,7 +247,7 @@ def fit_model(
     rms = float(100 * np.sqrt(np.mean((model_hz / obs.freq_hz - 1) ** 2)))
     return DiagnosisFit(frozenset(active), from_vector(start, names, x), names, x, cov, model_hz,
                         mac_values, shapes, rms, float(res[:m] @ res[:m]),
-                        float(res[m:k] @ res[m:k]))
+                        float(res[m:k] @ res[m:k]), float(mass_res @ mass_res), g)
 
 
 def shape_sigma(fit: DiagnosisFit, obs: Observations, floor: float) -> float:

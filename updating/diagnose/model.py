@@ -91,12 +91,16 @@ class Setup:
     solid_corrections: np.ndarray | None = None
 
     @cached_property
+    def unit_mass(self):
+        """Mass properties of the bat at unit density (updating.model.mass_properties)."""
+        return mass_properties(build_model(self.profile, Material(1.0, 1.0)))
+
+    @cached_property
     def rho_from_weight(self) -> float | None:
         """Mass density that makes the model weigh what the scale says: rho = W / int A dx."""
         if self.weight_kg is None:
             return None
-        unit = build_model(self.profile, Material(1.0, 1.0))
-        return self.weight_kg / mass_properties(unit).mass_kg
+        return self.weight_kg / self.unit_mass.mass_kg
 
 
 @dataclass(frozen=True)
@@ -234,6 +238,43 @@ class ModalSensitivities:
     dlnf_low: np.ndarray
     dshapes: np.ndarray
     n_planes: int = 1
+
+
+def rigid_flexibility(
+    setup: Setup, active: frozenset[str], state: State, names: tuple[str, ...] = (),
+) -> tuple[np.ndarray, np.ndarray]:
+    """The model's mass line at the test points and its derivatives (p, n_points).
+
+    The rigid-body flexibility of the free bat with its accelerometer (mass m_s at x_s, the
+    driving point), the driving point's row (ema.shapes.mass_line):
+
+        G(x_j, x_s) = [1, x_j] R^-1 [1, x_s]^T,
+        R = rho [[V, S], [S, J_0]] + m_s [[1, x_s], [x_s, x_s^2]],
+
+    V = int A dx, S = int A x dx, J_0 = int (A x^2 + I) dx (the profile at unit density,
+    rotary inertia counted: rigid-body physics, whatever the beam model), so R holds the mass,
+    first moment and pitch inertia about the knob end. dG = -[1, x_j] R^-1 dR R^-1 [1, x_s]^T
+    with dR / d sensor_g = 1e-3 [[1, x_s], [x_s, x_s^2]] and dR / d ln rho = the wood's part.
+    E, E/G and the bungees do not enter: the mass line separates the accelerometer from E.
+    """
+    s = effective_state(setup, active, state)
+    u = setup.unit_mass
+    xs = setup.sensor_x_m
+    wood = s.rho_kg_m3 * np.array([[u.mass_kg, u.mass_kg * u.cg_m],
+                                   [u.mass_kg * u.cg_m, u.i_knob_kg_m2]])
+    ts = np.array([1.0, xs])
+    R = wood + s.sensor_mass_kg * np.outer(ts, ts)
+    T = np.column_stack([np.ones(setup.points_m.size), setup.points_m])
+    left = T @ np.linalg.inv(R)  # (n, 2)
+    right = np.linalg.solve(R, ts)  # (2,)
+    g = T @ right
+    dg = np.zeros((len(names), g.size))
+    for j, name in enumerate(names):
+        if name == "sensor_g":
+            dg[j] = -left @ (1e-3 * np.outer(ts, ts)) @ right
+        elif name == "ln_rho":
+            dg[j] = -left @ wood @ right
+    return g, dg
 
 
 def interpolation_matrix(model: BatModel, x_m: np.ndarray) -> np.ndarray:

@@ -44,6 +44,7 @@ from updating.diagnose.model import (
     free_parameters,
     modal_sensitivities,
     reference_of,
+    rigid_flexibility,
 )
 from updating.diagnose.pairing_check import checked_pairing, pairing_warnings, refuse_causes
 from updating.model.lab_input import BatMeta
@@ -251,10 +252,33 @@ def observations(
     if measured.freq_std_hz is not None and np.all(np.isfinite(measured.freq_std_hz)):
         sigma_f = max(1e-4, float(np.median(measured.freq_std_hz[meas_idx] / f)))
     susp = np.sort(np.asarray([] if suspension_hz is None else suspension_hz, dtype=float))
+    ml, sigma_ml = measured_mass_line(measured)
     obs = Observations(f, y, model_idx, sigma_f, suspension_hz=susp[susp > 0][:2], code=code,
-                       combined=combined)
+                       combined=combined, mass_line=ml, sigma_ml=sigma_ml)
     unpaired = np.setdiff1d(np.arange(m), meas_idx)
     return obs, meas_idx, measured.freq_hz[unpaired], notes
+
+
+ML_SIGMA_FLOOR = 1e-4  # of the mass line's largest value: noise-free data
+
+
+def measured_mass_line(measured: MeasuredModes) -> tuple[np.ndarray | None, float]:
+    """(the test's mass line at the points, its standard uncertainty per point, 1/kg).
+
+    The driving point's row of the rigid-body flexibility is a straight line in x (ema.shapes
+    .mass_line); its uncertainty is the scatter about the least-squares line, sqrt(SSR /
+    (n - 2)), at least ``ML_SIGMA_FLOOR`` of its largest value. None with fewer than 4
+    points or no (or a non-finite) mass line."""
+    a = measured.mass_line
+    if a is None or np.size(a) != measured.x_m.size or measured.x_m.size < 4:
+        return None, 1.0
+    a = np.asarray(a, dtype=float)
+    if not np.all(np.isfinite(a)) or not np.any(a):
+        return None, 1.0
+    x = np.asarray(measured.x_m, dtype=float)
+    line = np.polyval(np.polyfit(x, a, 1), x)
+    sigma = float(np.sqrt(np.sum((a - line) ** 2) / (a.size - 2)))
+    return a, max(sigma, ML_SIGMA_FLOOR * float(np.abs(a).max()))
 
 
 def start_state(setup: Setup, suspension_hz=None) -> State:
@@ -338,7 +362,45 @@ POOR = {"ln_E": 0.01, "ln_rho": 0.02, "ln_e_over_g": 0.05, "sensor_g": 0.5,
         "bungee_kn_per_m": 0.1, "ln_g_ratio": 0.05, "theta": 0.1}
 
 
-def limits(obs: Observations, final: DiagnosisFit, solid_tried: bool) -> tuple[str, ...]:
+def mass_line_limits(setup: Setup, obs: Observations, final: DiagnosisFit) -> list[str]:
+    """What the mass line says and what it cannot: its fit at the driving point, and the
+    accelerometer mass that a 1 % error of the FRFs' calibration (sensitivity) would move,
+    a systematic error the stated uncertainty does not hold."""
+    if obs.mass_line is None:
+        return ["the test gave no mass line (no driving point, or the fitted band reaches "
+                "below the suspension without two suspension modes): the accelerometer's "
+                "mass rests on the mode shapes' scale alone"]
+    g, dg = rigid_flexibility(setup, final.active | {"sensor_mass"}, final.state,
+                              ("sensor_g",))
+    d = int(np.argmin(np.abs(setup.points_m - setup.sensor_x_m)))
+    per_pct = 0.01 * g[d] / max(abs(dg[0, d]), 1e-300)
+    return [f"mass line at the driving point: measured {obs.mass_line[d]:.4g} 1/kg, model "
+            f"{final.mass_line[d]:.4g} 1/kg (+-{obs.sigma_ml:.2g} per point); it fixes the "
+            "accelerometer's mass independently of E, but a 1 % error of the FRFs' "
+            f"calibration (sensitivity) moves it by about {per_pct:.1f} g (not in the stated "
+            "uncertainty)"]
+
+
+def data_sheet_check(setup: Setup, obs: Observations, final: DiagnosisFit) -> list[str]:
+    """Whether the data agree with meta.json's accelerometer_mass_g: the calibrated model
+    refitted without it (sensor mass free) against the data sheet, within 2.5 combined
+    standard uncertainties."""
+    if obs.sensor_prior_g is None:
+        return []
+    free = fit_model(setup, final.active | {"sensor_mass"}, replace(obs, sensor_prior_g=None),
+                     final.state)
+    m, s = 1e3 * free.state.sensor_mass_kg, free.std("sensor_g")
+    z = (m - obs.sensor_prior_g) / np.hypot(s, obs.sigma_prior_g)
+    verdict = ("consistent" if abs(z) <= 2.5 else
+               "they disagree: check the accelerometer (and its cable) mass, its position "
+               "and the FRFs' calibration")
+    return [f"accelerometer: data sheet {obs.sensor_prior_g:.2f} +- {obs.sigma_prior_g:.1f} g "
+            f"(meta.json accelerometer_mass_g, used as a prior); the data alone give "
+            f"{m:.2f} +- {s:.2f} g: {verdict}"]
+
+
+def limits(obs: Observations, final: DiagnosisFit, solid_tried: bool,
+           setup: Setup) -> tuple[str, ...]:
     """What the calibrated model could not establish, in words (Diagnosis.warnings)."""
     out = []
     code = obs.codes
@@ -363,9 +425,10 @@ def limits(obs: Observations, final: DiagnosisFit, solid_tried: bool) -> tuple[s
     if "sensor_mass" not in final.active:
         out.append("no accelerometer mass in the calibrated model: the data did not show one. "
                    "A mass near a free end lowers every mode by about the same fraction, as a "
-                   "lower E does, so frequencies alone cannot separate them; only the absolute "
-                   "scale of the mass-normalised shapes can. If an accelerometer was mounted, "
-                   "E is low by about its share")
+                   "lower E does, so frequencies alone cannot separate them; only the mass "
+                   "line and the absolute scale of the mass-normalised shapes can. If an "
+                   "accelerometer was mounted, E is low by about its share")
+    out += mass_line_limits(setup, obs, final)
     if "ln_E" in final.names and "ln_e_over_g" in final.names:
         i, j = final.names.index("ln_E"), final.names.index("ln_e_over_g")
         c = final.cov[i, j] / np.sqrt(max(final.cov[i, i] * final.cov[j, j], 1e-300))
@@ -410,6 +473,8 @@ def diagnose(
                   float(measured.sensor_x_m), fine_element_m,
                   None if solid_corrections is None else np.asarray(solid_corrections, float))
     obs, meas_idx, unpaired, warnings = observations(setup, measured, suspension_hz, min_mac)
+    if meta.accelerometer_mass_kg is not None:  # the data sheet's mass: a prior
+        obs = replace(obs, sensor_prior_g=1e3 * meta.accelerometer_mass_kg)
     nominal = fit_model(setup, frozenset(), obs, start_state(setup, suspension_hz))
     crit = scipy.stats.chi2.ppf(CONFIDENCE, np.arange(8))
 
@@ -455,7 +520,8 @@ def diagnose(
     reference = reference_of(setup, final.active, final.state)
     warnings += pairing_warnings(final, obs.model_index, by_mac=not warnings)
     refuse = refuse_causes(warnings)
-    warnings += limits(obs, final, setup.solid_corrections is not None)
+    warnings += limits(obs, final, setup.solid_corrections is not None, setup)
+    warnings += data_sheet_check(setup, obs, final)
     if refuse:  # 6. no cause is named from a pairing that cannot be trusted
         warnings.append("causes not named: the pairing or the calibration cannot be trusted")
         path = [replace(s, role="calibration") if s.named else s for s in path]

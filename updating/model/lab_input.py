@@ -1,7 +1,8 @@
 """A bat's lab inputs (meta.json) turned into model inputs, and alteration specs.
 
 meta.json (docs/contract.md): serial, species, nominal_E_psi,
-nominal_weight_density_lbf_in3, weight_lb, points_in; extra keys are ignored.
+nominal_weight_density_lbf_in3, weight_lb, points_in; the optional accelerometer_mass_g (the
+accelerometer's data sheet, used by diagnose as a prior); other keys are ignored.
 """
 
 from __future__ import annotations
@@ -25,6 +26,7 @@ class BatMeta:
     weight_kg: float | None
     points_m: np.ndarray
     extra: dict = field(default_factory=dict)
+    accelerometer_mass_kg: float | None = None
 
 
 def read_meta(path: str | Path, e_over_g: float = ISOTROPIC_E_OVER_G) -> BatMeta:
@@ -56,8 +58,15 @@ def read_meta(path: str | Path, e_over_g: float = ISOTROPIC_E_OVER_G) -> BatMeta
                          "knob end)") from None
     if E <= 0 or wd <= 0 or (weight_kg is not None and weight_kg <= 0):
         raise ValueError(f"{path}: modulus, density and weight must be positive")
+    sensor_kg = None
+    if raw.get("accelerometer_mass_g") is not None:
+        sensor_g = scalar("accelerometer_mass_g")
+        if not 0.0 <= sensor_g <= 100.0:
+            raise ValueError(f"{path}: key 'accelerometer_mass_g' = {sensor_g:g} is outside "
+                             "0-100 g")
+        sensor_kg = 1e-3 * sensor_g
     return BatMeta(str(raw["serial"]), str(raw.get("species", "")),
-                   material_from_imperial(E, wd, e_over_g), weight_kg, points, raw)
+                   material_from_imperial(E, wd, e_over_g), weight_kg, points, raw, sensor_kg)
 
 
 FILL_DEFAULTS = {"cork": 1 / 3, "heavy": 1.8, "neutral": 1.0, "core": 1 / 3}
