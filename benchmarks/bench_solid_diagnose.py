@@ -1,22 +1,37 @@
-"""Diagnose on 3D-simulated test data: both bending planes excited (docs/diagnose.md).
+"""Diagnose on 3D-simulated FRF tests: both bending planes excited (docs/diagnose.md).
 
 The truth is the 3D solid (updating.solid) of the smooth bat and of the paper's stepped bat
-in data_samples: the handbook wood of meta.json,
-E_L 5 % above the handbook's, E/G_LR = 11, E/G_LT = 15, planar grain, a 3 g accelerometer on
-the axis at the driving point (33 in), free-free; tapped at 30 degrees from the radial plane,
-so each bending mode appears as a pair (cos^2 / sin^2 of the amplitude). Six modes per
-plane, 0.05 % frequency and 0.5 % shape noise. Diagnose runs without and with the solid's
-per-mode corrections (`--solid`: a second 3D model built from the first pass's fitted E and
-E/G, updating.diagnose.solid). For each: the errors of E, E/G (both planes), tap angle and
-sensor mass, the RMS error before and after, the named causes with their gains (which add up
-along the selection path to the RMS drop) and the warnings.
+in data_samples: the handbook wood of meta.json with E_L 5 % above the handbook's,
+E/G_LR = 11, E/G_LT = 15, planar grain, a 3 g accelerometer on the axis at the barrel-end
+driving point (the last test point, 1 in from the end). Its roving-hammer FRFs
+(updating.simulate.solid_test: bending modes of both planes tapped at 30 degrees from the
+radial plane, the rigid body on two 150 N/m bungees, 0.5-1.4 % damping rising with
+frequency, 0.5 % relative and 0.1 % floor noise, 0-3200 Hz at 0.5 Hz) are written to a UFF
+file with meta.json (the scale weight: the solid without its accelerometer) and the profile,
+and the real command line runs on them:
 
-    OPENBLAS_NUM_THREADS=1 python benchmarks/bench_solid_diagnose.py
+    batlab diagnose --profile profile.csv --meta meta.json --frf test.uff --json [--solid]
+
+three times per bat: the 1D family, with --solid, and with --solid and the accelerometer's
+data-sheet mass in meta.json (accelerometer_mass_g = 3). For each: the errors of E, the two
+planes' E/G, the tap angle and the sensor mass (with the standard uncertainty diagnose
+states), the RMS error before and after, the named causes and their gains against the RMS
+drop, the time. The 3D truth's modes are cached (an .npz keyed by every input, under
+$BATLAB_CACHE or ~/.cache/batlab): the first run solves them (about a minute per bat).
+
+    OPENBLAS_NUM_THREADS=1 python benchmarks/bench_solid_diagnose.py [--seed N]
 """
 
 from __future__ import annotations
 
+import argparse
+import hashlib
+import json
+import os
+import shutil
+import subprocess
 import sys
+import tempfile
 import time
 from pathlib import Path
 
@@ -25,69 +40,124 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from updating.diagnose.run import diagnose  # noqa: E402
-from updating.diagnose.solid import diagnose_with_solid  # noqa: E402
-from updating.model.assembly import build_model  # noqa: E402
+from ema.io.uff import write_uff  # noqa: E402
 from updating.model.lab_input import read_meta  # noqa: E402
-from updating.model.mass_properties import mass_properties  # noqa: E402
-from updating.model.material import Material  # noqa: E402
 from updating.model.profile import read_profile_csv  # noqa: E402
+from updating.model.units import LB_TO_KG, PSI_TO_PA  # noqa: E402
+from updating.simulate.solid_test import tap_test_frf  # noqa: E402
 from updating.solid.elastic import OrthotropicWood  # noqa: E402
-from updating.solid.measured import tap_test_modes  # noqa: E402
 from updating.solid.mesh import bat_mesh  # noqa: E402
-from updating.solid.modes import solid_modes  # noqa: E402
+from updating.solid.modes import SolidModes, solid_modes  # noqa: E402
 
 SENSOR_KG = 3e-3
 THETA_DEG = 30.0
+MESH = (40, 2, 1)  # axial, section, ring divisions (updating.solid.mesh.bat_mesh)
+N_MODES = 40
 
 
-def main() -> None:
-    for name in ("smooth_bat", "paper_bat"):
-        print(f"\n=== {name}")
-        run(ROOT / "data_samples" / name)
+def cache_dir() -> Path:
+    return Path(os.environ.get("BATLAB_CACHE", Path.home() / ".cache" / "batlab")) / "solid"
 
 
-def run(bat: Path) -> None:
+def cached_solid_modes(profile, wood: OrthotropicWood, sensor_x_m: float) -> SolidModes:
+    """The solid's modes with the accelerometer, from the cache when the same inputs were
+    solved before (key: profile, wood, mesh, mode count, sensor)."""
+    key = hashlib.sha1(json.dumps({
+        "x": np.asarray(profile.x_m).tolist(), "d": np.asarray(profile.diameter_m).tolist(),
+        "wood": repr(wood), "mesh": MESH, "n": N_MODES, "sensor": [sensor_x_m, SENSOR_KG],
+    }, sort_keys=True).encode()).hexdigest()[:16]
+    path = cache_dir() / f"{key}.npz"
+    if path.exists():
+        z = np.load(path)
+        return SolidModes(z["freq_hz"], z["kind"], z["axis_x_m"], z["axis_w"], int(z["n_dof"]),
+                          tuple(float(v) for v in z["rigid"]))
+    modes = solid_modes(bat_mesh(profile, *MESH), wood, N_MODES, "planar", progress=True,
+                        point_masses=((sensor_x_m, SENSOR_KG),))
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = path.with_suffix(".tmp.npz")
+    np.savez(tmp, freq_hz=modes.freq_hz, kind=modes.kind, axis_x_m=modes.axis_x_m,
+             axis_w=modes.axis_w, n_dof=modes.n_dof, rigid=np.array(modes.rigid))
+    tmp.replace(path)
+    return modes
+
+
+def diagnose_cli(folder: Path, solid: bool) -> tuple[dict, float]:
+    cmd = [sys.executable, "-m", "batlab", "diagnose", "--profile", str(folder / "profile.csv"),
+           "--meta", str(folder / "meta.json"), "--frf", str(folder / "test.uff"), "--json"]
+    t0 = time.perf_counter()
+    out = subprocess.run(cmd + (["--solid"] if solid else []), capture_output=True, text=True,
+                         cwd=ROOT, env={**os.environ, "PYTHONPATH": str(ROOT),
+                                        "OPENBLAS_NUM_THREADS": "1"})
+    if out.returncode:
+        raise SystemExit(f"batlab diagnose failed: {out.stderr.strip()}")
+    return json.loads(out.stdout), time.perf_counter() - t0
+
+
+def report(label: str, out: dict, seconds: float, truth: OrthotropicWood) -> None:
+    cal = out["calibrated"]
+    e_err = 100 * (cal["E_psi"] * PSI_TO_PA / truth.E_L_pa - 1)
+    eg1, eg2 = cal["E_over_G"], cal.get("E_over_G_plane2") or float("nan")
+    sensor = next((c for c in out["causes"] if c["name"] == "sensor_mass"), None)
+    std = sensor["uncertainty"]["mass_g"] if sensor else None
+    rms = out["rms_error_pct"]
+    gains = sum(c["gain_pct"] for c in out["causes"])
+    path = gains + sum(c["gain_pct"] for c in out["not_named"] if c["in_reference"])
+    print(f"\n{label}: {seconds:.0f} s")
+    print(f"  E error {e_err:+.2f} %, E/G plane 1 {eg1:.2f} ({100 * (eg1 / 11 - 1):+.1f} %), "
+          f"plane 2 {eg2:.2f} ({100 * (eg2 / 15 - 1):+.1f} %), tap angle "
+          f"{cal.get('tap_angle_deg') or float('nan'):.1f} deg, sensor "
+          f"{cal['sensor_mass_g']:.2f} g (true {1e3 * SENSOR_KG:g}"
+          + (f"; named, +- {std:.2f} g" if std is not None else "") + ")")
+    print(f"  RMS nominal {rms['nominal']:.3f} % -> calibrated {rms['extended']:.3f} % (drop "
+          f"{rms['nominal'] - rms['extended']:.3f} pp); named gains sum to {gains:.3f} pp, "
+          f"the whole path to {path:.3f} pp")
+    for c in out["causes"]:
+        print(f"  cause {c['name']:<18} gain {c['gain_pct']:.3f} pp  {c['value']}")
+    for c in out["not_named"]:
+        if c["in_reference"]:
+            print(f"  in the model, not named: {c['name']} ({c['gain_pct']:+.3f} pp)")
+    for w in out["warnings"]:
+        print(f"  warning: {w}")
+    sys.stdout.flush()
+
+
+def run(bat: Path, seed: int) -> None:
     profile = read_profile_csv(bat / "profile.csv")
+    meta_raw = json.loads((bat / "meta.json").read_text())
     meta = read_meta(bat / "meta.json")
     hb = meta.material
     truth = OrthotropicWood(hb.E_pa * 1.05, hb.rho_kg_m3, e_over_g_lr=11.0, e_over_g_lt=15.0)
-    weight = mass_properties(build_model(profile, Material(truth.E_L_pa, truth.rho_kg_m3)))
-    meta = type(meta)(meta.serial, meta.species, hb, weight.mass_kg, meta.points_m)
     points = np.asarray(meta.points_m)
-    sensor_x = float(points[-1])
     t0 = time.perf_counter()
-    modes = solid_modes(bat_mesh(profile, 40, 2, 1), truth, 30, "planar",
-                        point_masses=((sensor_x, SENSOR_KG),))
-    meas = tap_test_modes(modes, points, sensor_x, THETA_DEG, 6, seed=7)
-    print(f"3D truth: {meas.freq_hz.size} modes, {time.perf_counter() - t0:.0f} s")
-    for label in ("1D family only", "with --solid"):
-        t0 = time.perf_counter()
-        if label == "with --solid":
-            res, corr = diagnose_with_solid(profile, meta, meas)
-            print("corrections per plane, %: " + "; ".join(
-                " ".join(f"{100 * c:+.3f}" for c in row) for row in corr))
-        else:
-            res = diagnose(profile, meta, meas)
-        out = res.to_json_dict()
-        ref = res.reference
-        print(f"\n{label}: {time.perf_counter() - t0:.0f} s, {res.n_split} split pairs")
-        print(f"  E error {100 * (ref.E_pa / truth.E_L_pa - 1):+.2f} %, "
-              f"E/G plane 1 {ref.e_over_g:.2f} (11: {100 * (ref.e_over_g / 11 - 1):+.1f} %), "
-              f"plane 2 {ref.e_over_g_plane2 or float('nan'):.2f} "
-              f"(15: {100 * ((ref.e_over_g_plane2 or np.nan) / 15 - 1):+.1f} %), "
-              f"tap angle {ref.tap_angle_deg or float('nan'):.1f} deg, "
-              f"sensor {1e3 * ref.sensor_mass_kg:.2f} g (true 3)")
-        rms = out["rms_error_pct"]
-        path = [s.gain_pct for s in res.steps if s.role != "rejected"]
-        print(f"  RMS nominal {rms['nominal']:.3f} % -> calibrated {rms['extended']:.3f} %; "
-              f"gains along the path sum to {sum(path):.3f} pp "
-              f"(drop {rms['nominal'] - rms['extended']:.3f} pp)")
-        for cause in out["causes"]:
-            print(f"  cause {cause['name']:<18} gain {cause['gain_pct']:.3f} pp")
-        for w in out["warnings"]:
-            print(f"  warning: {w}")
-    sys.stdout.flush()
+    modes = cached_solid_modes(profile, truth, float(points[-1]))
+    test = tap_test_frf(modes, points, points.size - 1, THETA_DEG, seed=seed)
+    print(f"3D truth: {modes.n_dof} DOF, {np.sum(np.char.startswith(modes.kind, 'bend'))} "
+          f"bending modes to {modes.freq_hz.max():.0f} Hz, mass {modes.rigid[0]:.4f} kg "
+          f"with the accelerometer; {time.perf_counter() - t0:.0f} s (cache: {cache_dir()})")
+    bare_kg = modes.rigid[0] - SENSOR_KG  # the scale weighs the bat without its sensor
+    with tempfile.TemporaryDirectory() as tmp:
+        folder = Path(tmp)
+        shutil.copy(bat / "profile.csv", folder / "profile.csv")
+        write_uff(folder / "test.uff", test)
+        runs = (("1D family", False, None), ("--solid", True, None),
+                ("--solid, meta.json accelerometer_mass_g = 3", True, 1e3 * SENSOR_KG))
+        for label, solid, sheet in runs:
+            raw = {**meta_raw, "weight_lb": round(bare_kg / LB_TO_KG, 4)}
+            if sheet is not None:
+                raw["accelerometer_mass_g"] = sheet
+            (folder / "meta.json").write_text(json.dumps(raw))
+            out, seconds = diagnose_cli(folder, solid)
+            report(label, out, seconds, truth)
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--seed", type=int, default=7, help="noise seed of the FRFs")
+    ap.add_argument("--bats", nargs="*", default=["smooth_bat", "paper_bat"])
+    args = ap.parse_args()
+    for name in args.bats:
+        print(f"\n=== {name} (seed {args.seed})")
+        run(ROOT / "data_samples" / name, args.seed)
 
 
 if __name__ == "__main__":

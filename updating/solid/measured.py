@@ -5,7 +5,8 @@ planar grain) see the y-plane modes with shapes cos(theta) w_y and the z-plane m
 sin(theta) w_z, w the mass-normalised transverse displacement of the axis at the test points
 (linear interpolation between the axis nodes of the quadratic mesh, 0.5 element apart).
 Frequencies and shape entries get relative Gaussian noise as in
-updating.simulate.virtual_bat.simulate_modes.
+updating.simulate.virtual_bat.simulate_modes. The FRFs of such a test:
+updating.simulate.solid_test.
 """
 
 from __future__ import annotations
@@ -39,3 +40,4 @@ def tap_test_modes(
     y = y + shape_noise * np.sqrt(np.mean(y**2, axis=0)) * rng.standard_normal(y.shape)
     return MeasuredModes(f, y, np.asarray(points_m, dtype=float), np.full(f.size, zeta),
                          float(sensor_x_m), freq_noise * f)
+

@@ -38,6 +38,9 @@ class SolidModes:
         axis_x_m: (a,) positions of the axis nodes, sorted; axis_w: (a, m) the transverse
             displacement there in the mode's bending plane (y or z; 0 for other kinds).
         n_dof: size of the model.
+        rigid: (mass kg, centre of mass m from the knob end, pitch inertia about it kg m^2)
+            of the solid with its point masses, from the mass matrix (``rigid_body``), or
+            None.
     """
 
     freq_hz: np.ndarray
@@ -45,6 +48,7 @@ class SolidModes:
     axis_x_m: np.ndarray
     axis_w: np.ndarray
     n_dof: int
+    rigid: tuple[float, float, float] | None = None
 
     def bending_hz(self, plane: str) -> np.ndarray:
         """Bending frequencies in plane "y" or "z", ascending."""
@@ -57,7 +61,8 @@ class SolidModes:
         bend = np.flatnonzero(np.char.startswith(self.kind.astype(str), "bend"))
         kind[bend] = "other"
         kind[bend[::2]] = "bend_y"
-        return SolidModes(self.freq_hz, kind.astype(str), self.axis_x_m, self.axis_w, self.n_dof)
+        return SolidModes(self.freq_hz, kind.astype(str), self.axis_x_m, self.axis_w, self.n_dof,
+                          self.rigid)
 
 
 def material_axes(points: np.ndarray, orientation: str) -> np.ndarray:
@@ -128,6 +133,21 @@ def classify(u: np.ndarray, on_axis: np.ndarray) -> tuple[str, np.ndarray]:
     return kind, (ax[:, comp] if comp else np.zeros(ax.shape[0]))
 
 
+def rigid_body(M, doflocs: np.ndarray) -> tuple[float, float, float]:
+    """(mass, x_cg, pitch inertia about the centre of mass) in the x-y plane from the mass
+    matrix: with the rigid motions t (u_y = 1) and r (rotation about z through the origin:
+    u_x = -y, u_y = x), m = t^T M t, m x_cg = t^T M r, I_0 = r^T M r, I_cg = I_0 - m x_cg^2
+    (point masses and the sections' own rotary inertia included)."""
+    n = doflocs.shape[1]
+    t = np.zeros(3 * n)
+    t[1::3] = 1.0
+    r = np.zeros(3 * n)
+    r[0::3], r[1::3] = -doflocs[1], doflocs[0]
+    mass = float(t @ (M @ t))
+    cg = float(t @ (M @ r)) / mass
+    return mass, cg, float(r @ (M @ r)) - mass * cg**2
+
+
 def solid_modes(
     mesh: MeshHex2, wood: OrthotropicWood, n_modes: int = 30, orientation: str = "planar",
     progress: bool = False, point_masses: tuple[tuple[float, float], ...] = (),
@@ -170,4 +190,5 @@ def solid_modes(
         ws.append(w)
     say(f"done: {int(np.sum(np.char.startswith(np.array(kinds), 'bend')))} bending modes "
         f"below {f.max():.0f} Hz")
-    return SolidModes(f, np.array(kinds), loc[0, on_axis], np.array(ws).T, K.shape[0])
+    return SolidModes(f, np.array(kinds), loc[0, on_axis], np.array(ws).T, K.shape[0],
+                      rigid_body(M, loc))
