@@ -85,3 +85,33 @@ def test_planar_grain_splits_the_bending_planes():
     f = np.sort(cyl.freq_hz[np.char.startswith(cyl.kind.astype(str), "bend")])[:4]
     assert f[1] == pytest.approx(f[0], rel=1e-6) and f[3] == pytest.approx(f[2], rel=1e-6)
     assert np.allclose(cyl.one_plane().bending_hz("y")[:2], f[::2])
+
+
+def test_rigid_body_of_the_solid(cylinder_modes):
+    """Mass, centre of mass and pitch inertia from the solid's mass matrix: the cylinder's
+    rho pi r^2 L, L / 2 and m (L^2 / 12 + r^2 / 4) (mesh accuracy, as the volume above)."""
+    mass, cg, inertia = cylinder_modes.rigid
+    m = STEEL[1] * np.pi * 0.03**2 * 0.8
+    assert mass == pytest.approx(m, rel=1e-3)
+    assert cg == pytest.approx(0.4, rel=1e-9)
+    assert inertia == pytest.approx(m * (0.8**2 / 12 + 0.03**2 / 4), rel=1e-3)
+
+
+def test_frf_test_of_the_solid_carries_its_modes_and_mass_line(cylinder_modes):
+    """3D-simulated roving-hammer FRFs (updating.simulate.solid_test) through the real modal
+    fit: the bending frequencies of the solid and its exact mass line
+    1/M + (x - x_c)(x_d - x_c)/I come back (0.5 % noise, bungees)."""
+    from ema.fit import fit_test
+    from updating.simulate.solid_test import tap_test_frf
+
+    x = np.linspace(0.02, 0.78, 13)
+    test = tap_test_frf(cylinder_modes, x, 12, 30.0, bungee_k_n_per_m=400.0, seed=3)
+    fit = fit_test(test)
+    bend = np.unique(np.round(cylinder_modes.bending_hz("y"), 3))
+    bend = bend[bend < 3100]
+    assert fit.freq_hz.size == bend.size
+    np.testing.assert_allclose(fit.freq_hz, bend, rtol=2e-4)
+    mass, cg, inertia = cylinder_modes.rigid
+    truth = 1 / mass + (x - cg) * (x[12] - cg) / inertia
+    c1, c0 = np.polyfit(x, fit.mass_line[0], 1)
+    assert (c0 + c1 * x[12]) / truth[12] - 1 == pytest.approx(0.0, abs=2e-3)

@@ -374,11 +374,16 @@ def mass_line_limits(setup: Setup, obs: Observations, final: DiagnosisFit) -> li
                               ("sensor_g",))
     d = int(np.argmin(np.abs(setup.points_m - setup.sensor_x_m)))
     per_pct = 0.01 * g[d] / max(abs(dg[0, d]), 1e-300)
+    sensor = ""
+    if "sensor_g" in final.names:
+        sensor = (f"; calibrated accelerometer {1e3 * final.state.sensor_mass_kg:.2f} +- "
+                  f"{final.std('sensor_g'):.2f} g")
     return [f"mass line at the driving point: measured {obs.mass_line[d]:.4g} 1/kg, model "
-            f"{final.mass_line[d]:.4g} 1/kg (+-{obs.sigma_ml:.2g} per point); it fixes the "
-            "accelerometer's mass independently of E, but a 1 % error of the FRFs' "
-            f"calibration (sensitivity) moves it by about {per_pct:.1f} g (not in the stated "
-            "uncertainty)"]
+            f"{final.mass_line[d]:.4g} 1/kg (+-{obs.sigma_ml:.2g} per point){sensor}. The "
+            "mass line fixes the accelerometer's mass independently of E, but a 1 % error of "
+            f"the FRFs' calibration (sensitivity) moves it by about {per_pct:.1f} g, and so "
+            "does a mass distribution unlike the profile's at uniform density (neither is in "
+            "the stated uncertainty)"]
 
 
 def data_sheet_check(setup: Setup, obs: Observations, final: DiagnosisFit) -> list[str]:
