@@ -22,7 +22,7 @@ states), the RMS error before and after, the named causes and their gains agains
 drop, the time. The 3D truth's modes are cached (an .npz keyed by every input, under
 $BATLAB_CACHE or ~/.cache/batlab): the first run solves them (about a minute per bat).
 
-    OPENBLAS_NUM_THREADS=1 python benchmarks/bench_solid_diagnose.py [--seed N]
+    OPENBLAS_NUM_THREADS=1 python benchmarks/bench_solid_diagnose.py [--seeds N ...]
 """
 
 from __future__ import annotations
@@ -111,7 +111,7 @@ def diagnose_cli(folder: Path, solid: bool) -> tuple[dict, float]:
     return json.loads(out.stdout), time.perf_counter() - t0
 
 
-def report(label: str, out: dict, seconds: float, truth: OrthotropicWood) -> None:
+def report(label: str, out: dict, seconds: float, truth: OrthotropicWood) -> dict:
     cal = out["calibrated"]
     e_err = 100 * (cal["E_psi"] * PSI_TO_PA / truth.E_L_pa - 1)
     eg1, eg2 = cal["E_over_G"], cal.get("E_over_G_plane2") or float("nan")
@@ -137,9 +137,14 @@ def report(label: str, out: dict, seconds: float, truth: OrthotropicWood) -> Non
     for w in out["warnings"]:
         print(f"  warning: {w}")
     sys.stdout.flush()
+    return {"E %": e_err, "E/G 1 %": 100 * (eg1 / 11 - 1), "E/G 2 %": 100 * (eg2 / 15 - 1),
+            "angle": cal.get("tap_angle_deg") or float("nan"),
+            "sensor g": cal["sensor_mass_g"] - 1e3 * SENSOR_KG, "RMS nom": rms["nominal"],
+            "RMS cal": rms["extended"], "named sum": gains,
+            "drop": rms["nominal"] - rms["extended"], "s": seconds}
 
 
-def run(bat: Path, seed: int, exact_steps: bool) -> None:
+def run(bat: Path, seed: int, exact_steps: bool, with_sheet: bool = True) -> list:
     given = read_profile_csv(bat / "profile.csv")
     profile = solid_profile(given)
     meta_raw = json.loads((bat / "meta.json").read_text())
@@ -163,25 +168,36 @@ def run(bat: Path, seed: int, exact_steps: bool) -> None:
         write_uff(folder / "test.uff", test)
         runs = (("1D family", False, None), ("--solid", True, None),
                 ("--solid, meta.json accelerometer_mass_g = 3", True, 1e3 * SENSOR_KG))
-        for label, solid, sheet in runs:
+        rows = []
+        for label, solid, sheet in runs[:3 if with_sheet else 2]:
             raw = {**meta_raw, "weight_lb": round(bare_kg / LB_TO_KG, 4)}
             if sheet is not None:
                 raw["accelerometer_mass_g"] = sheet
             (folder / "meta.json").write_text(json.dumps(raw))
             out, seconds = diagnose_cli(folder, solid)
-            report(label, out, seconds, truth)
+            rows.append((f"{bat.name} seed {seed}: {label}", report(label, out, seconds, truth)))
+    return rows
 
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--seed", type=int, default=7, help="noise seed of the FRFs")
+    ap.add_argument("--seeds", type=int, nargs="*", default=[7], help="noise seeds of the FRFs")
+    ap.add_argument("--no-sheet", action="store_true",
+                    help="skip the run with the data-sheet accelerometer mass")
     ap.add_argument("--bats", nargs="*", default=["smooth_bat", "paper_bat"])
     ap.add_argument("--exact-steps", action="store_true",
                     help="give diagnose the paper's exact steps, not the solid's tapers")
     args = ap.parse_args()
+    rows = []
     for name in args.bats:
-        print(f"\n=== {name} (seed {args.seed}{', exact steps' if args.exact_steps else ''})")
-        run(ROOT / "data_samples" / name, args.seed, args.exact_steps)
+        for seed in args.seeds:
+            print(f"\n=== {name} (seed {seed}{', exact steps' if args.exact_steps else ''})")
+            rows += run(ROOT / "data_samples" / name, seed, args.exact_steps, not args.no_sheet)
+    print("\nsummary (errors against the truth; sensor in g, the rest in %)")
+    keys = list(rows[0][1])
+    print(f"{'run':<62}" + "".join(f"{k:>10}" for k in keys))
+    for label, row in rows:
+        print(f"{label:<62}" + "".join(f"{row[k]:>10.3f}" for k in keys))
 
 
 if __name__ == "__main__":
