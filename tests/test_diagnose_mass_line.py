@@ -5,6 +5,8 @@ Hidden effect: an accelerometer of 2-6 g at the barrel-end driving point (1 in f
 where it lowers every mode by about the same fraction as a lower E does.
 """
 
+import json
+
 import numpy as np
 import pytest
 from hypothesis import HealthCheck, given, settings
@@ -15,7 +17,7 @@ from updating.correlate.measured import from_fit
 from updating.diagnose.model import CAUSES, Setup, State, free_parameters, rigid_flexibility
 from updating.diagnose.run import diagnose
 from updating.model.assembly import Attachment, build_model
-from updating.model.lab_input import BatMeta
+from updating.model.lab_input import BatMeta, read_meta
 from updating.model.mass_properties import mass_properties
 from updating.model.material import Material
 from updating.model.profile import make_profile
@@ -90,3 +92,17 @@ def test_data_sheet_prior_and_whether_the_data_agree(sheet_g, agree):
     assert ("consistent" in note[0]) == agree
     if agree:  # prior and data together: within the prior's 0.3 g
         assert 1e3 * result.reference.sensor_mass_kg == pytest.approx(4.0, abs=0.3)
+
+
+@pytest.mark.parametrize("value, message", [
+    (-1, "'accelerometer_mass_g' = -1 is outside 0-100 g"),
+    ("three", "'accelerometer_mass_g' must be a number"),
+])
+def test_bad_data_sheet_mass_names_the_key(tmp_path, value, message):
+    path = tmp_path / "meta.json"
+    base = {"serial": "S", "nominal_E_psi": 1.7e6, "nominal_weight_density_lbf_in3": 0.0217}
+    path.write_text(json.dumps({**base, "accelerometer_mass_g": value}))
+    with pytest.raises(ValueError, match=f"key {message}"):
+        read_meta(path)
+    path.write_text(json.dumps(base))
+    assert read_meta(path).accelerometer_mass_kg is None
