@@ -76,11 +76,14 @@ def mass_normalise(model: BatModel, test: MeasuredModes, n_rigid: int = 2) -> Me
 
 
 def _run(model, test, groups_kw, msso_kw, expansions, do_refine, mass_normalised, sigmas,
-         prior_sigma):
+         prior_sigma, scaled: MeasuredModes | None = None):
+    """Expansion passes and the refinement; ``scaled``: ``test`` already mass-normalised
+    (``mass_normalise``, when the caller has it), else normalised here if need be."""
     refine_groups = choose_groups(model, groups_kw.pop("refine_stiffness"),
                                   groups_kw.pop("refine_mass"))
     n_rigid = 2
-    scaled = test if mass_normalised else mass_normalise(model, test, n_rigid)
+    if scaled is None:
+        scaled = test if mass_normalised else mass_normalise(model, test, n_rigid)
     f, first, res, cond = zero_factors(model.n_elements), None, None, np.nan
     for _ in range(max(1, expansions)):
         f, res, c = expansion_pass(model, scaled, f, n_rigid, **groups_kw, **msso_kw)
@@ -173,14 +176,13 @@ def update_elements(
         return {"stiffness": seed_s, "mass": seed_m, "refine_stiffness": stiffness,
                 "refine_mass": mass}
 
+    scaled = test if mass_normalised else mass_normalise(model, test)  # once, used twice
     f, first, res, rr, cond = _run(model, test, groups_kw(), msso_kw, expansions, refine_fit,
-                                   mass_normalised, sig, prior_sigma)
+                                   mass_normalised, sig, prior_sigma, scaled)
     # scaling check: POC of the (scaled) test shapes with the SEREP-reduced reference mass
     Phi = model_modes(model).shapes
     idx, T = paired_serep(Phi, shapes_a, dofs_a, 2)
-    sa = align_signs(Phi[np.ix_(dofs_a, idx)], shapes_a)
-    if not mass_normalised:
-        sa = mass_normalise(model, test).shapes
+    sa = align_signs(Phi[np.ix_(dofs_a, idx)], shapes_a) if mass_normalised else scaled.shapes
     poc = pseudo_orthogonality(sa, T.reduce(assemble(model)[1]))
     std, draws = None, None
     if n_resample > 0:
