@@ -16,6 +16,7 @@ import shutil
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -24,6 +25,11 @@ from rigs.virtual_box import BoxConfig as BoxConfig
 from rigs.virtual_box import VirtualBox as VirtualBox
 from rigs.virtual_box import default_info as default_info
 from updating.model.units import IN_TO_M, KG_M2_TO_LB_IN2, LB_TO_KG, LBF_IN3_TO_KG_M3, PSI_TO_PA
+
+if TYPE_CHECKING:  # option types only; the stage modules load inside the functions
+    from updating.model.assembly import Beam
+    from updating.simulate.field_fleet import FieldKind
+    from updating.simulate.integrity import Integrity
 
 Progress = Callable[[str], None]
 
@@ -84,7 +90,7 @@ def core_spec(alter: str | None):
     return parse_core_spec(alter) if alter else None
 
 
-def bat_model(profile, material, beam: str = "euler", rotary_inertia: bool | None = None,
+def bat_model(profile, material, beam: Beam = "euler", rotary_inertia: bool | None = None,
               n_elements: int | None = None, alter: str | None = None):
     """The bat's FE model (``updating.model.assembly.build_model``), ``alter``ed if given."""
     from updating.model.assembly import build_model
@@ -128,7 +134,7 @@ def summarise_model(model, n_modes: int = 8, n_points: int = 16) -> dict:
 
 def virtual_bat(
     profile, material, points_m: np.ndarray, *, sensor_offset_m: float = 0.0,
-    sensor_mass_kg: float = 0.0, bungee_k_n_per_m: float = 0.0, beam: str = "timoshenko",
+    sensor_mass_kg: float = 0.0, bungee_k_n_per_m: float = 0.0, beam: Beam = "timoshenko",
     alter: str | None = None, moisture_pct: float = 0.0, zeta1: float = 0.005,
     rel_noise: float = 0.0,
 ):
@@ -165,8 +171,8 @@ def nuisance_names() -> tuple[str, ...]:
 
 
 def simulate_field_case(
-    seed: int | None, kind: str, nuisances: tuple[str, ...], integrity: str | None, folder,
-    progress: Progress = _quiet,
+    seed: int | None, kind: FieldKind, nuisances: tuple[str, ...], integrity: Integrity | None,
+    folder, progress: Progress = _quiet,
 ) -> tuple[dict, str]:
     """One random bat of the nuisance-rich fleet written as a lab hands it over (profile.csv,
     meta.json, baseline.uff, retest.uff, retest.json, truth.json in ``folder``;
