@@ -36,6 +36,11 @@ UPDATING_LAYERS = {  # sub-package (or top module) -> the updating sub-packages 
     "simulate": {"model", "correlate", "lsq", "msso", "inspect"},
 }
 
+APPLICATION_MAY_NOT_IMPORT = (  # the stages' runners: only the pipeline calls them
+    "rigs", "ema.fit", "ema.poles", "updating.diagnose", "updating.inspect.run",
+    "updating.msso", "updating.simulate", "updating.solid",
+)
+
 COMMAND_MAY_IMPORT = {  # what a command may import from batlab besides batlab.pipeline
     "batlab", "batlab.cli_support", "batlab.formatting", "batlab.registry", "batlab.report",
     "batlab.diagnose_report",
@@ -87,6 +92,15 @@ def test_data_flow_one_way(package):
            for p in files_of(package) for line, name in imported_modules(p)
            if top(name) in PACKAGES and top(name) != package
            and top(name) not in MAY_IMPORT[package]]
+    assert not bad, "\n".join(bad)
+
+
+@pytest.mark.parametrize("name", sorted(COMMAND_MAY_IMPORT - {"batlab"}))
+def test_application_modules_run_no_stage(name):
+    path = ROOT / (name.replace(".", "/") + ".py")
+    bad = [f"{name}:{line} imports {mod}" for line, mod in imported_modules(path)
+           if any(mod == s or mod.startswith(s + ".") for s in APPLICATION_MAY_NOT_IMPORT)
+           or mod.startswith("batlab.commands")]
     assert not bad, "\n".join(bad)
 
 
