@@ -29,3 +29,12 @@ def progress_printer(command: str):
               file=sys.stderr, flush=True)
 
     return progress
+
+
+def note_printer(command: str):
+    """A ``note(msg)`` callable printing ``batlab CMD: msg`` on stderr (a default taken)."""
+
+    def note(message: str) -> None:
+        print(f"batlab {command}: {message}", file=sys.stderr)
+
+    return note

@@ -1,7 +1,12 @@
 """Verdicts in words for a terminal: shared by `inspect`, `demo` and `history`, so commands do
-not import each other."""
+not import each other. The stored record's evidence is read through its type
+(``updating.inspect.details.InspectionDetails.from_json_dict``)."""
 
 from __future__ import annotations
+
+import math
+
+from updating.inspect.details import InspectionDetails
 
 
 def status_of(verdict: dict) -> str:
@@ -20,7 +25,9 @@ STATUS_WORDS = {"altered": "ALTERED", "not_altered": "not altered",
 def p_value(verdict: dict) -> float | None:
     """The chance that an unaltered bat differs at least this much from its baseline: the
     verdict's ``details.p_value``, else 1 - ``confidence`` (None when it has neither)."""
-    p = (verdict.get("details") or {}).get("p_value")
+    p = InspectionDetails.from_json_dict(verdict.get("details")).p_value
+    if p is not None and math.isnan(p):  # stored as null: not computed
+        p = None
     if p is None and verdict.get("confidence") is not None:
         p = 1.0 - float(verdict["confidence"])
     return None if p is None else min(max(float(p), 0.0), 1.0)

@@ -23,9 +23,10 @@ from pathlib import Path
 import numpy as np
 
 from batlab.formatting import chance_words, p_value, status_of
-from batlab.pipeline import ReportInputs
+from batlab.pipeline import ReportInputs, jsonable
 from batlab.registry import now_utc
 from ema.io.atomic_write import atomic_write
+from updating.inspect.details import InspectionDetails, ModePair
 from updating.model.mass_properties import MassProperties, mass_properties
 from updating.model.sections import Core
 from updating.model.units import (
@@ -35,6 +36,15 @@ from updating.model.units import (
     LBF_IN3_TO_KG_M3,
     PSI_TO_PA,
 )
+
+
+def stored_details(v: dict) -> InspectionDetails:
+    """The stored verdict record's evidence, typed; the MSSO map's element ends are the
+    record's ``elements``."""
+    els = v.get("elements") or []
+    return InspectionDetails.from_json_dict(v.get("details"),
+                                            [e["x0_in"] * IN_TO_M for e in els],
+                                            [e["x1_in"] * IN_TO_M for e in els])
 
 
 def _data_uri(png: bytes) -> str:
@@ -142,12 +152,13 @@ def element_figure(r: ReportInputs):
     fig, axes = plt.subplots(3, 1, sharex=True, figsize=(10, 6.8),
                              gridspec_kw={"height_ratios": [2.2, 2.2, 1.0]})
     region = v.get("region_in") if status_of(v) == "altered" else None
-    msso = (v.get("details") or {}).get("msso") or {}
-    has_map = "alpha" in msso and len(msso["alpha"]) == len(x0)
+    emap = stored_details(v).msso.result
+    has_map = emap is not None and emap.alpha.size == len(x0)
     shown = [fit["alpha"], fit["beta"]]
     if has_map:
-        band = {k: 2 * np.asarray(msso.get(f"{k}_std") or np.zeros(len(x0)), dtype=float)
-                for k in ("alpha", "beta")}
+        msso = {"alpha": emap.alpha, "beta": emap.beta}
+        band = {k: 2 * (std if std.size else np.zeros(len(x0)))
+                for k, std in (("alpha", emap.alpha_std), ("beta", emap.beta_std))}
         shown += [msso["alpha"], msso["beta"], band["alpha"], band["beta"]]
     lim = _symmetric_limit(shown, SCALE_FLOOR)
     for ax, key, name, color in ((axes[0], "alpha", "mass change, alpha", "C0"),
@@ -160,11 +171,11 @@ def element_figure(r: ReportInputs):
         ax.bar(x0, fit[key], width=w / 2 if has_map else w, align="edge", color=color,
                edgecolor="k", lw=0.4, label="core fit (how much)")
         if has_map:
-            ax.bar(x0 + w / 2, np.asarray(msso[key], dtype=float), width=w / 2, align="edge",
+            ax.bar(x0 + w / 2, msso[key], width=w / 2, align="edge",
                    color="none", edgecolor="C2", hatch="////", lw=0.6,
                    label="element map (where)")
-            if msso.get("region_m"):
-                a, b2 = msso["region_m"]
+            if emap.region_m:
+                a, b2 = emap.region_m
                 ax.axvspan(a / IN_TO_M, b2 / IN_TO_M, fill=False, hatch="..", color="C2",
                            alpha=0.25, lw=0, label="map region")
         if region is not None:
@@ -297,12 +308,12 @@ def regions_note(r: ReportInputs) -> str:
     """The two localisations side by side, reconciled or their difference explained."""
     v = r.verdict
     fit = v.get("region_in") if status_of(v) == "altered" else None
-    msso = (v.get("details") or {}).get("msso") or {}
-    if "error" in msso:
-        return f"The element map could not be computed ({msso['error']})."
-    if "alpha" not in msso:
+    emap = stored_details(v).msso
+    if emap.error is not None:
+        return f"The element map could not be computed ({emap.error})."
+    if emap.result is None:
         return ""
-    mreg = msso.get("region_m")
+    mreg = emap.region_m
     mreg = None if not mreg else (mreg[0] / IN_TO_M, mreg[1] / IN_TO_M)
     pts = np.sort(r.baseline.modes.x_m) / IN_TO_M
     spacing = float(np.median(np.diff(pts))) if pts.size > 1 else float("nan")
@@ -450,7 +461,8 @@ def _facts(r: ReportInputs) -> list[list]:
             facts.append([f"Uncertainty (1σ) of {k.replace('_', ' ')}", _Raw(f"±{val:.3g}")])
     stat = v.get("statistic")
     if stat is not None:
-        name = (v.get("details") or {}).get("statistic") or "test statistic"
+        fit_evidence = stored_details(v).fit
+        name = (fit_evidence.statistic if fit_evidence else None) or "test statistic"
         facts.append([_Raw("Test statistic <span class='note'>(larger: further beyond what "
                            "moisture explains; the p-value above is what it means)</span>"),
                       _Raw(f"{stat:.4g} <span class='note'>{html.escape(str(name))}</span>")])
@@ -532,7 +544,7 @@ def render_html(r: ReportInputs, generated_at: str, figures: dict[str, bytes]) -
         [[label, _Raw(f"{w:.4f}"), _Raw(f"{100 * (w / w0 - 1):+.2f}"), _Raw(f"{cg:.2f}"),
           _Raw(f"{cg - cg0:+.3f}"), _Raw(f"{i:.0f}"), _Raw(f"{100 * (i / i0 - 1):+.2f}")]
          for label, w, cg, i in rows]))
-    modes = v.get("modes") or []
+    modes = [jsonable(ModePair.from_json_dict(m).to_json_dict()) for m in v.get("modes") or []]
     if modes:
         keys = list(dict.fromkeys(k for m in modes for k in m))
         parts.append("<h2>Paired modes</h2>")

@@ -25,7 +25,7 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from batlab import pipeline  # noqa: E402
-from batlab.commands.demo import RETEST, simulate_pair  # noqa: E402
+from batlab.pipeline import DEMO_RETEST, simulate_demo_pair  # noqa: E402
 from batlab.registry import open_registry  # noqa: E402
 from batlab.report import write_report  # noqa: E402
 
@@ -57,10 +57,12 @@ def main() -> int:
 
     pages = {}
     with open_registry(work / "registry.sqlite") as conn:
-        for case, alteration in (("clean", None), ("altered", RETEST["alteration"])):
+        for case, alteration in (("clean", None), ("altered", DEMO_RETEST["alteration"])):
             folder = work / case
             folder.mkdir(parents=True, exist_ok=True)
-            profile, meta, baseline, retest = simulate_pair(folder, 7, progress, alteration)
+            files = simulate_demo_pair(folder, 7, progress, alteration)
+            profile, meta, baseline, retest = files.profile, files.meta, files.baseline, \
+                files.retest
             done = pipeline.register_files(conn, profile, meta, baseline, replace=True,
                                            progress=progress)
             result = pipeline.inspect_registered(conn, done.record.serial, retest,

@@ -3,8 +3,8 @@ report) can be tested on its own. Each is small but honest about its inputs: the
 real peaks of the driving-point FRF, the inspector decides from the frequency shifts, so
 a wrong file, a lost re-ordering or a swapped test changes what they return.
 
-``use_standins(monkeypatch, ...)`` patches batlab.pipeline; pass ``fit=False`` etc. to keep a
-real stage once it exists.
+``use_standins(monkeypatch, ...)`` patches batlab.pipeline.inspection (where the pipeline's
+stage calls live); pass ``fit=False`` etc. to keep a real stage once it exists.
 """
 
 from __future__ import annotations
@@ -73,7 +73,7 @@ def fake_inspect(profile, reference, baseline, retest, false_alarm, conditions=N
 
 def use_standins(monkeypatch, fit: bool = True, calibrate: bool = True,
                  inspect: bool = True) -> None:
-    import batlab.pipeline as pipeline
+    import batlab.pipeline.inspection as pipeline
 
     if fit:
         monkeypatch.setattr(pipeline, "fit_modes", fake_fit)

@@ -13,7 +13,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from batlab.pipeline import jsonable
+from batlab.registry import history, open_registry
 from ema.io.frf_io import write_test
+from updating.inspect.details import InspectionDetails, ModePair
 from updating.model.lab_input import read_meta
 from updating.model.material import Material
 from updating.model.profile import read_profile_csv
@@ -55,6 +58,19 @@ def batlab(args) -> dict:
     return json.loads(res.stdout)
 
 
+def assert_stored_record_reads_back(db) -> dict:
+    """The latest stored verdict record's details and modes read through the typed
+    ``from_json_dict`` and written again give the stored JSON exactly."""
+    with open_registry(db, create=False) as conn:
+        record = history(conn, "HX-2001")[-1].verdict
+    details = InspectionDetails.from_json_dict(record["details"])
+    assert details.fit is not None and details.p_value == record["details"]["p_value"]
+    assert jsonable(details.to_json_dict()) == record["details"]
+    assert [ModePair.from_json_dict(m).to_json_dict() for m in record["modes"]] == \
+        record["modes"]
+    return record
+
+
 def test_corked_retest_found_in_place(registry):
     tmp, db = registry
     out = batlab(["inspect", "--serial", "HX-2001", SAMPLE / "retest_corked.uff",
@@ -78,6 +94,9 @@ def test_corked_retest_found_in_place(registry):
                               SAMPLE / "meta.json", "--baseline", SAMPLE / "baseline.uff",
                               "--retest", SAMPLE / "retest_corked.uff", "--json"])
     assert stateless == out
+    record = assert_stored_record_reads_back(db)
+    details = InspectionDetails.from_json_dict(record["details"])
+    assert details.msso.result is not None and details.msso.region_m is not None
 
 
 def test_drifted_retest_is_not_altered(registry):
@@ -88,3 +107,4 @@ def test_drifted_retest_is_not_altered(registry):
     assert out["region_in"] is None and out["core_diameter_in"] is None
     assert out["fill_density_ratio"] is None
     assert len(out["elements"]) > 10
+    assert_stored_record_reads_back(db)

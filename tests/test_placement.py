@@ -9,7 +9,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from batlab.cli import main
-from batlab.model_summary import summarise_model
+from batlab.pipeline import summarise_model
 from updating.model.assembly import build_model
 from updating.model.material import Material
 from updating.model.placement import BARREL_ZONE_IN, effective_independence

@@ -16,7 +16,7 @@ SAMPLE = Path("data_samples/smooth_bat").resolve()
 
 
 def _lab_worker(db: str, folder: str, serial: str, n_inspections: int) -> None:
-    import batlab.pipeline as pipeline
+    import batlab.pipeline.inspection as pipeline
     from batlab.cli import main
     from tests.inspect_standins import fake_calibrate, fake_fit, fake_inspect
 

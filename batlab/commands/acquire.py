@@ -1,7 +1,7 @@
 """`batlab acquire`: roving-hammer test over a serial port (or a recorded raw stream).
 
 Live: handshake with the box, for each point take --hits accepted hits, STOP, write the FRFs
-(UFF, CSV or NPZ by extension, via ema.io.frf_io.write_test). Every byte from the box goes to
+(UFF, CSV or NPZ by extension; ``batlab.pipeline.acquisition``). Every byte from the box goes to
 the raw stream file first, with a JSON sidecar holding the session settings so that
 ``--replay RAW`` re-runs the same path.
 """
@@ -13,8 +13,6 @@ import json
 import sys
 from dataclasses import asdict
 from pathlib import Path
-
-from ema.io.atomic_write import atomic_write
 
 HELP = "run a roving-hammer impact test over a serial port (or replay a recorded stream)"
 EXAMPLE = ("batlab acquire --port /dev/ttyACM0 --points 1,3,5,7,9,11,13,15,16 "
@@ -68,8 +66,7 @@ def _positions_m(args: argparse.Namespace, points: list[int], side: dict) -> dic
     recorded session's sidecar, else the default marks (every 2 in from 1 in)."""
     import numpy as np
 
-    from rigs.session import DEFAULT_POINTS_IN
-    from updating.model.units import IN_TO_M
+    from batlab.pipeline import DEFAULT_POINTS_IN, IN_TO_M
 
     where = "default marks"
     if args.meta:
@@ -95,10 +92,6 @@ def _positions_m(args: argparse.Namespace, points: list[int], side: dict) -> dic
     return {n: float(x[n - 1]) for n in range(1, x.size + 1)}
 
 
-def _write_json_atomic(path: Path, obj: dict) -> None:
-    atomic_write(path, lambda tmp: tmp.write_text(json.dumps(obj, indent=1)))
-
-
 def _read_sidecar(path: Path, required: bool) -> dict:
     if not path.exists():
         if required:
@@ -121,12 +114,21 @@ def _resume_raw(raw: Path) -> Path:
 def run(args: argparse.Namespace) -> int:
     import numpy as np
 
-    from batlab.session_files import load_points, save_points
-    from rigs.capture import CaptureSettings
-    from rigs.driver import ReplaySource, SerialDevice, open_port
-    from rigs.protocol import device_info_from_dict
-    from rigs.session import SessionInterrupted, combine, run_session
-    from updating.model.units import IN_TO_M
+    from batlab.pipeline import (
+        IN_TO_M,
+        CaptureSettings,
+        ReplaySource,
+        SerialDevice,
+        SessionInterrupted,
+        combine,
+        device_info_from_dict,
+        load_points,
+        open_port,
+        run_session,
+        save_points,
+        write_json_atomic,
+        write_session_test,
+    )
 
     def progress(msg: str) -> None:
         print(msg, file=sys.stderr, flush=True)
@@ -188,7 +190,7 @@ def run(args: argparse.Namespace) -> int:
                 "points_in": positions_in, "points_file": points_file.name,
                 "completed": sorted(done), "segments": side.get("segments", [raw.name])
                 + ([seg.name] if args.resume else []), "log": log_before}
-        _write_json_atomic(side_path, side)
+        write_json_atomic(side_path, side)
         source = SerialDevice(port, seg, csv_info, silence_s=args.timeout_s)
     else:
         source = ReplaySource(raw, csv_info)
@@ -197,7 +199,7 @@ def run(args: argparse.Namespace) -> int:
         done[point] = est
         if args.port:  # completed points and their hit log are on disk as they complete
             save_points(points_file, done)
-            _write_json_atomic(side_path, side | {"completed": sorted(done), "log": log_before
+            write_json_atomic(side_path, side | {"completed": sorted(done), "log": log_before
                                                   + [asdict(h) for h in log]})
 
     interrupted: SessionInterrupted | None = None
@@ -219,7 +221,7 @@ def run(args: argparse.Namespace) -> int:
     if interrupted is not None:
         log = log_before + [asdict(h) for h in interrupted.log]
         if args.port:
-            _write_json_atomic(side_path, side | {"completed": sorted(done), "log": log})
+            write_json_atomic(side_path, side | {"completed": sorted(done), "log": log})
             raise ValueError(f"{interrupted}; {len(done)} of {len(points)} points saved in "
                              f"{points_file}: continue with batlab acquire --port PORT "
                              f"--resume --raw {raw}"
@@ -239,18 +241,9 @@ def run(args: argparse.Namespace) -> int:
 
     log_all = log_before + result.hits_as_dicts()
     if args.port:
-        _write_json_atomic(side_path, side | {"completed": sorted(done), "log": log_all})
-    if args.output:
-        from ema.io.frf_data import FrfTest
-        from ema.io.frf_io import write_test
-
-        out = Path(args.output)
-        test = FrfTest(result.freq_hz, result.h1, [driving], result.points,
-                       {n: node_x[n] for n in sorted(set(points) | {driving})},
-                       coherence=result.coherence, exp_window_tau_s=tau,
-                       meta={"source": "batlab acquire", "raw_stream": str(raw),
-                             "device": result.info.name, "hits_per_point": hits})
-        write_test(out, test)  # atomic (temporary name, then os.replace)
+        write_json_atomic(side_path, side | {"completed": sorted(done), "log": log_all})
+    if args.output:  # atomic (temporary name, then os.replace)
+        write_session_test(Path(args.output), result, points, driving, node_x, tau, raw, hits)
     rejected = [{"point": h["point"], "hit": h["hit"], "reason": h["reason"],
                  "detail": h["detail"]} for h in log_all if not h["accepted"]]
     summary = {"accepted": int(sum(h["accepted"] for h in log_all)), "rejected": rejected,

@@ -15,12 +15,11 @@ def add_arguments(p) -> None:
 
 
 def run(args) -> int:
-    from batlab.pipeline import history_table
+    from batlab.pipeline import history_table, write_csv
     from batlab.registry import open_registry
-    from ema.io.atomic_write import atomic_write
 
     with open_registry(db_path(args), create=False) as conn:
         table = history_table(conn, args.serial)
-    atomic_write(args.output, lambda tmp: table.to_csv(tmp, index=False))
+    write_csv(args.output, table)
     print(f"{len(table)} inspection(s) written to {args.output}")
     return 0

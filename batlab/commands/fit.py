@@ -5,8 +5,7 @@ from __future__ import annotations
 import json
 import sys
 
-from ema.fit import MIN_SNR
-from updating.model.units import IN_TO_M, KG_M2_TO_LB_IN2, LB_TO_KG
+from batlab.pipeline import IN_TO_M, KG_M2_TO_LB_IN2, LB_TO_KG, MIN_SNR
 
 HELP = "fit natural frequencies, damping and mass-normalised mode shapes to a test's FRFs"
 EXAMPLE = "batlab fit baseline.uff --json"
@@ -159,31 +158,24 @@ def explain(fit) -> list[str]:
 
 
 def run(args) -> int:
-    from ema.fit import fit_test
-    from ema.io.frf_io import read_test
+    from batlab import pipeline
 
     print(f"batlab fit: reading {args.test}", file=sys.stderr)
-    test = read_test(args.test, require_driving=False)
+    test = pipeline.read_test_file(args.test, require_driving=False)
     print(f"batlab fit: {test.frf.shape[1]} x {test.frf.shape[2]} FRFs, "
           f"{test.freq_hz.size} lines; fitting ({args.method})", file=sys.stderr)
-    fit = fit_test(test, band_hz=args.band, method=args.method, max_order=args.max_order,
-                   known_mass_kg=args.mass_kg, refine=args.refine, min_snr=args.min_snr)
+    fit = pipeline.fit_test_file(test, band_hz=args.band, method=args.method,
+                                 max_order=args.max_order, known_mass_kg=args.mass_kg,
+                                 refine=args.refine, min_snr=args.min_snr)
     print(f"batlab fit: {fit.freq_hz.size} modes"
           + ("" if fit.scaled else " (unscaled shapes: no driving point)"), file=sys.stderr)
     for line in explain(fit):
         print(line, file=sys.stderr)
     if args.out:
-        from ema.io.uff_modes import write_modes_uff
-
-        write_modes_uff(args.out, fit.freq_hz, fit.damping_ratio, fit.real_shapes, fit.nodes,
-                        fit.x_m)
+        pipeline.write_modes_file(args.out, fit)
         print(f"batlab fit: modes written to {args.out}", file=sys.stderr)
     if args.plot:
-        from ema.plots import plot_fit
-
-        sel = (test.freq_hz >= fit.band_hz[0]) & (test.freq_hz <= fit.band_hz[1])
-        sel &= test.freq_hz > 0
-        for path in plot_fit(fit, test.frf[sel], args.plot):
+        for path in pipeline.plot_fit_files(fit, test, args.plot):
             print(f"batlab fit: plot {path}", file=sys.stderr)
     if args.json:
         print(json.dumps(summary(fit)))

@@ -30,23 +30,19 @@ def add_arguments(p) -> None:
 
 
 def run(args) -> int:
-    from batlab.model_summary import summarise_model
-    from batlab.wood import wood
-    from updating.model.assembly import build_model
-    from updating.model.lab_input import parse_core_spec
-    from updating.model.profile import paper_profile, read_profile_csv
+    from batlab import pipeline
+    from batlab.cli_support import note_printer
 
-    profile = read_profile_csv(args.profile) if args.profile else paper_profile()
-    material = wood(args.meta, args.e_over_g, "model")
-    core = parse_core_spec(args.alter) if args.alter else None
+    profile = pipeline.bat_profile(args.profile)
+    material = pipeline.wood(args.meta, args.e_over_g, note_printer("model"))
     rotary = None if args.rotary_inertia is None else args.rotary_inertia == "on"
-    model = build_model(profile, material, beam=args.beam, rotary_inertia=rotary,
-                        n_elements=args.elements, core=core)
-    out = summarise_model(model, n_modes=args.modes, n_points=args.points)
+    model = pipeline.bat_model(profile, material, beam=args.beam, rotary_inertia=rotary,
+                               n_elements=args.elements, alter=args.alter)
+    out = pipeline.summarise_model(model, n_modes=args.modes, n_points=args.points)
     if args.json:
         print(json.dumps(out))
     else:
-        print(f"{model.n_elements} elements, {out['ndof']} DOF, {args.beam} beam", file=sys.stdout)
+        print(f"{out['n_elements']} elements, {out['ndof']} DOF, {args.beam} beam", file=sys.stdout)
         print(f"weight {out['weight_lb']:.4f} lb, centre of mass {out['cg_in']:.3f} in "
               f"from the knob, I_knob {out['moi_knob_lb_in2']:.1f} lb in^2, "
               f"I_cg {out['moi_cg_lb_in2']:.1f} lb in^2")

@@ -20,7 +20,7 @@ def add_arguments(p) -> None:
 
 
 def run(args) -> int:
-    from batlab.paper_case import PAPER, TRUE, element_rows, plot_figures, run_paper_case
+    from batlab.pipeline import PAPER, TRUE, element_rows, plot_figures, run_paper_case
 
     if args.noise < 0 or not 2 <= args.modes <= 10:
         raise ValueError("--noise must be >= 0 and --modes between 2 and 10")

@@ -23,9 +23,8 @@ def add_arguments(p) -> None:
 
 
 def run(args) -> int:
-    from batlab.pipeline import register_files
+    from batlab.pipeline import LBF_IN3_TO_KG_M3, PSI_TO_PA, register_files
     from batlab.registry import open_registry
-    from updating.model.units import LBF_IN3_TO_KG_M3, PSI_TO_PA
 
     progress = progress_printer("register")
     path = db_path(args)

@@ -46,38 +46,24 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--once", action="store_true", help="exit after the host's STOP")
 
 
-def _profile_model(args: argparse.Namespace, points_m: np.ndarray):
-    """ModalModel of a bat at ``points_m`` from its profile (updating's virtual bat: FE model,
-    Timoshenko, 3 g accelerometer at the driving point, two 150 N/m bungees)."""
-    from batlab.wood import wood
-    from updating.model.lab_input import parse_core_spec
-    from updating.model.profile import read_profile_csv
-    from updating.simulate.virtual_bat import VirtualBat, modal_model
-
-    profile = read_profile_csv(args.profile)
-    material = wood(args.meta, None, "rig")
-    accel = (args.accel_point - 1) if args.accel_point else -1
-    bat = VirtualBat(profile, material, points_m, sensor_index=accel, sensor_mass_kg=0.003,
-                     bungee_k_n_per_m=150.0,
-                     core=parse_core_spec(args.alter) if args.alter else None)
-    modal, _ = modal_model(bat)
-    return modal, bat.sensor_point()
-
-
 def run(args: argparse.Namespace) -> int:
-    from rigs.modal_model import uniform_beam_modes
-    from rigs.session import DEFAULT_POINTS_IN
-    from rigs.virtual_box import FAULTS, BoxConfig, VirtualBox, default_info
-    from updating.model.units import IN_TO_M
+    from batlab import pipeline
+    from batlab.cli_support import note_printer
+    from batlab.pipeline import (
+        DEFAULT_POINTS_IN,
+        FAULTS,
+        IN_TO_M,
+        BoxConfig,
+        VirtualBox,
+        default_info,
+    )
 
     faults = tuple(f for f in args.faults.split(",") if f)
     unknown = [f for f in faults if f not in FAULTS]
     if unknown:
         raise ValueError(f"--faults: unknown fault(s) {', '.join(unknown)}")
     if args.meta and not args.points_in:
-        from updating.model.lab_input import read_meta
-
-        points_in = read_meta(args.meta).points_m / IN_TO_M
+        points_in = pipeline.meta_points_m(args.meta) / IN_TO_M
         if not points_in.size:
             raise ValueError(f"{args.meta}: no points_in")
     elif args.points_in:
@@ -88,12 +74,14 @@ def run(args: argparse.Namespace) -> int:
     else:
         points_in = np.array(DEFAULT_POINTS_IN)
     if args.profile:
-        model, accel = _profile_model(args, points_in * IN_TO_M)
+        model, accel = pipeline.bat_modal_model(args.profile, args.meta, points_in * IN_TO_M,
+                                                args.accel_point, args.alter,
+                                                note_printer("rig"))
     else:
         if args.alter:
             raise ValueError("--alter needs --profile (the uniform beam cannot be altered)")
-        model = uniform_beam_modes(args.length_in * IN_TO_M, args.mass_kg, args.f1_hz,
-                                   points_in * IN_TO_M)
+        model = pipeline.uniform_beam_model(args.length_in * IN_TO_M, args.mass_kg,
+                                            args.f1_hz, points_in * IN_TO_M)
         accel = (args.accel_point or len(points_in)) - 1
     if not 0 <= accel < len(points_in):
         raise ValueError(f"--accel-point {args.accel_point} is not one of 1..{len(points_in)}")

@@ -60,24 +60,19 @@ def add_arguments(p) -> None:
 
 def run_case(args) -> int:
     """`--case DIR`: one random bat of the nuisance-rich fleet, written as lab files."""
-    import numpy as np
-
-    from updating.simulate.field_fleet import draw_case, write_case
-    from updating.simulate.nuisances import NUISANCES
+    from batlab import pipeline
 
     if args.nuisances == "all":
-        nuisances = NUISANCES
+        nuisances = pipeline.nuisance_names()
     elif args.nuisances == "none":
         nuisances = ()
     else:
         nuisances = tuple(n.strip() for n in args.nuisances.split(",") if n.strip())
-    rng = np.random.default_rng(args.seed)
-    case = draw_case(rng, args.kind, nuisances, args.integrity)
-    print(f"simulating a {args.kind} bat with {', '.join(nuisances) or 'no nuisance'} ...",
-          file=sys.stderr)
-    paths = write_case(case, args.case, seed=int(rng.integers(2**31)), truth=True)
+    paths, expected = pipeline.simulate_field_case(
+        args.seed, args.kind, nuisances, args.integrity, args.case,
+        progress=lambda msg: print(msg, file=sys.stderr))
     summary = {k: str(v) for k, v in paths.items() if v is not None}
-    summary["expected"] = case.expected
+    summary["expected"] = expected
     if args.json:
         print(json.dumps(summary))
     else:
@@ -94,40 +89,36 @@ def run(args) -> int:
         raise ValueError("--out is required (or --case DIR)")
     import numpy as np
 
-    from batlab.wood import wood
-    from ema.io.frf_io import write_test
-    from updating.model.lab_input import parse_core_spec, read_meta
-    from updating.model.profile import paper_profile, read_profile_csv
-    from updating.model.units import IN_TO_M
-    from updating.simulate.virtual_bat import VirtualBat, simulate_test
+    from batlab import pipeline
+    from batlab.cli_support import note_printer
+    from batlab.pipeline import IN_TO_M
 
-    profile = read_profile_csv(args.profile) if args.profile else paper_profile()
-    meta = read_meta(args.meta) if args.meta else None
-    material = wood(args.meta, args.e_over_g, "simulate").scaled(args.E_scale,
-                                                                  args.density_scale)
+    profile = pipeline.bat_profile(args.profile)
+    meta_points_m = pipeline.meta_points_m(args.meta) if args.meta else None
+    material = pipeline.wood(args.meta, args.e_over_g, note_printer("simulate")).scaled(
+        args.E_scale, args.density_scale)
     if args.points:
         try:
             points = np.array([float(v) for v in args.points.split(",")]) * IN_TO_M
         except ValueError:
             raise ValueError(f"--points {args.points!r}: not a comma-separated list") from None
-    elif meta is not None and meta.points_m.size:
-        points = meta.points_m
+    elif meta_points_m is not None and meta_points_m.size:
+        points = meta_points_m
     else:
         points = np.arange(1.0, profile.length_m / IN_TO_M, 2.0) * IN_TO_M
     if points.size < 2 or points.min() < 0 or points.max() > profile.length_m:
         raise ValueError("impact points must be at least two, within the bat")
     if args.df <= 0 or args.fmax <= args.df:
         raise ValueError("--df must be positive and below --fmax")
-    bat = VirtualBat(
+    bat = pipeline.virtual_bat(
         profile, material, np.sort(points), sensor_offset_m=args.sensor_offset_in * IN_TO_M,
         sensor_mass_kg=args.sensor_mass_g / 1000, bungee_k_n_per_m=args.bungee_k,
-        beam=args.beam, core=parse_core_spec(args.alter) if args.alter else None,
-        moisture_pct=args.moisture, zeta1=args.zeta, rel_noise=args.noise_pct / 100,
-    )
+        beam=args.beam, alter=args.alter, moisture_pct=args.moisture, zeta1=args.zeta,
+        rel_noise=args.noise_pct / 100)
     freq = np.arange(0.0, args.fmax + args.df / 2, args.df)
     print(f"simulating {points.size} impact points, {freq.size} lines ...", file=sys.stderr)
-    test = simulate_test(bat, freq, seed=args.seed)
-    write_test(args.out, test)
+    test = pipeline.simulate_bat_test(bat, freq, seed=args.seed)
+    pipeline.write_frf(args.out, test)
     summary = {"out": str(args.out),
                "points_in": [round(float(x), 4) for x in np.sort(points) / IN_TO_M],
                "driving_point_node": int(test.response_nodes[0]), "lines": int(freq.size)}

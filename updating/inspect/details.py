@@ -2,12 +2,16 @@
 
 Built once by ``updating.inspect.run.inspect_retest``; readers use attributes. For storage and
 ``--json`` each type has one ``to_json_dict()`` (the keys and values the registry has always
-stored, so records written before these types existed read the same).
+stored, so records written before these types existed read the same), and its inverse
+``from_json_dict()`` for readers of stored records (the report, the history): a key an older
+record lacks takes its field's "not computed" value (None, empty, NaN), never an error.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass, field, fields
 from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:  # only a type here: fit.py imports this module without the MSSO stack
@@ -39,6 +43,15 @@ class ModePair:
     def to_json_dict(self) -> dict[str, float]:
         return {k: float(v) for k, v in vars(self).items() if v is not None}
 
+    @classmethod
+    def from_json_dict(cls, d: Mapping[str, Any]) -> ModePair:
+        """Inverse of ``to_json_dict``: a stored null (NaN) is NaN, a missing key None
+        (missing frequencies NaN); unknown keys are ignored."""
+        kw = {f.name: _num(d[f.name]) for f in fields(cls) if f.name in d}
+        kw.setdefault("baseline_hz", math.nan)
+        kw.setdefault("retest_hz", math.nan)
+        return cls(**kw)
+
 
 @dataclass(frozen=True)
 class PositionScan:
@@ -60,6 +73,14 @@ class PositionScan:
         return {"scan_norm": list(self.scan_norm),
                 "starts_plug_length_in": [list(s) for s in self.starts_plug_length_in],
                 "start_rss": list(self.start_rss)}
+
+    @classmethod
+    def from_json_dict(cls, d: Mapping[str, Any] | None) -> PositionScan:
+        """Inverse of ``to_json_dict`` (an empty or missing scan: ``PositionScan()``)."""
+        d = d or {}
+        return cls(tuple(float(v) for v in d.get("scan_norm") or ()),
+                   tuple((float(a), float(b)) for a, b in d.get("starts_plug_length_in") or ()),
+                   tuple(float(v) for v in d.get("start_rss") or ()))
 
 
 @dataclass(frozen=True)
@@ -88,6 +109,33 @@ class ElementMap:
             out["agrees_with_fit"] = bool(self.agrees_with_fit)
         return out
 
+    @classmethod
+    def from_json_dict(cls, d: Mapping[str, Any] | None, x0_m=None, x1_m=None) -> ElementMap:
+        """Inverse of ``to_json_dict``. The stored map does not repeat the element ends (the
+        record's ``elements`` hold them): pass them as ``x0_m``, ``x1_m``, else they are NaN.
+        No ``alpha``: no map (with the stored ``error`` if any)."""
+        d = d or {}
+        if "alpha" not in d:
+            return cls(error=d.get("error"))
+        import numpy as np
+
+        from updating.inspect.msso_map import MssoMap  # numpy, only for a stored map
+
+        alpha = np.asarray(d["alpha"], dtype=float)
+        ends = [np.full(alpha.size, np.nan) if x is None else np.asarray(x, dtype=float)
+                for x in (x0_m, x1_m)]
+        region = d.get("region_m")
+        result = MssoMap(
+            ends[0], ends[1], alpha, np.asarray(d.get("beta") or [], dtype=float),
+            np.asarray(d.get("alpha_std") or [], dtype=float),
+            np.asarray(d.get("beta_std") or [], dtype=float),
+            None if region is None else (float(region[0]), float(region[1])),
+            _num(d.get("peak_z")), int(d.get("rank") or 0), _num(d.get("chi2")),
+            int(d.get("n_data") or 0), _num(d.get("baseline_chi2")),
+            tuple(d.get("groups") or ()), _num(d.get("time_s")))
+        agrees = d.get("agrees_with_fit")
+        return cls(result, None if agrees is None else bool(agrees))
+
 
 @dataclass(frozen=True)
 class CoreCandidate:
@@ -107,6 +155,14 @@ class CoreCandidate:
         return {"region_m": list(self.region_m), "diameter_m": self.diameter_m,
                 "fill_density_ratio": self.fill_density_ratio,
                 "uncertainty": dict(self.uncertainty)}
+
+    @classmethod
+    def from_json_dict(cls, d: Mapping[str, Any] | None) -> CoreCandidate:
+        """Inverse of ``to_json_dict`` (missing values NaN)."""
+        d = d or {}
+        region = d.get("region_m") or (math.nan, math.nan)
+        return cls((_num(region[0]), _num(region[1])), _num(d.get("diameter_m")),
+                   _num(d.get("fill_density_ratio")), dict(d.get("uncertainty") or {}))
 
 
 @dataclass(frozen=True)
@@ -204,3 +260,43 @@ class InspectionDetails:
             "plug_m": f.plug_m, "fill_modulus_ratio": f.fill_modulus_ratio,
             "time_s": self.time_s,
         }
+
+    @classmethod
+    def from_json_dict(cls, d: Mapping[str, Any] | None, x0_m=None, x1_m=None
+                       ) -> InspectionDetails:
+        """Inverse of ``to_json_dict``: a stored record's ``details`` (None or {}: nothing
+        known). The fit evidence is read when the record has the test (``statistic`` or
+        ``p_value``); ``x0_m``, ``x1_m``: the element ends for the MSSO map (see
+        ``ElementMap.from_json_dict``)."""
+        d = d or {}
+        n_modes = int(d.get("n_modes") or 0)
+        time_s = None if d.get("time_s") is None else float(d["time_s"])
+        if "statistic" not in d and "p_value" not in d:
+            return cls(n_modes, time_s)
+        dof = d.get("dof") or (0, 0)
+        weight = d.get("weight_change_rel")
+        fit = FitEvidence(
+            statistic=str(d.get("statistic") or ""), dof=(int(dof[0]), int(dof[1])),
+            p_value=_num(d.get("p_value")), rss_null=_num(d.get("rss_null")),
+            rss_core=_num(d.get("rss_core")), n_data=int(d.get("n_data") or 0),
+            shape_noise_rel=_num(d.get("shape_noise_rel")),
+            freq_noise_rel=tuple(float(v) for v in d.get("freq_noise_rel") or ()),
+            null_fit=dict(d.get("null_fit") or {}),
+            null_at_bound=tuple(d.get("null_at_bound") or ()),
+            core_fit_at_bound=tuple(d.get("core_fit_at_bound") or ()),
+            weight_change_rel=None if weight is None else float(weight),
+            element_source=str(d.get("element_source") or ""),
+            element_beta_shear=tuple(float(v) for v in d.get("element_beta_shear") or ()),
+            candidate_core=CoreCandidate.from_json_dict(d.get("candidate_core")),
+            core_fit_moisture=dict(d.get("core_fit_moisture") or {}),
+            sensor_shift_m=_num(d.get("sensor_shift_m")),
+            baseline_sensor_offset_m=_num(d.get("baseline_sensor_offset_m")),
+            position_scan=PositionScan.from_json_dict(d.get("position_scan")),
+            msso=ElementMap.from_json_dict(d.get("msso"), x0_m, x1_m),
+            plug_m=_num(d.get("plug_m")), fill_modulus_ratio=_num(d.get("fill_modulus_ratio")))
+        return cls(n_modes, time_s, fit)
+
+
+def _num(v: Any) -> float:
+    """A stored number (JSON null: NaN was stored as null) as a float; missing: NaN."""
+    return math.nan if v is None else float(v)

@@ -41,8 +41,8 @@ import numpy as np
 
 from updating.inspect.details import PositionScan
 from updating.inspect.model import ChangeParams
+from updating.lsq import LsqSolution, solve_bounded
 from updating.lsq import covariance as lsq_covariance
-from updating.lsq import solve_bounded
 from updating.model.profile import Profile
 from updating.model.sections import Core
 from updating.model.units import IN_TO_M
@@ -190,20 +190,35 @@ class Differences:
 
 @dataclass(frozen=True)
 class ChangeFit:
-    """A least-squares solution: parameters, weighted residual, Jacobian (in x units)."""
+    """A change fit: the least-squares solution (x, weighted residual, Jacobian in x units,
+    active bounds), the bat's state it stands for, and where the residual's blocks are
+    (``n_freq`` frequency rows, then ``n_psi`` shape rows)."""
 
-    x: np.ndarray
+    solution: LsqSolution
     params: ChangeParams
-    residual: np.ndarray
-    jac: np.ndarray
     n_freq: int
     n_psi: int
-    active: np.ndarray
-    """(len(x),) -1 / +1 where a lower / upper bound holds the solution, else 0."""
+
+    @property
+    def x(self) -> np.ndarray:
+        return self.solution.x
+
+    @property
+    def residual(self) -> np.ndarray:
+        return self.solution.residual
+
+    @property
+    def jac(self) -> np.ndarray:
+        return self.solution.jac
+
+    @property
+    def active(self) -> np.ndarray:
+        """(len(x),) -1 / +1 where a lower / upper bound holds the solution, else 0."""
+        return self.solution.active
 
     @property
     def rss(self) -> float:
-        return float(self.residual @ self.residual)
+        return self.solution.ssr
 
     @property
     def rss_shapes(self) -> float:
@@ -327,8 +342,7 @@ def fit_bounded(fun: Callable, x0: np.ndarray, lower: np.ndarray, upper: np.ndar
     f, jac = forward_jacobian(fun, upper)
     res = solve_bounded(f, x0, lower, upper, jac=jac, margin=0.01 * (upper - lower),
                         x_scale=1.0, ftol=1e-6, xtol=1e-6, max_nfev=max_nfev)
-    return ChangeFit(res.x, space.params(res.x), res.residual, res.jac, diff.n_freq,
-                     diff.dpsi.size, res.active)
+    return ChangeFit(res, space.params(res.x), diff.n_freq, diff.dpsi.size)
 
 
 def fit_null(predict, diff: Differences, space: ParamSpace, sigma_rel: float,

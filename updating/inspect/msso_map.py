@@ -42,7 +42,7 @@ from updating.model.modes import model_modes
 from updating.model.profile import Profile
 from updating.model.reference import BatReference
 from updating.msso.core_reading import changed_region
-from updating.msso.factors import apply_factors, choose_groups, zero_factors
+from updating.msso.factors import Mass, Stiffness, apply_factors, choose_groups, zero_factors
 from updating.msso.iterate import refine
 from updating.msso.update import ElementUpdate, update_elements
 
@@ -126,7 +126,7 @@ def msso_map(
     *, stiffness_scale: float, density_scale: float, sensor_shift_m: float,
     baseline_sensor_offset_m: float = 0.0, shape_sigma: float, freq_sigma: float,
     prior_sigma: float = PRIOR_SIGMA,
-    stiffness: str = "bend", mass: str = "trans", mass_normalised: bool = True,
+    stiffness: Stiffness = "bend", mass: Mass = "trans", mass_normalised: bool = True,
 ) -> MssoMap:
     """The element map of ``retest`` (module docstring).
 

@@ -11,6 +11,7 @@ from dataclasses import dataclass
 
 import numpy as np
 import scipy.linalg
+import scipy.sparse
 
 from updating.model.assembly import BatModel, assemble
 
@@ -43,6 +44,14 @@ def rigid_body_shapes(node_x_m: np.ndarray, M: np.ndarray) -> np.ndarray:
     return np.linalg.solve(L, R.T).T
 
 
+def column_quadratic_forms(A: np.ndarray, V: np.ndarray) -> np.ndarray:
+    """diag(V^T A V), (m,), for a banded A (n, n) and V (n, m): A is read as a sparse matrix,
+    so the cost is O(nnz(A) m + n^2) instead of the dense product's O(n^2 m) -- for all modes
+    of a fine mesh (m = n) that is the difference between a fraction of the eigen-solution's
+    time and as much again."""
+    return np.einsum("ij,ij->j", V, scipy.sparse.csr_array(A) @ V)
+
+
 def solve_modes(
     K: np.ndarray, M: np.ndarray, node_x_m: np.ndarray | None = None, n_modes: int | None = None,
 ) -> Modes:
@@ -61,7 +70,7 @@ def solve_modes(
     _, vec = scipy.linalg.eigh(K, M, subset_by_index=subset)
     # Rayleigh quotients of the vectors: the solver's eigenvalues carry an absolute error of
     # order eps * lambda_max, large for fine meshes; the quotient's error is quadratic.
-    lam = np.einsum("ij,ij->j", vec, K @ vec) / np.einsum("ij,ij->j", vec, M @ vec)
+    lam = column_quadratic_forms(K, vec) / column_quadratic_forms(M, vec)
     n_rigid = 0
     if free and m >= 2:
         n_rigid = 2

@@ -15,15 +15,26 @@ In the exact (section-rebuilding) model, "bend" scales EI, "shear" kGA, "trans" 
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Literal, get_args
 
 import numpy as np
 
 from updating.model.assembly import BatModel, scale_sections
 
+Stiffness = Literal["element", "separate", "bend"]
+"""Stiffness parameterisation: the paper's one beta per element (k_i), bending and shear
+separately, or bending only; None: stiffness not updated."""
+Mass = Literal["element", "separate", "trans"]
+"""Mass parameterisation: the paper's one alpha per element (m_i), translational and rotary
+separately, or translational only; None: mass not updated."""
+
 GROUP_PARTS = {"k": ("bend", "shear"), "m": ("trans", "rot"), "bend": ("bend",),
                "shear": ("shear",), "trans": ("trans",), "rot": ("rot",)}
-STIFFNESS = {"element": ("k",), "separate": ("bend", "shear"), "bend": ("bend",), None: ()}
-MASS = {"element": ("m",), "separate": ("trans", "rot"), "trans": ("trans",), None: ()}
+STIFFNESS: dict[Stiffness | None, tuple[str, ...]] = {
+    "element": ("k",), "separate": ("bend", "shear"), "bend": ("bend",), None: ()}
+MASS: dict[Mass | None, tuple[str, ...]] = {
+    "element": ("m",), "separate": ("trans", "rot"), "trans": ("trans",), None: ()}
+assert set(STIFFNESS) == {*get_args(Stiffness), None} and set(MASS) == {*get_args(Mass), None}
 PART_ATTR = {"bend": "k_bend", "shear": "k_shear", "trans": "m_trans", "rot": "m_rot"}
 SECTION_OF = {"bend": "ei", "shear": "kga", "trans": "rhoa", "rot": "rhoi"}
 
@@ -32,13 +43,20 @@ def is_stiffness(group: str) -> bool:
     return group in ("k", "bend", "shear")
 
 
-def choose_groups(model: BatModel, stiffness: str | None = "element",
-                  mass: str | None = "element") -> tuple[str, ...]:
+def check_parameterisation(stiffness: Stiffness | None, mass: Mass | None) -> None:
+    """ValueError naming the option and its choices unless both are known."""
+    for name, value, choices in (("stiffness", stiffness, Stiffness), ("mass", mass, Mass)):
+        if value is not None and value not in get_args(choices):
+            raise ValueError(f"unknown parameterisation {name}={value!r} (one of "
+                             f"{', '.join(get_args(choices))} or None)")
+
+
+def choose_groups(model: BatModel, stiffness: Stiffness | None = "element",
+                  mass: Mass | None = "element") -> tuple[str, ...]:
     """Groups for a stiffness option (element, separate, bend, None) and a mass option
     (element, separate, trans, None); parts that are zero in the model (shear of an
     Euler-Bernoulli beam, rotary inertia when off) are dropped."""
-    if stiffness not in STIFFNESS or mass not in MASS:
-        raise ValueError(f"unknown parameterisation stiffness={stiffness!r}, mass={mass!r}")
+    check_parameterisation(stiffness, mass)
     out = []
     for g in STIFFNESS[stiffness] + MASS[mass]:
         parts = [p for p in GROUP_PARTS[g] if np.any(getattr(model.parts, PART_ATTR[p]))]

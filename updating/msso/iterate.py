@@ -24,6 +24,7 @@ with every factor of a group moved by +-h gives all of that group's element deri
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Literal
 
 import numpy as np
 
@@ -159,11 +160,22 @@ def _with_scale_columns(J, phi_a, psi, w):
 
 AUTO_PRIORS = (0.01, 0.1, 1.0, None)
 
+PriorSigma = float | Literal["auto"] | None
+"""The smoothness prior's standard deviation, "auto" (the discrepancy principle) or None."""
+
+
+def check_prior_sigma(prior_sigma: PriorSigma) -> None:
+    """ValueError unless ``prior_sigma`` is "auto", a number > 0 or None."""
+    if prior_sigma is None or prior_sigma == "auto":
+        return
+    if not isinstance(prior_sigma, (int, float)) or not prior_sigma > 0:
+        raise ValueError(f"unknown prior_sigma {prior_sigma!r} (auto, a number > 0 or None)")
+
 
 def refine(
     model: BatModel, test: MeasuredModes, seed: ElementFactors, groups: tuple[str, ...], *,
     mass_normalised: bool = True, freq_sigma: float = 5e-4, shape_sigma: float = 1e-2,
-    prior_sigma: float | str | None = "auto", weighed_mass_kg: float | None = None,
+    prior_sigma: PriorSigma = "auto", weighed_mass_kg: float | None = None,
     mass_sigma: float = 1e-3, n_rigid: int = 2, max_iter: int = 60, tol: float = 1e-12,
     lower: float = -0.95,
 ) -> RefineResult:
@@ -213,6 +225,7 @@ def refine(
     6(12). Morozov, V. A. (1966), On the solution of functional equations by the method of
     regularization, Soviet Math. Dokl. 7.
     """
+    check_prior_sigma(prior_sigma)
     kw = {"mass_normalised": mass_normalised, "freq_sigma": freq_sigma,
           "shape_sigma": shape_sigma, "n_rigid": n_rigid, "max_iter": max_iter, "tol": tol,
           "lower": lower, "weighed_mass_kg": weighed_mass_kg, "mass_sigma": mass_sigma}

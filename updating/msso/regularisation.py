@@ -15,6 +15,7 @@ are enforced, only if violated, by a bounded solve of the same regularised probl
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Literal, get_args
 
 import numpy as np
 import scipy.linalg
@@ -23,6 +24,11 @@ import scipy.sparse as sp
 
 DENSE_SVD_LIMIT = 1_000_000  # rows * columns below which C is decomposed directly
 RANK_TOL = 1e-7
+
+LambdaRule = Literal["gcv", "lcurve"]
+"""How lam is chosen from the data: generalised cross-validation or the L-curve's corner."""
+Regularisation = LambdaRule | float | None
+"""A rule, a given lam >= 0, or None (minimum-norm pseudo-inverse)."""
 
 
 @dataclass(frozen=True)
@@ -109,7 +115,16 @@ def lcurve_lambda(sp_: Spectrum) -> float:
     return float(lams[int(np.argmax(kappa))])
 
 
-def solve_regularised(C, d: np.ndarray, regularisation: str | float | None = "gcv",
+def check_regularisation(regularisation: Regularisation) -> None:
+    """ValueError unless ``regularisation`` is "gcv", "lcurve", a number >= 0 or None."""
+    if regularisation is None or regularisation in get_args(LambdaRule):
+        return
+    if not isinstance(regularisation, (int, float)) or not regularisation >= 0:
+        raise ValueError(f"unknown regularisation {regularisation!r} "
+                         "(gcv, lcurve, a number >= 0 or None)")
+
+
+def solve_regularised(C, d: np.ndarray, regularisation: Regularisation = "gcv",
                       lower: float | None = None) -> RegularisedSolution:
     """Regularised least squares min ||C y - d||^2 + lam^2 ||y||^2 (Tikhonov, SVD filters).
 
@@ -145,11 +160,9 @@ def solve_regularised(C, d: np.ndarray, regularisation: str | float | None = "gc
             lam = gcv_lambda(sp_)
         elif regularisation == "lcurve":
             lam = lcurve_lambda(sp_)
-        elif isinstance(regularisation, (int, float)) and regularisation >= 0:
-            lam = float(regularisation)
         else:
-            raise ValueError(f"unknown regularisation {regularisation!r} "
-                             "(gcv, lcurve, a number >= 0 or None)")
+            check_regularisation(regularisation)
+            lam = float(regularisation)
         f = _filters(sp_, lam) if lam > 0 else (sp_.s > RANK_TOL * sp_.s[0]).astype(float)
     y = _solution(sp_, f)
     bounded = False

@@ -33,12 +33,14 @@ import scipy.sparse as sp
 from updating.model.assembly import BatModel, attachment_matrices, skyline_mask
 from updating.msso.factors import (
     ElementFactors,
+    Mass,
+    Stiffness,
     choose_groups,
     factors_from_vector,
     group_matrices,
     is_stiffness,
 )
-from updating.msso.regularisation import RANK_TOL, solve_regularised
+from updating.msso.regularisation import RANK_TOL, Regularisation, solve_regularised
 
 BLOCKS = ("eigen", "mass_norm", "stiffness_norm", "weighed_mass")
 
@@ -168,8 +170,8 @@ def _stack(blocks: dict, user_weights: dict | None):
 
 def msso_elements(
     model: BatModel, shapes_n: np.ndarray, omega2: np.ndarray, *,
-    stiffness: str | None = "element", mass: str | None = "element",
-    regularisation: str | float | None = "gcv", weights: dict | None = None,
+    stiffness: Stiffness | None = "element", mass: Mass | None = "element",
+    regularisation: Regularisation = "gcv", weights: dict | None = None,
     weighed_mass_kg: float | None = None, lower: float = -0.95,
 ) -> MssoResult:
     """Element-factor MSSO: solve the stacked equations for per-element factors.
@@ -233,7 +235,7 @@ class SkylineResult:
 
 def msso_skyline(
     model: BatModel, shapes_n: np.ndarray, omega2: np.ndarray, *,
-    regularisation: str | float | None = None, weights: dict | None = None,
+    regularisation: Regularisation = None, weights: dict | None = None,
 ) -> SkylineResult:
     """Coefficient MSSO: every symmetric K, M entry inside the skyline is an unknown.
 

@@ -17,8 +17,9 @@ from updating.correlate.serep import paired_serep
 from updating.model.assembly import BatModel, assemble
 from updating.model.modes import model_modes
 from updating.msso.expansion import expansion_pass
-from updating.msso.factors import ElementFactors, choose_groups, zero_factors
-from updating.msso.iterate import RefineResult, refine
+from updating.msso.factors import ElementFactors, Mass, Stiffness, choose_groups, zero_factors
+from updating.msso.iterate import PriorSigma, RefineResult, check_prior_sigma, refine
+from updating.msso.regularisation import Regularisation, check_regularisation
 from updating.msso.skyline import MssoResult
 
 
@@ -76,11 +77,14 @@ def mass_normalise(model: BatModel, test: MeasuredModes, n_rigid: int = 2) -> Me
 
 
 def _run(model, test, groups_kw, msso_kw, expansions, do_refine, mass_normalised, sigmas,
-         prior_sigma):
+         prior_sigma, scaled: MeasuredModes | None = None):
+    """Expansion passes and the refinement; ``scaled``: ``test`` already mass-normalised
+    (``mass_normalise``, when the caller has it), else normalised here if need be."""
     refine_groups = choose_groups(model, groups_kw.pop("refine_stiffness"),
                                   groups_kw.pop("refine_mass"))
     n_rigid = 2
-    scaled = test if mass_normalised else mass_normalise(model, test, n_rigid)
+    if scaled is None:
+        scaled = test if mass_normalised else mass_normalise(model, test, n_rigid)
     f, first, res, cond = zero_factors(model.n_elements), None, None, np.nan
     for _ in range(max(1, expansions)):
         f, res, c = expansion_pass(model, scaled, f, n_rigid, **groups_kw, **msso_kw)
@@ -96,13 +100,13 @@ def _run(model, test, groups_kw, msso_kw, expansions, do_refine, mass_normalised
 
 
 def update_elements(
-    model: BatModel, freq_hz, shapes_a, dofs_a, *, stiffness: str | None = "element",
-    mass: str | None = "element", mass_normalised: bool = True, expansions: int = 1,
-    refine_fit: bool = True, regularisation: str | float | None = "gcv",
+    model: BatModel, freq_hz, shapes_a, dofs_a, *, stiffness: Stiffness | None = "element",
+    mass: Mass | None = "element", mass_normalised: bool = True, expansions: int = 1,
+    refine_fit: bool = True, regularisation: Regularisation = "gcv",
     weights: dict | None = None, weighed_mass_kg: float | None = None,
-    freq_sigma: float = 5e-4, shape_sigma: float = 1e-2, prior_sigma: float | str | None = "auto",
+    freq_sigma: float = 5e-4, shape_sigma: float = 1e-2, prior_sigma: PriorSigma = "auto",
     n_resample: int = 0, rng: np.random.Generator | None = None,
-    msso_parts: tuple[str | None, str | None] | None = None,
+    msso_parts: tuple[Stiffness | None, Mass | None] | None = None,
 ) -> ElementUpdate:
     """Per-element mass and stiffness changes of a re-tested bat against its reference.
 
@@ -163,9 +167,11 @@ def update_elements(
         raise ValueError("dofs_a must be translational DOFs of the model")
     test = MeasuredModes(freq_hz, shapes_a, model.node_x_m[dofs_a // 2], np.zeros(m),
                          float("nan"))
-    choose_groups(model, stiffness, mass)
+    choose_groups(model, stiffness, mass)  # the string options checked here, once
     seed_s, seed_m = (stiffness, mass) if msso_parts is None else msso_parts
     choose_groups(model, seed_s, seed_m)
+    check_regularisation(regularisation)
+    check_prior_sigma(prior_sigma)
     msso_kw = {"regularisation": regularisation, "weights": weights,
                "weighed_mass_kg": weighed_mass_kg}
     sig = (freq_sigma, shape_sigma)
@@ -173,14 +179,13 @@ def update_elements(
         return {"stiffness": seed_s, "mass": seed_m, "refine_stiffness": stiffness,
                 "refine_mass": mass}
 
+    scaled = test if mass_normalised else mass_normalise(model, test)  # once, used twice
     f, first, res, rr, cond = _run(model, test, groups_kw(), msso_kw, expansions, refine_fit,
-                                   mass_normalised, sig, prior_sigma)
+                                   mass_normalised, sig, prior_sigma, scaled)
     # scaling check: POC of the (scaled) test shapes with the SEREP-reduced reference mass
     Phi = model_modes(model).shapes
     idx, T = paired_serep(Phi, shapes_a, dofs_a, 2)
-    sa = align_signs(Phi[np.ix_(dofs_a, idx)], shapes_a)
-    if not mass_normalised:
-        sa = mass_normalise(model, test).shapes
+    sa = align_signs(Phi[np.ix_(dofs_a, idx)], shapes_a) if mass_normalised else scaled.shapes
     poc = pseudo_orthogonality(sa, T.reduce(assemble(model)[1]))
     std, draws = None, None
     if n_resample > 0:

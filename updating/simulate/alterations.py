@@ -21,13 +21,16 @@ bottom).
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Literal, get_args
 
 import numpy as np
 
 from updating.model.sections import Core
 from updating.model.units import IN_TO_M
 
-KINDS = ("cork", "deep", "empty", "end_plug", "partial", "small", "neutral")
+AlterationKind = Literal["cork", "deep", "empty", "end_plug", "partial", "small", "neutral"]
+"""The alterations of the nuisance-rich fleet (the module's table)."""
+KINDS: tuple[AlterationKind, ...] = get_args(AlterationKind)
 CORK_RATIO = (0.2, 0.4)
 
 
@@ -44,7 +47,7 @@ class Alteration:
         fill_density_ratio: length-weighted mean fill density / wood density over the region.
     """
 
-    kind: str
+    kind: AlterationKind
     core: Core
     cavities: tuple[Core, ...]
     region_in: tuple[float, float]
@@ -82,7 +85,7 @@ def partial_fill(
 
 
 def draw_alteration(
-    rng: np.random.Generator, kind: str, length_in: float, min_plug_in: float = 0.0,
+    rng: np.random.Generator, kind: AlterationKind, length_in: float, min_plug_in: float = 0.0,
 ) -> Alteration:
     """A random alteration of ``kind`` (see the module's table) in a bat ``length_in`` long."""
     u = rng.uniform

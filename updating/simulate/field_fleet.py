@@ -21,6 +21,7 @@ from __future__ import annotations
 import json
 from dataclasses import dataclass, replace
 from pathlib import Path
+from typing import Literal
 
 import numpy as np
 
@@ -30,10 +31,13 @@ from updating.model.material import Material, material_from_imperial
 from updating.model.profile import Profile, write_profile_csv
 from updating.model.units import IN_TO_M, LB_TO_KG
 from updating.simulate import nuisances as nz
-from updating.simulate.alterations import KINDS, Alteration, draw_alteration
+from updating.simulate.alterations import KINDS, Alteration, AlterationKind, draw_alteration
 from updating.simulate.fleet import SPECIES, pro_profile
-from updating.simulate.integrity import INTEGRITY, corrupt
+from updating.simulate.integrity import INTEGRITY, Integrity, corrupt
 from updating.simulate.virtual_bat import VirtualBat, simulate_test
+
+FieldKind = Literal["none", AlterationKind]
+"""The re-test of a field case: unaltered ("none") or one of ``alterations.KINDS``."""
 
 SCALE_SIGMA_LB = 0.002
 BALANCE_SIGMA_IN = 0.03
@@ -64,11 +68,11 @@ class FieldCase:
     baseline: VirtualBat
     retest: VirtualBat
     freq_hz: np.ndarray
-    integrity: str | None
+    integrity: Integrity | None
     truth: dict
 
     @property
-    def kind(self) -> str:
+    def kind(self) -> FieldKind:
         return self.truth["kind"]
 
     @property
@@ -125,8 +129,8 @@ def no_barrel_points_in(length_in: float) -> np.ndarray:
 
 
 def draw_case(
-    rng: np.random.Generator, kind: str = "none", nuisances=nz.NUISANCES,
-    integrity: str | None = None, serial: str = "SIM-0001",
+    rng: np.random.Generator, kind: FieldKind = "none", nuisances=nz.NUISANCES,
+    integrity: Integrity | None = None, serial: str = "SIM-0001",
 ) -> FieldCase:
     """A random bat with the ``nuisances`` given, altered by ``kind`` ("none" or one of
     ``alterations.KINDS``) and with an ``integrity`` slip (None or one of INTEGRITY)."""
@@ -135,9 +139,9 @@ def draw_case(
     if unknown:
         raise ValueError(f"unknown nuisance(s) {sorted(unknown)}")
     if kind != "none" and kind not in KINDS:
-        raise ValueError(f"unknown alteration kind {kind!r}")
+        raise ValueError(f"unknown alteration kind {kind!r} (none, {', '.join(KINDS)})")
     if integrity is not None and integrity not in INTEGRITY:
-        raise ValueError(f"unknown integrity case {integrity!r}")
+        raise ValueError(f"unknown integrity case {integrity!r} ({', '.join(INTEGRITY)})")
     on = set(nuis)
     rec: dict = {}
 

@@ -11,13 +11,17 @@
 from __future__ import annotations
 
 from dataclasses import replace
+from typing import Literal, get_args
 
 import numpy as np
 
 from ema.io.frf_data import FrfTest
 from updating.model.units import G0_M_S2
 
-INTEGRITY = ("receptance_as_accelerance", "g_per_n_as_si", "other_bat", "no_barrel_points")
+Integrity = Literal["receptance_as_accelerance", "g_per_n_as_si", "other_bat",
+                    "no_barrel_points"]
+"""A data-integrity slip of a re-test file (or of its layout)."""
+INTEGRITY: tuple[Integrity, ...] = get_args(Integrity)
 
 
 def receptance_labelled_accelerance(test: FrfTest) -> FrfTest:
@@ -36,7 +40,7 @@ def g_per_n_labelled_si(test: FrfTest) -> FrfTest:
     return replace(test, frf=test.frf / G0_M_S2)
 
 
-def corrupt(test: FrfTest, integrity: str | None) -> FrfTest:
+def corrupt(test: FrfTest, integrity: Integrity | None) -> FrfTest:
     """Apply a file-level slip (None, ``other_bat`` and ``no_barrel_points``: unchanged)."""
     if integrity == "receptance_as_accelerance":
         return receptance_labelled_accelerance(test)

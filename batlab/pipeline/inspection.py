@@ -1,6 +1,6 @@
-"""The pipeline behind `register`, `inspect`, `report`, `export`, `diagnose` and `demo`, in one
-place: the seam between those commands and the stages (ema, updating) and the registry. The
-registry's storage (SQL, hashes, custody records) stays behind ``batlab.registry``'s API.
+"""Files to verdict: the operations behind `register`, `inspect`, `report`, `export`,
+`diagnose`, `check-rig`, `fit` and `demo`. The registry's storage (SQL, hashes, custody
+records) stays behind ``batlab.registry``'s API.
 
     FRF file -> FrfTest -> modal fit -> MeasuredModes (sensor at the driving point)
     baseline modes + profile + meta -> diagnose -> calibrated BatReference
@@ -24,6 +24,8 @@ import numpy as np
 
 from batlab import __version__
 from batlab import registry as reg
+from ema.fit import MIN_SNR
+from ema.io.atomic_write import atomic_write
 from ema.io.frf_data import FrfTest
 from updating.correlate.measured import MeasuredModes, from_fit
 from updating.inspect.planes import merge_plane_pairs
@@ -211,6 +213,41 @@ def fit_file(
     progress(f"{name}: {modes.freq_hz.size} modes at "
              + ", ".join(f"{f:.1f}" for f in modes.freq_hz) + " Hz")
     return FittedTest(name, test, fit, modes)
+
+
+def read_test_file(path, require_driving: bool = True) -> FrfTest:
+    """An FRF test file as ``ema.io.frf_io.read_test`` reads it (`batlab fit`: a test without
+    a driving point is allowed with ``require_driving`` False)."""
+    from ema.io.frf_io import read_test
+
+    return read_test(path, require_driving=require_driving)
+
+
+def fit_test_file(test: FrfTest, band_hz=None, method: str = "lscf", max_order=None,
+                  known_mass_kg: float | None = None, refine: bool = False,
+                  min_snr: float = MIN_SNR):
+    """`batlab fit`: the automatic modal analysis of a test (``ema.fit.fit_test``)."""
+    from ema.fit import fit_test
+
+    return fit_test(test, band_hz=band_hz, method=method, max_order=max_order,
+                    known_mass_kg=known_mass_kg, refine=refine, min_snr=min_snr)
+
+
+def write_modes_file(path, fit) -> None:
+    """A fit's real mass-normalised modes as UFF 55 (``ema.io.uff_modes``)."""
+    from ema.io.uff_modes import write_modes_uff
+
+    write_modes_uff(path, fit.freq_hz, fit.damping_ratio, fit.real_shapes, fit.nodes, fit.x_m)
+
+
+def plot_fit_files(fit, test: FrfTest, out_dir) -> list:
+    """stabilisation.png, synthesis.png and automac.png of a fit in ``out_dir``
+    (``ema.plots.plot_fit``, the FRFs of the fitted band); the paths written."""
+    from ema.plots import plot_fit
+
+    sel = (test.freq_hz >= fit.band_hz[0]) & (test.freq_hz <= fit.band_hz[1])
+    sel &= test.freq_hz > 0
+    return list(plot_fit(fit, test.frf[sel], out_dir))
 
 
 # --- the updating stage ----------------------------------------------------------------------
@@ -616,3 +653,8 @@ def history_table(conn: sqlite3.Connection, serial: str | None = None):
                "baseline_sha256", "registration_record", "verdict_record",
                "verdict_record_sha256", "report_path"]
     return pd.DataFrame(rows, columns=columns)
+
+
+def write_csv(path, table) -> None:
+    """A pandas DataFrame as CSV, atomically (temporary name, then rename)."""
+    atomic_write(path, lambda tmp: table.to_csv(tmp, index=False))
