@@ -27,20 +27,22 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 import numpy as np  # noqa: E402
 
 from batlab import pipeline  # noqa: E402
-from updating.inspect.run import F_FLOOR, MIN_CORE_DIAMETER_IN  # noqa: E402
+from updating.inspect import run as inspect_run  # noqa: E402
 from updating.model.units import IN_TO_M  # noqa: E402
 from updating.simulate.alterations import KINDS  # noqa: E402
 from updating.simulate.field_fleet import draw_case, write_case  # noqa: E402
 from updating.simulate.integrity import INTEGRITY  # noqa: E402
 
 
-def one(seed: int, kind: str, integrity: str | None, with_meta: bool) -> dict:
+def one(seed: int, kind: str, integrity: str | None, with_meta: bool,
+        registration: bool = False) -> dict:
     rng = np.random.default_rng(seed)
     row = {"seed": seed, "kind": kind, "integrity": integrity}
     with tempfile.TemporaryDirectory(prefix="batlab-field-") as tmp:
         try:
             case = draw_case(rng, kind, integrity=integrity, serial=f"F-{seed}")
-            paths = write_case(case, tmp, seed, retest_meta_keys=None if with_meta else [])
+            paths = write_case(case, tmp, seed, retest_meta_keys=None if with_meta else [],
+                               registration=registration)
         except ValueError as exc:  # the simulator cannot make this draw: not counted
             row.update(status="sim_error", reasons=[str(exc)])
             return row
@@ -87,6 +89,7 @@ def clean_margin(clean: list[dict]) -> str:
     """How close the clean bats came to "altered": the largest F among those whose candidate
     core was practical, and the largest lower diameter bound among those whose F passed the
     floor (each gate alone would have let that bat through)."""
+    F_FLOOR, MIN_CORE_DIAMETER_IN = inspect_run.F_FLOOR, inspect_run.MIN_CORE_DIAMETER_IN
     prac = [r["F"] for r in clean if (d_low_in(r) or 0.0) >= MIN_CORE_DIAMETER_IN
             and r.get("F") is not None]
     over = [d_low_in(r) or 0.0 for r in clean if (r.get("F") or 0.0) >= F_FLOOR]
@@ -144,6 +147,9 @@ def main() -> int:
     ap.add_argument("--integrity", type=int, default=0, help="rounds of the integrity cases")
     ap.add_argument("--seed", type=int, default=100)
     ap.add_argument("--no-retest-meta", action="store_true")
+    ap.add_argument("--registration", action="store_true",
+                    help="meta.json records the baseline's temperature and accelerometer "
+                         "mass (as a lab does at registration)")
     ap.add_argument("--summary", default=None, help="summarise a JSON-lines file and stop")
     args = ap.parse_args()
     if args.summary:
@@ -155,7 +161,7 @@ def main() -> int:
     jobs += [("none", g) for _ in range(args.integrity) for g in INTEGRITY]
     rows = []
     for i, (kind, integ) in enumerate(jobs):
-        row = one(args.seed + i, kind, integ, not args.no_retest_meta)
+        row = one(args.seed + i, kind, integ, not args.no_retest_meta, args.registration)
         rows.append(row)
         print(json.dumps(row, default=float), flush=True)
         print(f"{i + 1}/{len(jobs)} {kind} {integ or ''}: {row['status']} "

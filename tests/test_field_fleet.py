@@ -233,6 +233,23 @@ def test_write_case_writes_the_contract_files(tmp_path):
     assert no_meta["retest_meta"] is None and not (tmp_path / "bare" / "retest.json").exists()
 
 
+def test_registration_record_is_the_baseline_conditions(tmp_path):
+    """With ``registration`` meta.json records the baseline's temperature and accelerometer
+    mass (what inspect reads as the known changes); without it, neither key."""
+    from updating.inspect.retest_meta import conditions_from_dict
+
+    case = draw_case(np.random.default_rng(9), "none")
+    plain = json.loads(write_case(case, tmp_path / "a", seed=1)["meta"].read_text())
+    assert "temperature_c" not in plain and "accelerometer_mass_g" not in plain
+    meta = json.loads(write_case(case, tmp_path / "b", seed=1, registration=True)["meta"]
+                      .read_text())
+    reg = conditions_from_dict(meta, "meta.json")
+    assert reg.temperature_c == pytest.approx(case.truth["drawn"]["temperature"]["baseline_c"],
+                                              abs=0.05)
+    assert reg.sensor_mass_kg == pytest.approx(case.baseline.sensor_mass_kg, abs=5e-6)
+    assert reg.weight_kg == pytest.approx(plain["weight_lb"] * LB_TO_KG)
+
+
 def test_alter_case_keeps_the_bat_and_its_conditions():
     from updating.simulate.alterations import end_bored
     from updating.simulate.field_fleet import alter_case

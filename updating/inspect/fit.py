@@ -14,9 +14,11 @@ model-error floor), sigma_psi = sigma_rel * rms-shape of the mode (one relative 
 level estimated from the residuals), sigma_w = ``WEIGHT_SIGMA_REL``. Parameters:
 
     null (what an unaltered bat does between tests, physically bounded, ``NullBounds``):
-          x = [100 (s_E - 1), 100 (s_rho - 1), sensor shift (in),
+          x = [x0, 100 (s_rho - 1), sensor shift (in),
                end-grain moisture at the knob end (points), at the barrel end (points),
-               change of the accelerometer's mass (g)]
+               change of the accelerometer's mass (g), two-plane mix c]
+          with s_E = 1 + (x0 - 2 x1) / 100: moisture's stiffness coupled to its mass, x0 the
+          temperature's share (``MOISTURE_COUPLING``)
     core: x = null + [plug (in), filled length (in), p = r b, q = (R - r) b]
 
 with b = (d / 1 in)^2 for core diameter d, fill density ratio r in [0, R]: the box p, q >= 0
@@ -40,16 +42,17 @@ from dataclasses import dataclass
 import numpy as np
 
 from updating.inspect.details import PositionScan
-from updating.inspect.model import ChangeParams
+from updating.inspect.model import E_PER_POINT, MASS_PER_POINT, ChangeParams
 from updating.lsq import LsqSolution, solve_bounded
 from updating.lsq import covariance as lsq_covariance
 from updating.model.profile import Profile
 from updating.model.sections import Core
 from updating.model.units import IN_TO_M
 
-N_NULL, N_CORE = 6, 4
-NULL_NAMES = ("stiffness_pct", "density_pct", "sensor_shift_in", "knob_end_moisture_pt",
-              "barrel_end_moisture_pt", "sensor_mass_change_g")
+N_NULL, N_CORE = 7, 4
+NULL_NAMES = ("stiffness_beyond_moisture_pct", "density_pct", "sensor_shift_in",
+              "knob_end_moisture_pt", "barrel_end_moisture_pt", "sensor_mass_change_g",
+              "plane_mix")
 R_MAX = 6.0  # densest fill considered, relative to the wood
 MIN_PLUG_IN, MIN_LENGTH_IN = 0.05, 2.0
 """The shortest filled length considered a core: end plugs are 2-4 in, corks 3-12 in. A
@@ -78,10 +81,24 @@ PLANE_SPLIT_REL = (0.003, 0.013, 0.023, 0.030, 0.047, 0.056)
 """Split of the two bending planes' frequencies, elastic modes 1-6 (3D analysis of a smooth
 ash bat); beyond mode 6 the last value."""
 PLANE_MIX = 0.15
-"""Fraction of the plane split that a re-test tapped at another angle (+-10 deg from the
-label) can move a mode's apparent frequency: the fitted frequency of an unresolved pair is
-its members' mean weighted by cos^2 and sin^2 of the angle; a 10 deg change moves those
-weights by up to sin(20 deg) ~ 0.34, and a fit resolving part of the pair less."""
+"""Fraction of the plane split kept as frequency noise beside the fitted plane mix
+(``PLANE_MIX_MAX``): what the linear model of the mix misses (a fit resolving part of a
+pair, the two planes' slightly different shapes)."""
+MOISTURE_COUPLING = E_PER_POINT / MASS_PER_POINT
+"""Stiffness % per density % of a uniform moisture change (-2: E -2 % per +1 % mass per
+point): H0's uniform stiffness is s_E = 1 + (x0 + MOISTURE_COUPLING x1) / 100 with x1 the
+density % (moisture) and x0 what temperature does (0 would make the two scales free)."""
+COUPLING_SLACK_PCT = 1.0
+"""Freedom of x0 beyond temperature's range (-0.1..-0.3 %/C of the known change, else
++-10 C): a coupling of wood that is not exactly -2 (1 % of stiffness is +-0.33 %/point at
+the largest drift), the temperature's own reading."""
+PLANE_MIX_MAX, PRIOR_PLANE_MIX = 0.15, 0.05
+"""Bound and prior sd of the two-plane mix c = Delta(sin^2 theta) ln(EG_T / EG_R): the
+apparent frequency of a pair tapped at theta to the radial plane is ln f = ln f_R +
+sin^2(theta) ln(f_T / f_R), and ln(f_T / f_R) = S_r ln(EG_T / EG_R) with S_r = d ln f_r /
+d ln(E/G) of the reference; a re-test tapped within +-10 deg of the baseline's angle moves
+sin^2(theta) by up to sin(10 deg) = 0.17, the planes' E/G differ by up to ~1.8x (ln 0.58):
+|c| <= 0.1, bounded at 0.15."""
 
 
 def plane_sigma(elastic_order: np.ndarray) -> np.ndarray:
@@ -93,7 +110,7 @@ def plane_sigma(elastic_order: np.ndarray) -> np.ndarray:
 
 @dataclass(frozen=True)
 class NullBounds:
-    """Physical bounds of the null parameters (x[:6], module docstring), from
+    """Physical bounds of the null parameters (x[:N_NULL], module docstring), from
     ../docs/inspection.md: moisture +-2.5 points (E -2 %, mass +1 % per point), temperature
     +-10 C (E -0.1..-0.3 %/C), end grain up to 2.5 points beyond the middle, the sensor
     re-mounted within 0.3 in, a replacement accelerometer within 0-10 g (or its known mass
@@ -125,11 +142,15 @@ class NullBounds:
         else:
             m0 = 1e3 * sensor_change_kg
             m_lo, m_hi, m_sig = m0 - 0.3, m0 + 0.3, 0.1
-        lo = np.array([-5.5 + t_lo, -3.0, -0.3, -2.5, -2.5, m_lo])
-        hi = np.array([5.5 + t_hi, 3.0, 0.3, 2.5, 2.5, m_hi])
-        center = np.array([0.0, 0.0, 0.0, 0.0, 0.0, m0])
+        if MOISTURE_COUPLING:  # x[0]: stiffness beyond the moisture's coupled share
+            s_lo, s_hi = t_lo - COUPLING_SLACK_PCT, t_hi + COUPLING_SLACK_PCT
+        else:
+            s_lo, s_hi = -5.5 + t_lo, 5.5 + t_hi
+        lo = np.array([s_lo, -3.0, -0.3, -2.5, -2.5, m_lo, -PLANE_MIX_MAX])
+        hi = np.array([s_hi, 3.0, 0.3, 2.5, 2.5, m_hi, PLANE_MIX_MAX])
+        center = np.array([0.0, 0.0, 0.0, 0.0, 0.0, m0, 0.0])
         sigma = np.array([np.inf, np.inf, PRIOR_SHIFT_IN, PRIOR_END_MOISTURE_PT,
-                          PRIOR_END_MOISTURE_PT, m_sig])
+                          PRIOR_END_MOISTURE_PT, m_sig, PRIOR_PLANE_MIX])
         return NullBounds(lo, hi, center, sigma)
 
     def widened(self) -> NullBounds:
@@ -167,6 +188,8 @@ class Differences:
         f0: (m,) reference model frequencies, Hz; phi0: (n_points, m) its shapes, aligned.
         dlnw: ln(W_retest / W_registered), or None when a weight is missing.
         mass0_kg: the reference's wood mass (the model's weight before any change).
+        plane_sens: (m,) S_r = d ln f_r / d ln(E/G) of the reference (the two-plane mix's
+            effect on each pair's ln f per unit c), or None (no plane mix).
     """
 
     model_index: np.ndarray
@@ -178,6 +201,7 @@ class Differences:
     phi0: np.ndarray
     dlnw: float | None = None
     mass0_kg: float = 1.0
+    plane_sens: np.ndarray | None = None
 
     @property
     def n_freq(self) -> int:
@@ -246,7 +270,7 @@ class ParamSpace:
         return np.concatenate([self.bounds.upper, CORE_UPPER])
 
     def core(self, plug_in: float, length_in: float, p: float, q: float) -> Core:
-        """The core of x[6:10]; depth kept within 95 % of the bat, diameter clipped to 90 %
+        """The core of x[N_NULL:]; depth kept within 95 % of the bat, diameter clipped to 90 %
         of the thinnest outer diameter it spans."""
         L = self.profile.length_m
         plug = plug_in * IN_TO_M
@@ -274,7 +298,7 @@ class ParamSpace:
 
     def params(self, x: np.ndarray) -> ChangeParams:
         core = None if x.size == N_NULL else self.core(*x[N_NULL:])
-        return ChangeParams(1 + x[0] / 100, 1 + x[1] / 100,
+        return ChangeParams(1 + (x[0] + MOISTURE_COUPLING * x[1]) / 100, 1 + x[1] / 100,
                             self.sensor_mount_m + x[2] * IN_TO_M, core,
                             (float(x[3]), float(x[4])), float(x[5]) * 1e-3)
 
@@ -282,6 +306,13 @@ class ParamSpace:
     def to_x(plug_in: float, length_in: float, b: float, r: float) -> np.ndarray:
         """Core part of x for plug, length (in), b = (d / 1 in)^2 and fill ratio r."""
         return np.array([plug_in, length_in, r * b, (R_MAX - r) * b])
+
+
+def plane_shift(diff: Differences, x: np.ndarray) -> np.ndarray:
+    """(m,) ln f change of each pair from the two-plane mix c = x[6]: S_r c."""
+    if diff.plane_sens is None:
+        return np.zeros(diff.n_freq)
+    return diff.plane_sens * float(x[6])
 
 
 def residual_function(
@@ -294,7 +325,7 @@ def residual_function(
         f, phi = predict(params)
         f, phi = f[diff.model_index], phi[:, diff.model_index]
         phi = phi * np.sign(np.einsum("ij,ij->j", phi, diff.phi0))
-        rf = (diff.dlnf - np.log(f / diff.f0)) / diff.sigma_lnf
+        rf = (diff.dlnf - np.log(f / diff.f0) - plane_shift(diff, x)) / diff.sigma_lnf
         rs = (diff.dpsi - (phi - diff.phi0)) / (sigma_rel * diff.psi_scale)
         parts = [rf, rs.ravel()]
         if diff.dlnw is not None:

@@ -137,6 +137,11 @@ class ChangePredictor:
         out._cache = self._cache
         return out
 
+    def with_reference(self, reference: BatReference) -> ChangePredictor:
+        """The same points and sensor with another reference (no wood systems shared)."""
+        return ChangePredictor(self.profile, reference, self.points_m, self.sensor_x_m,
+                               self.n_solve)
+
     def system(self, core: Core | None = None) -> WoodSystem:
         if core not in self._cache:
             if len(self._cache) > 32:
@@ -158,9 +163,14 @@ class ChangePredictor:
         M = p.density_scale * M
         x = float(np.clip(self.sensor_x_m + p.sensor_shift_m, 0.0, self.profile.length_m))
         dofs, n = point_vector(ws.model, x)
-        # the change may take the calibrated mass below 0: calibration puts other physics
-        # there, the change is relative to it
+        # the change may take the calibrated mass below 0 (calibration puts other physics
+        # there, the change is relative to it), but not so far that M + m n n^T stops being
+        # positive definite (m > -1 / n^T M^-1 n), where the eigen-solution would fail
         mass = self.reference.sensor_mass_kg + p.sensor_mass_change_kg
+        if mass < 0:
+            v = np.zeros(M.shape[0])
+            v[dofs] = n
+            mass = max(mass, -0.9 / float(v @ np.linalg.solve(M, v)))
         if mass:
             M[np.ix_(dofs, dofs)] += mass * np.outer(n, n)
         modes = solve_modes(p.stiffness_scale * K + ws.K_bungees, M, None, self.n_solve)

@@ -80,6 +80,14 @@ class FieldCase:
         return self.truth["expected"]
 
     @property
+    def registration_conditions(self) -> dict:
+        """What a lab may record at registration beside the weight (meta.json's optional
+        keys): the baseline's temperature and accelerometer mass, read as retest.json's."""
+        t_base = self.truth["drawn"].get("temperature", {}).get("baseline_c", 21.0)
+        return {"temperature_c": round(t_base, 1),
+                "accelerometer_mass_g": round(1e3 * self.baseline.sensor_mass_kg, 2)}
+
+    @property
     def min_plug_in(self) -> float:
         """The shortest plug an alteration of this bat can have (behind a cupped end)."""
         return self.truth["drawn"].get("cup", {}).get("depth_in", 0.0) + 0.25
@@ -272,10 +280,13 @@ def write_retest(
 
 def write_case(
     case: FieldCase, folder, seed: int, retest_meta_keys=None, truth: bool = False,
+    registration: bool = False,
 ) -> dict:
     """Write profile.csv, meta.json, baseline.uff, retest.uff, retest.json (only the
     ``retest_meta_keys`` given, default all; none: no retest.json) and, with ``truth``,
     truth.json into ``folder``; returns the paths by name (retest_meta None when not written).
+    With ``registration`` meta.json also holds ``FieldCase.registration_conditions`` (the
+    baseline's temperature and accelerometer mass, as a lab records them at registration).
     """
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
@@ -283,7 +294,8 @@ def write_case(
                                         ("baseline", "baseline.uff"), ("retest", "retest.uff"),
                                         ("retest_meta", "retest.json"))}
     write_profile_csv(paths["profile"], case.profile)
-    paths["meta"].write_text(json.dumps(case.meta, indent=1))
+    meta = dict(case.meta, **case.registration_conditions) if registration else case.meta
+    paths["meta"].write_text(json.dumps(meta, indent=1))
     write_test(paths["baseline"], simulate_test(case.baseline, case.freq_hz, seed=seed))
     paths["retest_meta"] = write_retest(case, paths["retest"], paths["retest_meta"], seed + 1,
                                         retest_meta_keys)
