@@ -57,14 +57,21 @@ def one(seed: int, kind: str, integrity: str | None, with_meta: bool,
                        time_s=time.perf_counter() - t0)
             return row
         row["time_s"] = time.perf_counter() - t0
-    out = pipeline.contract_dict(case.meta["serial"], res.verdict)
-    fit = res.verdict.details.fit
-    row.update(status=out["status"], reasons=out["reasons"], F=res.verdict.statistic,
+    return score_verdict(row, case.meta["serial"], res.verdict, kind, case.truth)
+
+
+def score_verdict(row: dict, serial: str, verdict, kind: str, truth: dict) -> dict:
+    """``row`` with the verdict's status, reasons, F test and candidate core, and for an
+    altered bat called altered the reading's errors against ``truth`` (start in, diameter
+    relative, fill ratio absolute and relative, and whether the fill is within target)."""
+    out = pipeline.contract_dict(serial, verdict)
+    fit = verdict.details.fit
+    row.update(status=out["status"], reasons=out["reasons"], F=verdict.statistic,
                p=None if fit is None else fit.p_value,
                weight_change_rel=None if fit is None else fit.weight_change_rel,
                null_fit=None if fit is None else fit.null_fit,
                candidate=None if fit is None else fit.candidate_core.to_json_dict())
-    t = case.truth
+    t = truth
     if kind != "none" and out["status"] == "altered":
         row["start_err_in"] = out["region_in"][0] - t["region_in"][0]
         row["d_err_rel"] = out["core_diameter_in"] / t["core_diameter_in"] - 1

@@ -35,7 +35,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 import numpy as np  # noqa: E402
-from bench_inspect_field import summarise  # noqa: E402
+from bench_inspect_field import score_verdict, summarise  # noqa: E402
 
 from batlab import pipeline  # noqa: E402
 from updating.inspect.retest_meta import RetestConditions, conditions_from_dict  # noqa: E402
@@ -124,22 +124,7 @@ def score_one(bat: dict, false_alarm: float = 0.01, registration: bool = False) 
         row.update(status="refused", reasons=[str(exc)], time_s=time.perf_counter() - t0)
         return row
     row["time_s"] = time.perf_counter() - t0
-    out = pipeline.contract_dict(bat["serial"], v)
-    fit = v.details.fit
-    row.update(status=out["status"], reasons=out["reasons"], F=v.statistic,
-               p=None if fit is None else fit.p_value,
-               weight_change_rel=None if fit is None else fit.weight_change_rel,
-               null_fit=None if fit is None else fit.null_fit,
-               candidate=None if fit is None else fit.candidate_core.to_json_dict())
-    t = bat["truth"]
-    if bat["kind"] != "none" and out["status"] == "altered":
-        row["start_err_in"] = out["region_in"][0] - t["region_in"][0]
-        row["d_err_rel"] = out["core_diameter_in"] / t["core_diameter_in"] - 1
-        r_true = t["fill_density_ratio"]
-        row["fill_err"] = out["fill_density_ratio"] - r_true
-        row["fill_err_rel"] = row["fill_err"] / r_true if r_true > 0 else None
-        row["fill_ok"] = bool(abs(row["fill_err"]) <= (0.25 * r_true if r_true > 0 else 0.1))
-    return row
+    return score_verdict(row, bat["serial"], v, bat["kind"], bat["truth"])
 
 
 def main() -> int:
