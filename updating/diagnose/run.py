@@ -260,6 +260,35 @@ def observations(
 
 
 ML_SIGMA_FLOOR = 1e-4  # of the mass line's largest value: noise-free data
+ML_SENSOR_MAX_KG = 0.015
+"""The heaviest accelerometer (with cable and mount) a bat test uses (bat tests use 1-10 g)."""
+ML_MISMATCH_REL = 0.03
+"""How far the measured driving-point mass line may lie outside what the profile at the scale
+weight with a 0-15 g accelerometer gives: ~10 g at the barrel end, or a 3 % calibration slip."""
+
+
+def checked_mass_line(setup: Setup, obs: Observations) -> tuple[Observations, list[str]]:
+    """The observations without their mass line (and why) when no accelerometer of 0 to
+    ``ML_SENSOR_MAX_KG`` on the bat of this profile and scale weight explains its value at the
+    driving point within ``ML_MISMATCH_REL``: FRFs off in calibration (sensitivity, units) or
+    without the rigid body's response. Fitted anyway, such a mass line would put the
+    accelerometer at a bound and pull E with it. Without a scale weight nothing is checked."""
+    if obs.mass_line is None or setup.weight_kg is None:
+        return obs, []
+    d = int(np.argmin(np.abs(setup.points_m - setup.sensor_x_m)))
+    active = frozenset({"density", "sensor_mass"})
+    state = start_state(setup)
+    g = [rigid_flexibility(setup, active, replace(state, sensor_mass_kg=m))[0][d]
+         for m in (ML_SENSOR_MAX_KG, 0.0)]  # heavier sensor: smaller flexibility
+    lo, hi = g[0] * (1 - ML_MISMATCH_REL), g[1] * (1 + ML_MISMATCH_REL)
+    measured = float(obs.mass_line[d])
+    if lo <= measured <= hi:
+        return obs, []
+    return replace(obs, mass_line=None), [
+        f"mass line not used: {measured:.4g} 1/kg at the driving point, where the bat of this "
+        f"profile and scale weight with a 0-{1e3 * ML_SENSOR_MAX_KG:g} g accelerometer gives "
+        f"{g[0]:.4g}-{g[1]:.4g} 1/kg; check the FRFs' calibration (sensitivity, units) -- "
+        "the accelerometer's mass then rests on the mode shapes' scale alone"]
 
 
 def measured_mass_line(measured: MeasuredModes) -> tuple[np.ndarray | None, float]:
@@ -478,6 +507,7 @@ def diagnose(
                   float(measured.sensor_x_m), fine_element_m,
                   None if solid_corrections is None else np.asarray(solid_corrections, float))
     obs, meas_idx, unpaired, warnings = observations(setup, measured, suspension_hz, min_mac)
+    obs, ml_warnings = checked_mass_line(setup, obs)
     if meta.accelerometer_mass_kg is not None:  # the data sheet's mass: a prior
         obs = replace(obs, sensor_prior_g=1e3 * meta.accelerometer_mass_kg)
     nominal = fit_model(setup, frozenset(), obs, start_state(setup, suspension_hz))
@@ -525,6 +555,7 @@ def diagnose(
     reference = reference_of(setup, final.active, final.state)
     warnings += pairing_warnings(final, obs.model_index, by_mac=not warnings)
     refuse = refuse_causes(warnings)
+    warnings += ml_warnings
     warnings += limits(obs, final, setup.solid_corrections is not None, setup)
     warnings += data_sheet_check(setup, obs, final)
     if refuse:  # 6. no cause is named from a pairing that cannot be trusted
