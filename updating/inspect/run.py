@@ -433,6 +433,7 @@ def inspect_retest(
 
     f_fit, _ = predict(full.params)
     f_null, _ = predict(null.params)
+    shift_null, shift_fit = np.exp(plane_shift(diff, null.x)), np.exp(plane_shift(diff, full.x))
     modes = []
     for k in range(pairs.n):
         j = diff.model_index[k]
@@ -441,10 +442,8 @@ def inspect_retest(
         modes.append(ModePair(
             float(fb), float(fr), mac=float(pairs.mac[k]), reference_hz=float(diff.f0[k]),
             mac_reference=float(pairs.mac_model[k]), change_pct=float(100 * (fr / fb - 1)),
-            moisture_fit_change_pct=float(100 * (f_null[j] / diff.f0[k]
-                                                 * np.exp(plane_shift(diff, null.x)[k]) - 1)),
-            core_fit_change_pct=float(100 * (f_fit[j] / diff.f0[k]
-                                             * np.exp(plane_shift(diff, full.x)[k]) - 1))))
+            moisture_fit_change_pct=float(100 * (f_null[j] / diff.f0[k] * shift_null[k] - 1)),
+            core_fit_change_pct=float(100 * (f_fit[j] / diff.f0[k] * shift_fit[k] - 1))))
 
     # 6. the MSSO map, with the accepted model's drift (when there is a core, the null fit's
     # uniform scales absorb part of it and the map would show that as a change of the bat)
