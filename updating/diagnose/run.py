@@ -391,14 +391,17 @@ POOR = {"ln_E": 0.01, "ln_rho": 0.02, "ln_e_over_g": 0.05, "sensor_g": 0.5,
         "bungee_kn_per_m": 0.1, "ln_g_ratio": 0.05, "theta": 0.1}
 
 
-def mass_line_limits(setup: Setup, obs: Observations, final: DiagnosisFit) -> list[str]:
+def mass_line_limits(setup: Setup, obs: Observations, final: DiagnosisFit,
+                     set_aside: list[str]) -> list[str]:
     """What the mass line says and what it cannot: its fit at the driving point, and the
     accelerometer mass that a 1 % error of the FRFs' calibration (sensitivity) would move,
-    a systematic error the stated uncertainty does not hold."""
+    a systematic error the stated uncertainty does not hold. Without one: why
+    (``set_aside``, from ``checked_mass_line``, or that the test gave none)."""
     if obs.mass_line is None:
-        return ["the test gave no mass line (no driving point, or the fitted band reaches "
-                "below the suspension without two suspension modes): the accelerometer's "
-                "mass rests on the mode shapes' scale alone"]
+        return set_aside or [
+            "the test gave no mass line (no driving point, or the fitted band reaches below "
+            "the suspension without two suspension modes): the accelerometer's mass rests on "
+            "the mode shapes' scale alone"]
     g, dg = rigid_flexibility(setup, final.active | {"sensor_mass"}, final.state,
                               ("sensor_g",))
     d = int(np.argmin(np.abs(setup.points_m - setup.sensor_x_m)))
@@ -434,8 +437,9 @@ def data_sheet_check(setup: Setup, obs: Observations, final: DiagnosisFit) -> li
 
 
 def limits(obs: Observations, final: DiagnosisFit, solid_tried: bool,
-           setup: Setup) -> tuple[str, ...]:
-    """What the calibrated model could not establish, in words (Diagnosis.warnings)."""
+           setup: Setup, mass_line_set_aside: list[str]) -> tuple[str, ...]:
+    """What the calibrated model could not establish, in words (Diagnosis.warnings);
+    ``mass_line_set_aside``: why the test's mass line was not used (``checked_mass_line``)."""
     out = []
     code = obs.codes
     if obs.n_split == 0:
@@ -462,7 +466,7 @@ def limits(obs: Observations, final: DiagnosisFit, solid_tried: bool,
                    "lower E does, so frequencies alone cannot separate them; only the mass "
                    "line and the absolute scale of the mass-normalised shapes can. If an "
                    "accelerometer was mounted, E is low by about its share")
-    out += mass_line_limits(setup, obs, final)
+    out += mass_line_limits(setup, obs, final, mass_line_set_aside)
     if "ln_E" in final.names and "ln_e_over_g" in final.names:
         i, j = final.names.index("ln_E"), final.names.index("ln_e_over_g")
         c = final.cov[i, j] / np.sqrt(max(final.cov[i, i] * final.cov[j, j], 1e-300))
@@ -507,7 +511,7 @@ def diagnose(
                   float(measured.sensor_x_m), fine_element_m,
                   None if solid_corrections is None else np.asarray(solid_corrections, float))
     obs, meas_idx, unpaired, warnings = observations(setup, measured, suspension_hz, min_mac)
-    obs, ml_warnings = checked_mass_line(setup, obs)
+    obs, ml_set_aside = checked_mass_line(setup, obs)
     if meta.accelerometer_mass_kg is not None:  # the data sheet's mass: a prior
         obs = replace(obs, sensor_prior_g=1e3 * meta.accelerometer_mass_kg)
     nominal = fit_model(setup, frozenset(), obs, start_state(setup, suspension_hz))
@@ -555,8 +559,7 @@ def diagnose(
     reference = reference_of(setup, final.active, final.state)
     warnings += pairing_warnings(final, obs.model_index, by_mac=not warnings)
     refuse = refuse_causes(warnings)
-    warnings += ml_warnings
-    warnings += limits(obs, final, setup.solid_corrections is not None, setup)
+    warnings += limits(obs, final, setup.solid_corrections is not None, setup, ml_set_aside)
     warnings += data_sheet_check(setup, obs, final)
     if refuse:  # 6. no cause is named from a pairing that cannot be trusted
         warnings.append("causes not named: the pairing or the calibration cannot be trusted")
