@@ -18,6 +18,7 @@ import hashlib
 import json
 import os
 import sqlite3
+import time
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass
@@ -235,6 +236,28 @@ def _writable(path: Path) -> bool:
     return os.access(path, os.W_OK) and os.access(path.parent, os.W_OK)
 
 
+def _enable_wal(conn: sqlite3.Connection, deadline_s: float = BUSY_TIMEOUT_S) -> None:
+    """``PRAGMA journal_mode = WAL``, retried while another process holds the file.
+
+    Switching a file to WAL upgrades a shared lock to an exclusive one; while another
+    connection holds the reserved lock (a second process creating the same registry) that
+    upgrade could deadlock, so SQLite answers "database is locked" at once, without its busy
+    handler (1 run in 30 of four processes creating one registry under load). The mode is
+    stored in the file, so the retry usually finds it already set.
+    """
+    stop = time.monotonic() + deadline_s
+    pause_s = 0.005
+    while True:
+        try:
+            conn.execute("PRAGMA journal_mode = WAL")
+            return
+        except sqlite3.OperationalError as exc:
+            if "locked" not in str(exc) or time.monotonic() > stop:
+                raise
+        time.sleep(pause_s)
+        pause_s = min(2 * pause_s, 0.2)
+
+
 def connect(
     path: str | os.PathLike, target: int = SCHEMA_VERSION, create: bool = True,
     readonly: bool = False,
@@ -262,7 +285,7 @@ def connect(
     try:
         conn = sqlite3.connect(path, timeout=BUSY_TIMEOUT_S, isolation_level=None)
         conn.execute(f"PRAGMA busy_timeout = {int(BUSY_TIMEOUT_S * 1000)}")
-        conn.execute("PRAGMA journal_mode = WAL")
+        _enable_wal(conn)
         conn.execute("PRAGMA synchronous = FULL")
         conn.execute("PRAGMA foreign_keys = ON")
         migrate(conn, target)

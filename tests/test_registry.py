@@ -7,6 +7,7 @@ import multiprocessing as mp
 import os
 import signal
 import sqlite3
+import threading
 import time
 
 import pytest
@@ -415,3 +416,22 @@ def test_chain_names_whichever_record_was_changed(tmp_path, n_bats, n_insp, pick
     res = _check(path)
     assert not res.ok and res.first_changed == seq, res.problems
     path.unlink()
+
+
+def test_connect_waits_for_another_process_switching_to_wal(tmp_path):
+    """While another connection holds the reserved lock, SQLite refuses the switch to WAL at
+    once (the lock upgrade could deadlock, so no busy handler); connect must wait, not fail
+    (the race behind a CI failure of test_concurrent_writers)."""
+    path = tmp_path / "held.sqlite"
+    holder = sqlite3.connect(path, isolation_level=None, check_same_thread=False)
+    holder.execute("BEGIN IMMEDIATE")
+    holder.execute("CREATE TABLE t (x)")
+    timer = threading.Timer(0.3, lambda: holder.execute("COMMIT"))
+    timer.start()
+    try:
+        with reg.open_registry(path) as conn:
+            assert conn.execute("PRAGMA journal_mode").fetchone()[0] == "wal"
+            assert reg.schema_version(conn) == reg.SCHEMA_VERSION
+    finally:
+        timer.join()
+        holder.close()
