@@ -175,3 +175,32 @@ def test_uniform_beam_first_mode_any_size(length, d, E):
     f1 = model_modes(build_model(uniform(length, d), mat, n_elements=40), 3).freq_hz[2]
     exact = 4.730041**2 / (2 * np.pi * length**2) * np.sqrt(E * (d**2 / 16) / 600.0)
     assert f1 == pytest.approx(exact, rel=1e-3)
+
+
+def test_partial_fill_core_is_the_filled_core_plus_an_empty_cavity():
+    """A ``Core`` with ``empty_m`` (fill at the bottom of the hole, the rest behind the plug
+    empty) against the simulator's independent build (the filled part as the core, the empty
+    stretch as a cavity): same matrices' modes; and the mass removed is the analytic
+    rho [(1 - r) V_filled + V_empty] of the uniform beam."""
+    from updating.simulate.cavities import apply_cavities, cavity_stations_m
+
+    length, D, d = 0.84, 0.06, 1.0 * IN_TO_M
+    prof = uniform(length, D)
+    plug, hole, empty, r = 1.0 * IN_TO_M, 10.0 * IN_TO_M, 4.0 * IN_TO_M, 0.3
+    partial = Core(d, plug + hole, r, 0.0, plug, empty)
+    filled = Core(d, plug + hole, r, 0.0, plug + empty)
+    cavity = Core(d, plug + empty, 0.0, 0.0, plug)
+    stations = cavity_stations_m((filled, cavity), length)
+    a = build_model(prof, WOOD, beam="timoshenko", n_elements=60, stations_m=stations,
+                    core=partial)
+    b = apply_cavities(build_model(prof, WOOD, beam="timoshenko", n_elements=60,
+                                   stations_m=stations, core=filled), WOOD, (cavity,))
+    fa, fb = (model_modes(m, n_modes=8).freq_hz[2:] for m in (a, b))
+    np.testing.assert_allclose(fa, fb, rtol=1e-10)
+    m0 = mass_properties(build_model(prof, WOOD, n_elements=60)).mass_kg
+    area = np.pi / 4 * d**2
+    removed = WOOD.rho_kg_m3 * area * ((1 - r) * (hole - empty) + empty)
+    assert m0 - mass_properties(a).mass_kg == pytest.approx(removed, rel=1e-9)
+    assert partial.mean_fill_density_ratio == pytest.approx(r * (hole - empty) / hole)
+    with pytest.raises(ValueError, match="empty length"):
+        build_model(prof, WOOD, core=Core(d, plug + hole, r, 0.0, plug, hole))

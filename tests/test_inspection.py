@@ -140,6 +140,28 @@ def test_hidden_core_found_and_read(seed, kind):
     assert not v.alpha[outside].any() and not v.beta[outside].any()
 
 
+@settings(max_examples=3, deadline=None, derandomize=True)
+@given(seed=st.integers(0, 10**6), filled_fraction=st.floats(0.4, 0.7))
+def test_hidden_partial_fill_read_as_its_hole_and_average_fill(seed, filled_fraction):
+    """A hole 8-12 in deep with cork only at its bottom (the simulator's own build: the
+    filled part as the core, the empty stretch behind the plug as a cavity), realistic noise
+    and drift: altered, the hole's start within 1.5 in, and the fill averaged over the hole
+    (what a scale sees, r x filled fraction) within 25 %."""
+    rng = np.random.default_rng(seed)
+    case = random_case(rng, "none")
+    L = case.profile.length_m
+    d, hole, r = rng.uniform(0.8, 1.2) * IN_TO_M, rng.uniform(8.0, 12.0) * IN_TO_M, 0.3
+    plug, empty = IN_TO_M, (1 - filled_fraction) * hole
+    retest = replace(case.retest, core=Core(d, plug + hole, r, 0.0, plug + empty),
+                     cavities=(Core(d, plug + empty, 0.0, 0.0, plug),))
+    case = replace(case, retest=retest)
+    base, re = case_modes(case, rng)
+    v = inspect_retest(case.profile, case.reference, base, re, false_alarm=0.01)
+    assert v.altered is True, v.reasons
+    assert v.region_m[0] == pytest.approx(L - plug - hole, abs=1.5 * IN_TO_M)
+    assert v.fill_density_ratio == pytest.approx(r * filled_fraction, rel=0.25)
+
+
 def test_tests_at_different_points_are_refused():
     rng = np.random.default_rng(5)
     case = random_case(rng, "none")

@@ -184,6 +184,8 @@ class FitEvidence:
         baseline_sensor_offset_m: the baseline accelerometer's fitted offset.
         position_scan: the scan that seeded H1. msso: the element map.
         plug_m: H1's plug (solid wood at the barrel end). fill_modulus_ratio: assumed.
+        empty_m: the reading's empty stretch of the hole behind the plug (a partial fill),
+            m; 0 when the hole reads as filled to the plug.
     """
 
     statistic: str
@@ -208,6 +210,7 @@ class FitEvidence:
     msso: ElementMap
     plug_m: float
     fill_modulus_ratio: float
+    empty_m: float = 0.0
 
 
 @dataclass(frozen=True)
@@ -258,7 +261,7 @@ class InspectionDetails:
             "position_scan": f.position_scan.to_json_dict(),
             "msso": f.msso.to_json_dict(),
             "plug_m": f.plug_m, "fill_modulus_ratio": f.fill_modulus_ratio,
-            "time_s": self.time_s,
+            "empty_m": f.empty_m, "time_s": self.time_s,
         }
 
     @classmethod
@@ -293,7 +296,8 @@ class InspectionDetails:
             baseline_sensor_offset_m=_num(d.get("baseline_sensor_offset_m")),
             position_scan=PositionScan.from_json_dict(d.get("position_scan")),
             msso=ElementMap.from_json_dict(d.get("msso"), x0_m, x1_m),
-            plug_m=_num(d.get("plug_m")), fill_modulus_ratio=_num(d.get("fill_modulus_ratio")))
+            plug_m=_num(d.get("plug_m")), fill_modulus_ratio=_num(d.get("fill_modulus_ratio")),
+            empty_m=_num(d.get("empty_m")))
         return cls(n_modes, time_s, fit)
 
 

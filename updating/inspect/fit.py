@@ -269,9 +269,11 @@ class ParamSpace:
     def upper(self) -> np.ndarray:
         return np.concatenate([self.bounds.upper, CORE_UPPER])
 
-    def core(self, plug_in: float, length_in: float, p: float, q: float) -> Core:
+    def core(self, plug_in: float, length_in: float, p: float, q: float,
+             empty_fraction: float = 0.0) -> Core:
         """The core of x[N_NULL:]; depth kept within 95 % of the bat, diameter clipped to 90 %
-        of the thinnest outer diameter it spans."""
+        of the thinnest outer diameter it spans; ``empty_fraction`` of the hole, behind the
+        plug, left empty (``fit_partial``)."""
         L = self.profile.length_m
         plug = plug_in * IN_TO_M
         depth = min(plug + length_in * IN_TO_M, 0.95 * L)
@@ -280,18 +282,24 @@ class ParamSpace:
         b = max((p + q) / R_MAX, MIN_B)
         r = R_MAX * p / (p + q) if p + q > 0 else 1.0
         d = min(np.sqrt(b) * IN_TO_M, 0.9 * float(np.min(self.profile.diameter_at(xs))))
-        return Core(d, depth, r, self.fill_modulus_ratio, plug)
+        return Core(d, depth, r, self.fill_modulus_ratio, plug, empty_fraction * (depth - plug))
 
     def reading(self, x: np.ndarray, cov: np.ndarray) -> dict:
-        """Core start (m from the knob end), diameter (m), fill ratio and their standard
-        uncertainties from the covariance of x (first-order propagation)."""
-        _, _, p, q = x[N_NULL:]
+        """Core start (m from the knob end), diameter (m), fill ratio (averaged over the hole
+        when part of it is empty) and their standard uncertainties from the covariance of x
+        (first-order propagation)."""
+        _, _, p, q = x[N_NULL:N_NULL + N_CORE]
+        e = float(x[N_NULL + N_CORE]) if x.size > N_NULL + N_CORE else None
         s = max(p + q, R_MAX * MIN_B)
         b = s / R_MAX
         dd = IN_TO_M / (2 * np.sqrt(b)) / R_MAX
+        kept = 1.0 if e is None else 1.0 - e
         grads = {"region_start_m": np.array([-IN_TO_M, -IN_TO_M, 0.0, 0.0]),
                  "core_diameter_m": np.array([0.0, 0.0, dd, dd]),
-                 "fill_density_ratio": R_MAX * np.array([0.0, 0.0, q, -p]) / s**2}
+                 "fill_density_ratio": kept * R_MAX * np.array([0.0, 0.0, q, -p]) / s**2}
+        if e is not None:
+            grads = {k: np.append(g, 0.0) for k, g in grads.items()}
+            grads["fill_density_ratio"][-1] = -R_MAX * p / s
         c = cov[N_NULL:, N_NULL:]
         sd = {k: float(np.sqrt(max(g @ c @ g, 0.0))) for k, g in grads.items()}
         return {"core": self.core(*x[N_NULL:]), "sd": sd}
@@ -446,6 +454,26 @@ def fit_core(
                         tuple((float(s[N_NULL]), float(s[N_NULL + 1])) for s in starts),
                         tuple(float(f.rss) for f in fits))
     return best, scan
+
+
+MAX_EMPTY_FRACTION = 0.8
+"""Largest empty share of a partially filled hole ``fit_partial`` considers."""
+
+
+def fit_partial(predict, diff: Differences, space: ParamSpace, sigma_rel: float,
+                full: ChangeFit, start_fraction: float = 0.4) -> ChangeFit:
+    """H1 with one more parameter, the empty fraction e of the hole behind the plug (a
+    partial fill: the fill at the bottom of the hole, x = core + [e]), started from the H1
+    core at e = ``start_fraction`` with the fill ratio raised so that its hole-averaged
+    ratio r (1 - e) is H1's."""
+    fun = residual_function(predict, diff, space, sigma_rel)
+    lo = np.append(space.lower(), 0.0)
+    hi = np.append(space.upper(), MAX_EMPTY_FRACTION)
+    plug, length, p, q = full.x[N_NULL:N_NULL + N_CORE]
+    b = max(p + q, R_MAX * MIN_B) / R_MAX
+    r = min(R_MAX * p / max(p + q, 1e-12) / (1.0 - start_fraction), R_MAX - 0.05)
+    x0 = np.concatenate([full.x[:N_NULL], space.to_x(plug, length, b, r), [start_fraction]])
+    return fit_bounded(fun, x0, lo, hi, space, diff, MAX_NFEV_CORE)
 
 
 SHAPE_NOISE_FLOOR = 1e-3

@@ -21,7 +21,8 @@
    inconclusive when the drift itself is beyond physical bounds or a nuisance at its bound
    and a core cannot be told apart; else not altered.
 5. Reading: the H1 core (region, diameter, fill ratio) with standard uncertainties from the
-   Jacobian, and the element factors it implies.
+   Jacobian, and the element factors it implies; a light fill re-read with part of its hole
+   possibly empty (``fit.fit_partial``), its fill averaged over the hole.
 6. The MSSO element map (``msso_map``), independent of the core fit: the re-test against the
    baseline-updated reference with the accepted drift removed (``details.msso``).
 """
@@ -65,6 +66,7 @@ from updating.inspect.fit import (
     fit_bounded,
     fit_core,
     fit_null,
+    fit_partial,
     plane_shift,
     plane_sigma,
     residual_function,
@@ -100,6 +102,11 @@ F(4, N - 11). Clean bats whose candidate core was practical reached F 7.2 on 174
 calibration bats (seeds 2000-2173) but 10.0 and 10.7 on the acceptance fleets (seeds
 600-639, 3000-3039); a floor of 10 set from the calibration fleet called one of those
 clean bats altered, so the floor stays at 12 (docs/inspection.md)."""
+PARTIAL_LEVEL = 0.01
+"""Level of the chi^2 test (one degree) by which a light fill's reading is described as a
+partial fill (``fit.fit_partial``: part of the hole behind the plug empty). The reading itself
+always comes from that fit (it contains the hole filled to the plug); neither changes the
+verdict."""
 WEIGHT_DRIFT_MAX = 0.04
 """|ln(W_retest / W_registered)| beyond which moisture (+-2.5 points, 1 %/point, plus the
 scale) cannot explain a weight change."""
@@ -417,9 +424,34 @@ def inspect_retest(
         reasons = [f"the change between the tests is what moisture, temperature and the "
                    f"accelerometer make (F = {F:.2f}, p = {p_value:.2f}){weight_note}"]
 
-    # 5. reading
+    # 5. reading: a light fill is read with part of its hole possibly empty, which
+    # contains H1 (e = 0); its hole-averaged fill is what a scale would see, unbiased where
+    # the fill sits at the bottom of the hole (a partial fill), and it is described as
+    # partial when the empty stretch is significant
+    read, read_cov, read_sd = full, cov1, candidate["sd"]
+    if altered and c.fill_density_ratio < 1.0:
+        partial = fit_partial(predict, diff, space, sigma, full)
+        dof_p = max(n - p1 - 1, 1)
+        if partial.rss < full.rss:
+            read, read_cov = partial, covariance(partial, dof_p)
+            read_sd = space.reading(partial.x, read_cov)["sd"]
+            c = partial.params.core
+            start_in, end_in = (v / IN_TO_M for v in c.interval_m(profile.length_m))
+        if (full.rss - partial.rss) / max(partial.rss / dof_p, 1.0) > \
+                chi2.ppf(1 - PARTIAL_LEVEL, 1):
+            filled_in = (c.depth_m - c.plug_m - c.empty_m) / IN_TO_M
+            reasons[-1] = (f"it fits a hole {c.diameter_m / IN_TO_M:.2f} in across at "
+                           f"{start_in:.1f}-{end_in:.1f} in from the knob end filled at its "
+                           f"bottom {filled_in:.1f} in (fill/wood density "
+                           f"{c.fill_density_ratio:.2f}) and empty for "
+                           f"{c.empty_m / IN_TO_M:.1f} in behind the plug: hole-averaged "
+                           f"fill {c.mean_fill_density_ratio:.2f}")
+        else:
+            reasons[-1] = (f"it fits a core {c.diameter_m / IN_TO_M:.2f} in across at "
+                           f"{start_in:.1f}-{end_in:.1f} in from the knob end, fill/wood "
+                           f"density {c.mean_fill_density_ratio:.2f} (averaged over the hole)")
     cov0 = covariance(null, max(n - N_NULL, 1))
-    accepted, cov = (full, cov1) if altered else (null, cov0)
+    accepted, cov = (read, read_cov) if altered else (null, cov0)
     sd = np.sqrt(np.clip(np.diag(cov), 0.0, None))
     ps = accepted.params
     uncertainty = {"stiffness_scale": sd[0] / 100, "density_scale": sd[1] / 100,
@@ -427,13 +459,13 @@ def inspect_retest(
     region = core_d = ratio = None
     if altered:
         region = c.interval_m(profile.length_m)
-        core_d, ratio = c.diameter_m, c.fill_density_ratio
-        uncertainty.update(candidate["sd"])
+        core_d, ratio = c.diameter_m, c.mean_fill_density_ratio
+        uncertainty.update(read_sd)
     factors = core_element_factors(predict.system().model, c if altered else None)
 
-    f_fit, _ = predict(full.params)
+    f_fit, _ = predict(read.params)
     f_null, _ = predict(null.params)
-    shift_null, shift_fit = np.exp(plane_shift(diff, null.x)), np.exp(plane_shift(diff, full.x))
+    shift_null, shift_fit = np.exp(plane_shift(diff, null.x)), np.exp(plane_shift(diff, read.x))
     modes = []
     for k in range(pairs.n):
         j = diff.model_index[k]
@@ -452,6 +484,7 @@ def inspect_retest(
     if msso.result is not None:
         msso = replace(msso, agrees_with_fit=_agree(msso.region_m, region))
 
+    c = full.params.core
     region_c = c.interval_m(profile.length_m)
     evidence = FitEvidence(
         statistic="F (drift+core vs drift-only, nested least squares)",
@@ -469,7 +502,8 @@ def inspect_retest(
                            "density_scale": float(full.params.density_scale)},
         sensor_shift_m=float(ps.sensor_shift_m - space.sensor_mount_m),
         baseline_sensor_offset_m=offset, position_scan=hyp.scan, msso=msso,
-        plug_m=c.plug_m, fill_modulus_ratio=fill_modulus_ratio)
+        plug_m=c.plug_m, fill_modulus_ratio=fill_modulus_ratio,
+        empty_m=read.params.core.empty_m if altered else 0.0)
     details = InspectionDetails(pairs.n, time.perf_counter() - t0, evidence)
     return Verdict(
         altered=altered, confidence=1.0 - p_value, false_alarm_rate=false_alarm,

@@ -133,7 +133,8 @@ def sample_sections(
     """Gauss samples on every (element x profile piece x core zone) interval."""
     cuts = [profile.segments()[:, 0], profile.segments()[:, 1], node_x_m]
     if core is not None:
-        cuts.append(np.array(core.interval_m(profile.length_m)))
+        x0, x1 = core.interval_m(profile.length_m)
+        cuts.append(np.array([x0, x1 - core.empty_m, x1]))
     breaks = np.unique(np.concatenate(cuts))
     breaks = breaks[(breaks >= node_x_m[0]) & (breaks <= node_x_m[-1])]
     a, b = breaks[:-1], breaks[1:]
@@ -147,11 +148,12 @@ def sample_sections(
     xi = (x - node_x_m[elem]) / np.diff(node_x_m)[elem]
     D = profile.diameter_at(x)
     d_core = np.zeros_like(x)
-    ratio_rho, ratio_e = 0.0, 0.0
+    ratio_rho, ratio_e = np.zeros_like(x), np.zeros_like(x)
     if core is not None:
         x0, x1 = core.interval_m(profile.length_m)
         d_core[(x > x0) & (x < x1)] = core.diameter_m
-        ratio_rho, ratio_e = core.fill_density_ratio, core.fill_modulus_ratio
+        filled = (x > x0) & (x < x1 - core.empty_m)
+        ratio_rho[filled], ratio_e[filled] = core.fill_density_ratio, core.fill_modulus_ratio
     props = section_props(D, material, d_core, ratio_rho, ratio_e)
     return Samples(elem, xi, w, x, props)
 
@@ -188,6 +190,8 @@ def build_model(
         rotary_inertia = beam == "timoshenko"
     if core is not None and not 0 < core.plug_m < core.depth_m <= profile.length_m:
         raise ValueError("core: need 0 < plug < depth <= bat length")
+    if core is not None and not 0 <= core.empty_m < core.depth_m - core.plug_m:
+        raise ValueError("core: need 0 <= empty length < depth - plug")
     nodes = mesh_nodes(profile.length_m, n_elements, element_length_m, stations_m)
     samples = sample_sections(nodes, profile, material, core)
     phi, parts = parts_from_samples(nodes, samples, beam, rotary_inertia)

@@ -36,6 +36,8 @@ class Core:
         fill_density_ratio: fill density / wood density (cork ~0.2-0.4, heavy fill 1.5-2.2).
         fill_modulus_ratio: fill modulus / wood modulus (cork ~0).
         plug_m: length re-plugged with wood at the barrel end, m.
+        empty_m: length of the hole left empty right behind the plug, m (a partial fill:
+            the fill sits at the bottom of the hole); 0 for a hole filled to the plug.
     """
 
     diameter_m: float
@@ -43,10 +45,16 @@ class Core:
     fill_density_ratio: float
     fill_modulus_ratio: float = 0.0
     plug_m: float = 0.0254
+    empty_m: float = 0.0
 
     def interval_m(self, length_m: float) -> tuple[float, float]:
-        """(start, end) of the filled part along the bat, m from the knob end."""
+        """(start, end) of the hole behind the plug along the bat, m from the knob end."""
         return length_m - self.depth_m, length_m - self.plug_m
+
+    @property
+    def mean_fill_density_ratio(self) -> float:
+        """The fill ratio averaged over the hole: r (1 - empty / hole length)."""
+        return self.fill_density_ratio * (1.0 - self.empty_m / (self.depth_m - self.plug_m))
 
 
 def cowper_k(m: np.ndarray, nu: float) -> np.ndarray:
@@ -88,9 +96,10 @@ class SectionProps:
 
 def section_props(
     D_m: np.ndarray, material: Material, core_d_m: np.ndarray | float = 0.0,
-    fill_density_ratio: float = 0.0, fill_modulus_ratio: float = 0.0,
+    fill_density_ratio: np.ndarray | float = 0.0, fill_modulus_ratio: np.ndarray | float = 0.0,
 ) -> SectionProps:
-    """Properties of circular sections of outer diameter D with a filled core of diameter d."""
+    """Properties of circular sections of outer diameter D with a filled core of diameter d
+    (fill ratios per section or one for all)."""
     D = np.asarray(D_m, dtype=float)
     d = np.broadcast_to(np.asarray(core_d_m, dtype=float), D.shape)
     if np.any(d >= D):

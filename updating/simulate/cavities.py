@@ -1,12 +1,14 @@
 """Cavities besides the model's one core: a cupped barrel end, the empty part of a partial fill.
 
-``build_model`` takes a single ``Core``. A real bat can have more: the cup turned into the
-barrel end (up to 1 in deep, MLB rules) and, in a partially filled hole, an empty stretch
-next to the filled one. Each cavity is a ``Core`` (diameter, depth from the barrel end, fill
-density and modulus ratios, plug: its distance from the barrel end; a cup has plug 0). At the
-quadrature samples inside a cavity the section is recomputed with ``section_props`` (annulus
-of wood plus fill, Cowper's tube coefficient). The mesh must have nodes at the cavities' ends
-(``cavity_stations_m``) so that every sample lies wholly on one side of them.
+``build_model`` takes a single ``Core`` (which can leave its hole's outer stretch empty,
+``Core.empty_m``). A real bat can have more: the cup turned into the barrel end (up to 1 in
+deep, MLB rules) besides a core. The simulator also builds a partial fill's empty stretch as
+a cavity here, independently of ``Core.empty_m`` (a test compares the two). Each cavity is a
+``Core`` (diameter, depth from the barrel end, fill density and modulus ratios, plug: its
+distance from the barrel end; a cup has plug 0). At the quadrature samples inside a cavity
+the section is recomputed with ``section_props`` (annulus of wood plus fill, Cowper's tube
+coefficient). The mesh must have nodes at the cavities' ends (``cavity_stations_m``) so that
+every sample lies wholly on one side of them.
 """
 
 from __future__ import annotations
