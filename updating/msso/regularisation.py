@@ -124,6 +124,12 @@ def check_regularisation(regularisation: Regularisation) -> None:
                          "(gcv, lcurve, a number >= 0 or None)")
 
 
+DENSE_BOUNDED_MAX = 2_000_000
+"""Largest bounded problem (rows x unknowns) solved dense by BVLS (16 MB); beyond it the
+sparse trust-region solver with LSMR. On an inspection's element map (1090 x 148) BVLS took
+0.025 s against LSMR's 0.68 s, and reached a slightly lower residual."""
+
+
 def solve_regularised(C, d: np.ndarray, regularisation: Regularisation = "gcv",
                       lower: float | None = None) -> RegularisedSolution:
     """Regularised least squares min ||C y - d||^2 + lam^2 ||y||^2 (Tikhonov, SVD filters).
@@ -170,7 +176,11 @@ def solve_regularised(C, d: np.ndarray, regularisation: Regularisation = "gcv",
         p = C.shape[1]
         A = sp.vstack([sp.csr_matrix(C), lam * sp.identity(p, format="csr")]).tocsr()
         b = np.concatenate([d, np.zeros(p)])
-        res = scipy.optimize.lsq_linear(A, b, bounds=(lower, np.inf), lsmr_tol="auto")
+        if A.shape[0] * A.shape[1] <= DENSE_BOUNDED_MAX:  # exact active set, ~25x faster
+            res = scipy.optimize.lsq_linear(A.toarray(), b, bounds=(lower, np.inf),
+                                            method="bvls")
+        else:
+            res = scipy.optimize.lsq_linear(A, b, bounds=(lower, np.inf), lsmr_tol="auto")
         y, bounded = res.x, True
     r = C @ y - d
     return RegularisedSolution(y, lam, sp_.rank, float(np.linalg.norm(r)), sp_.s, bounded)
