@@ -281,6 +281,32 @@ def _bounds_matter(predict, diff, space, hyp: Hypotheses, n: int,
     return (hyp.null.rss - wide.rss) / s2 > chi2.ppf(1 - level, len(held))
 
 
+def _light_fill_reading(predict, diff, space, sigma_rel: float, full: ChangeFit,
+                        dof: int, length_m: float):
+    """(fit, covariance, reading sd, reason) of a light fill read with part of its hole
+    possibly empty (``fit_partial``). The family contains H1 (e = 0), so its fit replaces
+    H1's whenever its residual is lower; its hole-averaged fill r (1 - e) is what a scale
+    would miss, unbiased where the fill sits at the bottom of the hole. The reason calls it
+    a partial fill only when the empty stretch is significant (``PARTIAL_LEVEL``)."""
+    partial = fit_partial(predict, diff, space, sigma_rel, full)
+    dof = max(dof, 1)
+    read = partial if partial.rss < full.rss else full
+    cov = covariance(read, dof) if read is partial else covariance(full, dof + 1)
+    c = read.params.core
+    start_in, end_in = (v / IN_TO_M for v in c.interval_m(length_m))
+    where = f"{c.diameter_m / IN_TO_M:.2f} in across at {start_in:.1f}-{end_in:.1f} in from " \
+            "the knob end"
+    if (full.rss - partial.rss) / max(partial.rss / dof, 1.0) > chi2.ppf(1 - PARTIAL_LEVEL, 1):
+        filled_in = (c.depth_m - c.plug_m - c.empty_m) / IN_TO_M
+        reason = (f"it fits a hole {where} filled at its bottom {filled_in:.1f} in (fill/wood "
+                  f"density {c.fill_density_ratio:.2f}) and empty for {c.empty_m / IN_TO_M:.1f}"
+                  f" in behind the plug: hole-averaged fill {c.mean_fill_density_ratio:.2f}")
+    else:
+        reason = (f"it fits a core {where}, fill/wood density "
+                  f"{c.mean_fill_density_ratio:.2f} (averaged over the hole)")
+    return read, cov, space.reading(read.x, cov)["sd"], reason
+
+
 def _nan_verdict(predict: ChangePredictor, false_alarm: float, reasons: list[str],
                  details: InspectionDetails) -> Verdict:
     """An inconclusive verdict (no test made)."""
@@ -424,32 +450,12 @@ def inspect_retest(
         reasons = [f"the change between the tests is what moisture, temperature and the "
                    f"accelerometer make (F = {F:.2f}, p = {p_value:.2f}){weight_note}"]
 
-    # 5. reading: a light fill is read with part of its hole possibly empty, which
-    # contains H1 (e = 0); its hole-averaged fill is what a scale would see, unbiased where
-    # the fill sits at the bottom of the hole (a partial fill), and it is described as
-    # partial when the empty stretch is significant
+    # 5. reading (a light fill: part of its hole possibly empty, ``_light_fill_reading``)
     read, read_cov, read_sd = full, cov1, candidate["sd"]
     if altered and c.fill_density_ratio < 1.0:
-        partial = fit_partial(predict, diff, space, sigma, full)
-        dof_p = max(n - p1 - 1, 1)
-        if partial.rss < full.rss:
-            read, read_cov = partial, covariance(partial, dof_p)
-            read_sd = space.reading(partial.x, read_cov)["sd"]
-            c = partial.params.core
-            start_in, end_in = (v / IN_TO_M for v in c.interval_m(profile.length_m))
-        if (full.rss - partial.rss) / max(partial.rss / dof_p, 1.0) > \
-                chi2.ppf(1 - PARTIAL_LEVEL, 1):
-            filled_in = (c.depth_m - c.plug_m - c.empty_m) / IN_TO_M
-            reasons[-1] = (f"it fits a hole {c.diameter_m / IN_TO_M:.2f} in across at "
-                           f"{start_in:.1f}-{end_in:.1f} in from the knob end filled at its "
-                           f"bottom {filled_in:.1f} in (fill/wood density "
-                           f"{c.fill_density_ratio:.2f}) and empty for "
-                           f"{c.empty_m / IN_TO_M:.1f} in behind the plug: hole-averaged "
-                           f"fill {c.mean_fill_density_ratio:.2f}")
-        else:
-            reasons[-1] = (f"it fits a core {c.diameter_m / IN_TO_M:.2f} in across at "
-                           f"{start_in:.1f}-{end_in:.1f} in from the knob end, fill/wood "
-                           f"density {c.mean_fill_density_ratio:.2f} (averaged over the hole)")
+        read, read_cov, read_sd, reasons[-1] = _light_fill_reading(
+            predict, diff, space, sigma, full, n - p1 - 1, profile.length_m)
+    rc = read.params.core
     cov0 = covariance(null, max(n - N_NULL, 1))
     accepted, cov = (read, read_cov) if altered else (null, cov0)
     sd = np.sqrt(np.clip(np.diag(cov), 0.0, None))
@@ -458,10 +464,10 @@ def inspect_retest(
                    "sensor_shift_m": sd[2] * IN_TO_M}
     region = core_d = ratio = None
     if altered:
-        region = c.interval_m(profile.length_m)
-        core_d, ratio = c.diameter_m, c.mean_fill_density_ratio
+        region = rc.interval_m(profile.length_m)
+        core_d, ratio = rc.diameter_m, rc.mean_fill_density_ratio
         uncertainty.update(read_sd)
-    factors = core_element_factors(predict.system().model, c if altered else None)
+    factors = core_element_factors(predict.system().model, rc if altered else None)
 
     f_fit, _ = predict(read.params)
     f_null, _ = predict(null.params)
@@ -484,7 +490,6 @@ def inspect_retest(
     if msso.result is not None:
         msso = replace(msso, agrees_with_fit=_agree(msso.region_m, region))
 
-    c = full.params.core
     region_c = c.interval_m(profile.length_m)
     evidence = FitEvidence(
         statistic="F (drift+core vs drift-only, nested least squares)",
@@ -503,7 +508,7 @@ def inspect_retest(
         sensor_shift_m=float(ps.sensor_shift_m - space.sensor_mount_m),
         baseline_sensor_offset_m=offset, position_scan=hyp.scan, msso=msso,
         plug_m=c.plug_m, fill_modulus_ratio=fill_modulus_ratio,
-        empty_m=read.params.core.empty_m if altered else 0.0)
+        empty_m=rc.empty_m if altered else 0.0)
     details = InspectionDetails(pairs.n, time.perf_counter() - t0, evidence)
     return Verdict(
         altered=altered, confidence=1.0 - p_value, false_alarm_rate=false_alarm,
