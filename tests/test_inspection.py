@@ -169,3 +169,25 @@ def test_tests_at_different_points_are_refused():
     moved = replace(re, x_m=re.x_m + 0.01)
     with pytest.raises(ValueError, match="different points"):
         inspect_retest(case.profile, case.reference, base, moved)
+
+
+@pytest.mark.parametrize("seed,kind,shift_in", [(25, "cork", 0.4), (25, "cork", 0.6),
+                                                (23, "none", 0.4), (24, "none", 0.6)])
+def test_a_core_is_told_apart_from_a_drift_at_its_bound(seed, kind, shift_in):
+    """The accelerometer re-mounted 0.4-0.6 in off, beyond the 0.3 in the drift model allows:
+    a cork core, which holds the fitted shift at its bound, is still called altered when no
+    drift three times as large explains the change (``_core_beyond_drift``); the same shift
+    on an unaltered bat is never called altered."""
+    rng = np.random.default_rng(seed)
+    case = random_case(rng, kind)
+    moved = case.baseline.sensor_offset_m + shift_in * IN_TO_M
+    case = replace(case, retest=replace(case.retest, sensor_offset_m=moved))
+    base, re = case_modes(case, rng)
+    v = inspect_retest(case.profile, case.reference, base, re, false_alarm=0.01)
+    if kind == "none":
+        assert v.altered is not True, v.reasons
+        return
+    assert v.details.fit.core_fit_at_bound == ("sensor_shift_in",)
+    assert v.altered is True, v.reasons
+    core, L = case.core, case.profile.length_m
+    assert v.region_m[0] == pytest.approx(L - core.depth_m, abs=1.5 * IN_TO_M)

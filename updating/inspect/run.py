@@ -17,9 +17,10 @@
 
    p = P(F_{q, N-p_1} > F); significant when p < false_alarm; confidence = 1 - p.
 4. Decision: altered only when the change is significant, the core that explains it is a
-   practical one (``MIN_CORE_DIAMETER_IN``) and no nuisance is held at its physical bound;
-   inconclusive when the drift itself is beyond physical bounds or a nuisance at its bound
-   and a core cannot be told apart; else not altered.
+   practical one (``MIN_CORE_DIAMETER_IN``) and no nuisance is held at its physical bound,
+   or no drift three times beyond the bounds explains the change either
+   (``_core_beyond_drift``); inconclusive when the drift itself is beyond physical bounds or
+   a nuisance at its bound and a core cannot be told apart; else not altered.
 5. Reading: the H1 core (region, diameter, fill ratio) with standard uncertainties from the
    Jacobian, and the element factors it implies; a light fill re-read with part of its hole
    possibly empty (``fit.fit_partial``), its fill averaged over the hole.
@@ -281,6 +282,20 @@ def _bounds_matter(predict, diff, space, hyp: Hypotheses, n: int,
     return (hyp.null.rss - wide.rss) / s2 > chi2.ppf(1 - level, len(held))
 
 
+def _core_beyond_drift(predict, diff, space, hyp: Hypotheses, q: int, dof: int,
+                       false_alarm: float, factor: float = 3.0) -> float | None:
+    """F of the core against the null with every nuisance range ``factor`` times as wide
+    (``NullBounds.relaxed``, priors kept) when the core is still significant there (p below
+    ``false_alarm``, F at least ``F_FLOOR``), else None: a core fit that holds a nuisance
+    at its bound is told apart from that drift when no drift three times as large explains
+    the change."""
+    wide = fit_null(predict, diff, replace(space, bounds=space.bounds.relaxed(factor)),
+                    hyp.sigma_rel, x0=hyp.null.x)
+    rss1 = min(hyp.full.rss, hyp.null.rss)
+    F = max(wide.rss - rss1, 0.0) / q / max(rss1 / dof, 1.0)
+    return F if f_dist.sf(F, q, dof) < false_alarm and F >= F_FLOOR else None
+
+
 def _light_fill_reading(predict, diff, space, sigma_rel: float, full: ChangeFit,
                         dof: int, length_m: float):
     """(fit, covariance, reading sd, reason) of a light fill read with part of its hole
@@ -407,20 +422,25 @@ def inspect_retest(
                  f"knob end, fill/wood density {c.fill_density_ratio:.2f}")
     d_low_in = d_in - 2 * candidate["sd"]["core_diameter_m"] / IN_TO_M
     practical = d_low_in >= MIN_CORE_DIAMETER_IN
-    uniform = None
+    uniform = F_wide = None
     if significant:
         uniform = _uniform_explanation(predict, diff, space, hyp, q, dof, false_alarm)
+    if significant and practical and held1 and uniform is None:
+        F_wide = _core_beyond_drift(predict, diff, space, hyp, q, dof, false_alarm)
     if uniform is not None:
         altered = None
         reasons = [f"the tests differ as two bats of this profile would (uniform stiffness "
                    f"{uniform[0]:+.1f} %, density {uniform[1]:+.1f} %), far beyond what moisture "
                    "and temperature do: check that the re-test is of this bat (serial) and the "
                    "registered baseline is its own"]
-    elif significant and practical and not held1:
+    elif significant and practical and (not held1 or F_wide is not None):
         altered = True
+        beyond = "" if not held1 else (
+            f"; with {', '.join(held1)} at its physical bound, but no drift even three times "
+            f"beyond the physical bounds explains it (F = {F_wide:.1f})")
         reasons = [f"the change between the tests is not one moisture, temperature or the "
-                   f"accelerometer can make (F = {F:.1f}, p = {p_value:.1e}){weight_note}",
-                   f"it fits {core_text}"]
+                   f"accelerometer can make (F = {F:.1f}, p = {p_value:.1e}){weight_note}"
+                   f"{beyond}", f"it fits {core_text}"]
     elif significant and practical:
         altered = None
         reasons = [f"the change between the tests fits {core_text}, but only with "
