@@ -70,6 +70,7 @@ def score_verdict(row: dict, serial: str, verdict, kind: str, truth: dict) -> di
                p=None if fit is None else fit.p_value,
                weight_change_rel=None if fit is None else fit.weight_change_rel,
                null_fit=None if fit is None else fit.null_fit,
+               plug_m=None if fit is None else fit.plug_m,
                candidate=None if fit is None else fit.candidate_core.to_json_dict())
     t = truth
     if kind != "none" and out["status"] == "altered":
