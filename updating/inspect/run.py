@@ -93,9 +93,9 @@ MIN_CORE_DIAMETER_IN = 0.35
 this for "altered" (reported holes are 0.75-1.25 in, the smallest considered 0.5 in); a
 significant change that only a thinner or undetermined core explains is model error or
 drift, not a core. Calibrated on 200 nuisance-rich clean bats (seeds 600-639, 3000-3039,
-7000-7119): clean bats whose F passed the floor reached 0.31 in (a 0.40 +- 0.05 in,
-nearly density-neutral "core", F 18.9: called altered with a floor of 0.3 in); altered
-bats' candidates reached at least 0.40 in (docs/inspection.md)."""
+7000-7119; checked on 8000-8119): clean bats whose F passed the floor reached 0.31 in (a
+0.40 +- 0.05 in, nearly density-neutral "core", F 18.9: called altered with a floor of
+0.3 in); altered bats' candidates reached at least 0.36 in (docs/inspection.md)."""
 
 
 F_FLOOR = 14.0
@@ -411,11 +411,11 @@ def inspect_retest(
     F = max(rss0 - rss1, 0.0) / q / max(rss1 / dof, 1.0)
     p_value = float(f_dist.sf(F, q, dof))
     significant = p_value < false_alarm and F >= F_FLOOR
-    c = full.params.core
 
     # 4. decision
     cov1 = covariance(full, dof)
     candidate = space.reading(full.x, cov1)
+    c = full.params.core
     d_in = c.diameter_m / IN_TO_M
     start_in, end_in = (v / IN_TO_M for v in c.interval_m(profile.length_m))
     held0 = NullBounds.held(null)
