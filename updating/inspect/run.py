@@ -258,6 +258,15 @@ def fit_hypotheses(predict: ChangePredictor, diff: Differences, space: ParamSpac
     return Hypotheses(null, full, sigma, scan)
 
 
+def nested_f(rss_null: float, rss_core: float, q: int, dof: int) -> tuple[float, float]:
+    """(F, p) of the nested test: F = ((RSS_0 - RSS_1) / q) / max(RSS_1 / dof, 1), the
+    residual variance per datum not below 1 (the weights hold the noise floors,
+    ``SHAPE_NOISE_FLOOR``, and data cleaner than them must not make model error
+    significant); p = P(F_{q, dof} > F)."""
+    F = max(rss_null - rss_core, 0.0) / q / max(rss_core / dof, 1.0)
+    return F, float(f_dist.sf(F, q, dof))
+
+
 def _uniform_explanation(predict, diff, space, hyp: Hypotheses, q: int, dof: int,
                          false_alarm: float) -> tuple[float, float] | None:
     """(stiffness %, density %) when a uniform change of the wood beyond physical bounds
@@ -266,10 +275,10 @@ def _uniform_explanation(predict, diff, space, hyp: Hypotheses, q: int, dof: int
     wide = replace(space, bounds=space.bounds.widened())
     fit = fit_null(predict, diff, wide, hyp.sigma_rel, x0=hyp.null.x)
     rss1 = min(hyp.full.rss, hyp.null.rss)
-    F = max(fit.rss - rss1, 0.0) / q / max(rss1 / dof, 1.0)
+    _, p = nested_f(fit.rss, rss1, q, dof)
     beyond = np.any(fit.x[:2] < space.bounds.lower[:2]) or \
         np.any(fit.x[:2] > space.bounds.upper[:2])
-    if beyond and f_dist.sf(F, q, dof) >= false_alarm:
+    if beyond and p >= false_alarm:
         return (100 * (fit.params.stiffness_scale - 1), 100 * (fit.params.density_scale - 1))
     return None
 
@@ -297,8 +306,8 @@ def _core_beyond_drift(predict, diff, space, hyp: Hypotheses, q: int, dof: int,
     wide = fit_null(predict, diff, replace(space, bounds=space.bounds.relaxed(factor)),
                     hyp.sigma_rel, x0=hyp.null.x)
     rss1 = min(hyp.full.rss, hyp.null.rss)
-    F = max(wide.rss - rss1, 0.0) / q / max(rss1 / dof, 1.0)
-    return F if f_dist.sf(F, q, dof) < false_alarm and F >= F_FLOOR else None
+    F, p = nested_f(wide.rss, rss1, q, dof)
+    return F if p < false_alarm and F >= F_FLOOR else None
 
 
 def _light_fill_reading(predict, diff, space, sigma_rel: float, full: ChangeFit,
@@ -406,10 +415,7 @@ def inspect_retest(
     n, p1, q = diff.n_data, N_NULL + N_CORE, N_CORE
     dof = max(n - p1, 1)
     rss0, rss1 = null.rss, min(full.rss, null.rss)
-    # residual variance per datum, not below 1: the weights hold the noise floors
-    # (SHAPE_NOISE_FLOOR), and data cleaner than them must not make model error significant
-    F = max(rss0 - rss1, 0.0) / q / max(rss1 / dof, 1.0)
-    p_value = float(f_dist.sf(F, q, dof))
+    F, p_value = nested_f(rss0, rss1, q, dof)
     significant = p_value < false_alarm and F >= F_FLOOR
 
     # 4. decision
