@@ -83,7 +83,7 @@ ash bat); beyond mode 6 the last value."""
 PLANE_MIX = 0.15
 """Fraction of the plane split kept as frequency noise beside the fitted plane mix
 (``PLANE_MIX_MAX``): what the linear model of the mix misses (a fit resolving part of a
-pair, the two planes' slightly different shapes)."""
+pair; the mix's effect on the shapes is modelled, ``plane_shape_shift``)."""
 MOISTURE_COUPLING = E_PER_POINT / MASS_PER_POINT
 """Stiffness % per density % of a uniform moisture change (-2: E -2 % per +1 % mass per
 point): H0's uniform stiffness is s_E = 1 + (x0 + MOISTURE_COUPLING x1) / 100 with x1 the
@@ -190,6 +190,8 @@ class Differences:
         mass0_kg: the reference's wood mass (the model's weight before any change).
         plane_sens: (m,) S_r = d ln f_r / d ln(E/G) of the reference (the two-plane mix's
             effect on each pair's ln f per unit c), or None (no plane mix).
+        plane_shape_sens: (n_points, m) d phi_r / d ln(E/G), aligned as phi0 (the mix's
+            effect on each pair's shape per unit c), or None.
     """
 
     model_index: np.ndarray
@@ -202,6 +204,7 @@ class Differences:
     dlnw: float | None = None
     mass0_kg: float = 1.0
     plane_sens: np.ndarray | None = None
+    plane_shape_sens: np.ndarray | None = None
 
     @property
     def n_freq(self) -> int:
@@ -323,6 +326,16 @@ def plane_shift(diff: Differences, x: np.ndarray) -> np.ndarray:
     return diff.plane_sens * float(x[6])
 
 
+def plane_shape_shift(diff: Differences, x: np.ndarray) -> np.ndarray | float:
+    """(n_points, m) shape change of each pair from the two-plane mix c = x[6]:
+    dphi / d ln(E/G) c. The merged pair's shape is cos^2 phi_R + sin^2 phi_T
+    (``planes.merge_plane_pairs``), so tapping at another angle moves it by
+    Delta(sin^2 theta) (phi_T - phi_R) = c dphi / d ln(E/G) to first order."""
+    if diff.plane_shape_sens is None:
+        return 0.0
+    return diff.plane_shape_sens * float(x[6])
+
+
 def residual_function(
     predict, diff: Differences, space: ParamSpace, sigma_rel: float,
 ) -> Callable[[np.ndarray], np.ndarray]:
@@ -334,7 +347,8 @@ def residual_function(
         f, phi = f[diff.model_index], phi[:, diff.model_index]
         phi = phi * np.sign(np.einsum("ij,ij->j", phi, diff.phi0))
         rf = (diff.dlnf - np.log(f / diff.f0) - plane_shift(diff, x)) / diff.sigma_lnf
-        rs = (diff.dpsi - (phi - diff.phi0)) / (sigma_rel * diff.psi_scale)
+        rs = (diff.dpsi - (phi - diff.phi0) - plane_shape_shift(diff, x)) / (
+            sigma_rel * diff.psi_scale)
         parts = [rf, rs.ravel()]
         if diff.dlnw is not None:
             dw = np.log(predict.wood_mass_kg(params) / diff.mass0_kg)

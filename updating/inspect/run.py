@@ -188,23 +188,30 @@ def differences(predict: ChangePredictor, baseline: MeasuredModes, retest: Measu
     sig = np.sqrt(_rel_freq_std(baseline)[ib] ** 2 + _rel_freq_std(retest)[ir] ** 2
                   + FREQ_MODEL_ERROR_REL ** 2 + plane_sigma(order) ** 2)
     rms = np.hypot(np.sqrt(np.mean(psi_b**2, axis=0)), np.sqrt(np.mean(psi_r**2, axis=0)))
+    s_f, s_phi = shear_sensitivity(predict)
     return Differences(jmod, np.log(retest.freq_hz[ir] / baseline.freq_hz[ib]), sig,
                        psi_r - psi_b, rms, f_mod[jmod], phi0, dlnw,
-                       predict.wood_mass_kg(ChangeParams()),
-                       shear_sensitivity(predict)[jmod])
+                       predict.wood_mass_kg(ChangeParams()), s_f[jmod],
+                       s_phi[:, jmod] * np.sign(np.einsum("ij,ij->j", phi_mod[:, jmod], phi0)))
 
 
-def shear_sensitivity(predict: ChangePredictor, step: float = 0.02) -> np.ndarray:
-    """S_r = d ln f_r / d ln(E/G) of the reference model (all of the predictor's modes),
-    central differences at E fixed: how a change of the effective shear modulus -- the two
-    bending planes mixed in another proportion -- moves each frequency (``fit.plane_shift``)."""
+def shear_sensitivity(predict: ChangePredictor,
+                      step: float = 0.02) -> tuple[np.ndarray, np.ndarray]:
+    """(S_f, S_phi): S_f[r] = d ln f_r / d ln(E/G) (all of the predictor's modes) and
+    S_phi[:, r] = d phi_r / d ln(E/G) at the test points (mass-normalised, signs of the
+    reference's shapes) of the reference model, central differences at E fixed: how a
+    change of the effective shear modulus -- the two bending planes mixed in another
+    proportion -- moves each frequency and shape (``fit.plane_shift``)."""
     ref = predict.reference
-    f = [predict.with_reference(replace(ref, e_over_g=ref.e_over_g * np.exp(s)))(
-        ChangeParams())[0] for s in (-step, step)]
+    _, phi0 = predict(ChangeParams())
+    f, phi = zip(*(predict.with_reference(replace(ref, e_over_g=ref.e_over_g * np.exp(s)))(
+        ChangeParams()) for s in (-step, step)), strict=True)
     elastic = (f[0] >= ELASTIC_MIN_HZ) & (f[1] >= ELASTIC_MIN_HZ)
-    out = np.zeros(f[0].size)
-    out[elastic] = np.log(f[1][elastic] / f[0][elastic]) / (2 * step)
-    return out
+    s_f = np.zeros(f[0].size)
+    s_f[elastic] = np.log(f[1][elastic] / f[0][elastic]) / (2 * step)
+    s_phi = (align_signs(phi0, phi[1]) - align_signs(phi0, phi[0])) / (2 * step)
+    s_phi[:, ~elastic] = 0.0
+    return s_f, s_phi
 
 
 def _element_map(profile, reference, baseline, retest, pairs: RetestPairs, drift, offset,
