@@ -10,8 +10,10 @@ are matched by the model's changes from the reference, ln(f(theta)/f(0)),
 phi(theta) - phi(0) and ln(m(theta)/m(0)) (m: the wood's mass), so that what the calibrated
 reference gets wrong (and the test's own bias) largely cancels. Residuals are weighted by
 their standard deviations: sigma_f from the modal fit's frequency uncertainties (with a
-model-error floor), sigma_psi = sigma_rel * rms-shape of the mode (one relative shape-noise
-level estimated from the residuals), sigma_w = ``WEIGHT_SIGMA_REL``. Parameters:
+model-error floor), sigma_psi[j,r] = sigma_rel * psi_scale[j,r] (one relative shape-noise
+level estimated from the residuals; psi_scale ~ sqrt(phi0[j,r]^2 + k^2 rms_r^2), the noise of
+an FRF relative to |H| with a floor near the nodes, ``run.SHAPE_NOISE_FLOOR_SHARE``),
+sigma_w = ``WEIGHT_SIGMA_REL``. Parameters:
 
     null (what an unaltered bat does between tests, physically bounded, ``NullBounds``):
           x = [x0, 100 (s_rho - 1), sensor shift (in),
@@ -184,7 +186,9 @@ class Differences:
         model_index: (m,) index of each pair's mode among the predictor's modes.
         dlnf: (m,) ln(f_retest / f_baseline); sigma_lnf: (m,) its standard deviation.
         dpsi: (n_points, m) retest minus baseline shapes (signs aligned).
-        psi_scale: (m,) sqrt(rms_baseline^2 + rms_retest^2) of each mode's shape entries.
+        psi_scale: (n_points, m) shape-noise scale of each entry: sqrt(rms_baseline^2 +
+            rms_retest^2) of the mode, shared among its points as sqrt(phi0^2 + k^2 rms0^2)
+            (``run.SHAPE_NOISE_FLOOR_SHARE``: noise relative to |phi| with a floor).
         f0: (m,) reference model frequencies, Hz; phi0: (n_points, m) its shapes, aligned.
         dlnw: ln(W_retest / W_registered), or None when a weight is missing.
         mass0_kg: the reference's wood mass (the model's weight before any change).

@@ -38,6 +38,9 @@ from updating.simulate.cavities import apply_cavities, cavity_stations_m
 from updating.simulate.wood import WoodField, apply_wood_field
 
 DEFAULT_FREQ_HZ = np.arange(0.0, 3200.0 + 0.25, 0.5)
+SHAPE_NOISE_FLOOR = 0.3
+"""``simulate_modes``' shape noise near a mode's nodes, as a share of its RMS: the median
+floor of the FRF-level fleet's identified shapes (docs/inspection.md, shape noise)."""
 
 
 def moisture_scales(moisture_pct: float) -> tuple[float, float]:
@@ -202,7 +205,9 @@ def simulate_modes(
 
     The truth model's elastic modes at the impact points (the accelerometer's own mass and
     position included), mass-normalised, with relative Gaussian noise on frequencies and
-    shape entries (``shape_noise`` times each shape's RMS). Scaled as the fitter scales them,
+    shape entries: ``shape_noise`` times sqrt((phi^2 + k^2 rms^2) / (1 + k^2)), an FRF's
+    error relative to |H| with a floor near the nodes (k = ``SHAPE_NOISE_FLOOR``; the
+    shape's RMS noise is ``shape_noise`` times its RMS). Scaled as the fitter scales them,
     through the driving-point FRF: an accelerometer off its labelled point multiplies each
     shape by sqrt(phi(sensor) / phi(driving point)) (``inspect.model.driving_point_scale``).
     For fast tests of the updating stage; the full path (simulate_test + ema fit) is the real
@@ -222,7 +227,9 @@ def simulate_modes(
     rng = np.random.default_rng(seed)
     f = modes.freq_hz[elastic] * (1 + freq_noise * rng.standard_normal(elastic.size))
     rms = np.sqrt(np.mean(shapes**2, axis=0))
-    shapes = shapes + shape_noise * rms * rng.standard_normal(shapes.shape)
+    k2 = SHAPE_NOISE_FLOOR**2
+    sd = shape_noise * np.sqrt((shapes**2 + k2 * rms**2) / (1 + k2))
+    shapes = shapes + sd * rng.standard_normal(shapes.shape)
     zeta = damping_ratios(modes.freq_hz[elastic], bat.zeta1, bat.zeta_exponent)
     return MeasuredModes(f, shapes, points, zeta, float(points[s]),
                          freq_noise * f)
