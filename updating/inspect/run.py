@@ -211,7 +211,8 @@ def shear_sensitivity(predict: ChangePredictor,
     S_phi[:, r] = d phi_r / d ln(E/G) at the test points (mass-normalised, signs of the
     reference's shapes) of the reference model, central differences at E fixed: how a
     change of the effective shear modulus -- the two bending planes mixed in another
-    proportion -- moves each frequency and shape (``fit.plane_shift``)."""
+    proportion -- moves each frequency and shape (``fit.plane_shift``,
+    ``fit.plane_shape_shift``)."""
     ref = predict.reference
     _, phi0 = predict(ChangeParams())
     f, phi = zip(*(predict.with_reference(replace(ref, e_over_g=ref.e_over_g * np.exp(s)))(
