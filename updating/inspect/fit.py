@@ -502,6 +502,17 @@ with a diagnose-calibrated reference gave F = 14 without the floor), and two ide
 would have zero residual."""
 
 
+def shape_noise_profile(phi: np.ndarray, floor_share: float) -> np.ndarray:
+    """(n_points, m) standard deviation of each shape entry relative to its mode's RMS
+    noise: sqrt((phi^2 + k^2 rms^2) / ((1 + k^2) rms^2)), k = ``floor_share``, rms the
+    mode's RMS over the points (mean square 1 over each mode's points). An FRF's random
+    error is relative to |H|, and near a resonance |H_j| ~ |phi_j|; k is the floor near
+    the nodes."""
+    rms = np.sqrt(np.mean(phi**2, axis=0))
+    k2 = floor_share**2
+    return np.sqrt((phi**2 + k2 * rms**2) / ((1 + k2) * rms**2))
+
+
 def shape_noise(fit: ChangeFit, diff: Differences, sigma_rel: float, n_params: int) -> float:
     """Relative shape noise re-estimated from a fit's shape residual:
 

@@ -72,6 +72,7 @@ from updating.inspect.fit import (
     plane_sigma,
     residual_function,
     shape_noise,
+    shape_noise_profile,
 )
 from updating.inspect.model import ChangeParams, ChangePredictor, baseline_sensor_offset
 from updating.inspect.msso_map import msso_map
@@ -195,9 +196,7 @@ def differences(predict: ChangePredictor, baseline: MeasuredModes, retest: Measu
     sig = np.sqrt(_rel_freq_std(baseline)[ib] ** 2 + _rel_freq_std(retest)[ir] ** 2
                   + FREQ_MODEL_ERROR_REL ** 2 + plane_sigma(order) ** 2)
     rms = np.hypot(np.sqrt(np.mean(psi_b**2, axis=0)), np.sqrt(np.mean(psi_r**2, axis=0)))
-    rms0 = np.sqrt(np.mean(phi0**2, axis=0))
-    k2 = SHAPE_NOISE_FLOOR_SHARE**2
-    scale = rms * np.sqrt((phi0**2 + k2 * rms0**2) / ((1 + k2) * rms0**2))
+    scale = rms * shape_noise_profile(phi0, SHAPE_NOISE_FLOOR_SHARE)
     s_f, s_phi = shear_sensitivity(predict)
     return Differences(jmod, np.log(retest.freq_hz[ir] / baseline.freq_hz[ib]), sig,
                        psi_r - psi_b, scale, f_mod[jmod], phi0, dlnw,

@@ -214,6 +214,7 @@ def simulate_modes(
     thing.
     """
     from updating.correlate.measured import MeasuredModes
+    from updating.inspect.fit import shape_noise_profile
     from updating.inspect.model import driving_point_scale
 
     model = bat.truth_model()
@@ -227,8 +228,7 @@ def simulate_modes(
     rng = np.random.default_rng(seed)
     f = modes.freq_hz[elastic] * (1 + freq_noise * rng.standard_normal(elastic.size))
     rms = np.sqrt(np.mean(shapes**2, axis=0))
-    k2 = SHAPE_NOISE_FLOOR**2
-    sd = shape_noise * np.sqrt((shapes**2 + k2 * rms**2) / (1 + k2))
+    sd = shape_noise * rms * shape_noise_profile(shapes, SHAPE_NOISE_FLOOR)
     shapes = shapes + sd * rng.standard_normal(shapes.shape)
     zeta = damping_ratios(modes.freq_hz[elastic], bat.zeta1, bat.zeta_exponent)
     return MeasuredModes(f, shapes, points, zeta, float(points[s]),
