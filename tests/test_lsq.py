@@ -39,6 +39,23 @@ def test_bounds_hold_and_the_start_is_moved_inside():
         assert sol.x[0] == pytest.approx(2.0, abs=1e-6)
 
 
+def test_a_solution_stopped_short_of_its_bound_counts_as_held_within_the_tolerance():
+    """Minimum at 5 outside [0, 2], stopped early by a loose tolerance: scipy may leave x a
+    little inside; within ``held_within`` of the bound it is marked held, and a minimum
+    well inside is never marked."""
+    for x0 in (0.5, 1.0, 1.5):
+        sol = solve_bounded(lambda x: x - 5.0, np.array([x0]), np.array([0.0]),
+                            np.array([2.0]), held_within=0.01, xtol=1e-2, ftol=1e-2,
+                            max_nfev=2)
+        assert (sol.active[0] == 1) == (2.0 - sol.x[0] <= 0.01)
+    inside = solve_bounded(lambda x: x - 1.0, np.array([0.5]), np.array([0.0]),
+                           np.array([2.0]), held_within=0.01)
+    assert inside.active[0] == 0 and inside.x[0] == pytest.approx(1.0)
+    low = solve_bounded(lambda x: x + 3.0, np.array([1.0]), np.array([0.0]), np.array([2.0]),
+                        held_within=0.01)
+    assert low.active[0] == -1
+
+
 def test_rank_deficient_jacobian_gives_a_finite_covariance_on_the_observable_part():
     """Two identical columns: only x1 + x2 is observable. The pseudo-inverse gives each the
     half-variance of the sum, and the variance of x1 + x2 is that of one parameter alone."""

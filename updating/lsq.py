@@ -35,7 +35,8 @@ class LsqSolution:
     jac: np.ndarray
     nfev: int
     active: np.ndarray
-    """(p,) -1 / +1 where a lower / upper bound holds the solution, else 0."""
+    """(p,) -1 / +1 where a lower / upper bound holds the solution, else 0 (scipy's mask,
+    or within ``held_within`` of the bound, ``solve_bounded``)."""
 
     @property
     def ssr(self) -> float:
@@ -46,7 +47,7 @@ class LsqSolution:
 def solve_bounded(
     fun: Callable[[np.ndarray], np.ndarray], x0: np.ndarray, lower: np.ndarray,
     upper: np.ndarray, *, jac: Callable[[np.ndarray], np.ndarray] | str = "2-point",
-    margin: float | np.ndarray = 1e-9, **options,
+    margin: float | np.ndarray = 1e-9, held_within: float | np.ndarray = 0.0, **options,
 ) -> LsqSolution:
     """Bounded least squares from x0 (moved ``margin`` inside the bounds first).
 
@@ -63,6 +64,11 @@ def solve_bounded(
     margin : float or (p,) array
         x0 is clipped to [lower + margin, upper - margin] (trust-region reflective needs a
         strictly feasible start).
+    held_within : float or (p,) array
+        A solution this close to a bound counts as held there (``active``): trust-region
+        reflective iterates stay strictly inside, and a fit stopped by its tolerances can
+        end a hair short of the bound the data push it against (scipy marks only x within
+        ``xtol`` relative).
     **options
         Passed to ``scipy.optimize.least_squares`` (tolerances, ``x_scale``, ``diff_step``,
         ``max_nfev``).
@@ -79,7 +85,10 @@ def solve_bounded(
     """
     x0 = np.clip(np.asarray(x0, dtype=float), lower + margin, upper - margin)
     out = least_squares(fun, x0, jac=jac, bounds=(lower, upper), method="trf", **options)
-    return LsqSolution(out.x, out.fun, out.jac, int(out.nfev), np.asarray(out.active_mask))
+    active = np.asarray(out.active_mask).copy()
+    active[(active == 0) & (out.x - lower <= held_within)] = -1
+    active[(active == 0) & (upper - out.x <= held_within)] = 1
+    return LsqSolution(out.x, out.fun, out.jac, int(out.nfev), active)
 
 
 def covariance(
