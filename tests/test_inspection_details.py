@@ -66,7 +66,7 @@ def details(draw):
         PositionScan, floats, st.lists(st.tuples(num, num), max_size=3).map(tuple), floats))
     fit = FitEvidence(
         draw(names), (draw(st.integers(0, 9)), draw(st.integers(0, 999))), draw(nan_or_num),
-        draw(nan_or_num), draw(nan_or_num), draw(st.integers(0, 999)), draw(nan_or_num),
+        draw(nan_or_num), draw(nan_or_num), draw(st.integers(0, 999)), draw(floats),
         draw(floats), draw(st.dictionaries(names, num, max_size=4)),
         tuple(draw(st.lists(names, max_size=3))), tuple(draw(st.lists(names, max_size=3))),
         draw(maybe_num), draw(names), draw(floats), core,
@@ -86,6 +86,13 @@ def test_details_round_trip_through_the_stored_form(d):
         assert back.fit.statistic == d.fit.statistic and back.fit.dof == d.fit.dof
         assert (back.msso.result is None) == (d.fit.msso.result is None)
         assert back.msso.error == d.fit.msso.error
+
+
+def test_a_record_with_one_shape_noise_level_reads_as_one_level():
+    """Records stored before the shape noise was per mode hold one number."""
+    record = stored(InspectionDetails(2, 1.0, None).to_json_dict())
+    record.update(statistic="F", p_value=0.5, shape_noise_rel=0.01)
+    assert InspectionDetails.from_json_dict(record).fit.shape_noise_rel == (0.01,)
 
 
 @settings(max_examples=100, deadline=None)

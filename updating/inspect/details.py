@@ -173,7 +173,7 @@ class FitEvidence:
         statistic: the test statistic's name. dof: (q, N - p_1) of the F test.
         p_value: P(F_{q, N-p_1} > F). rss_null, rss_core: the fits' weighted residuals.
         n_data: number of data. shape_noise_rel, freq_noise_rel: the noise levels weighted
-            with (relative; per mode for frequencies).
+            with (relative, per paired mode).
         null_fit: the H0 parameters by name. null_at_bound, core_fit_at_bound: nuisances
             held at their physical bounds in H0 and (confusable ones) in H1.
         weight_change_rel: W_retest / W_registered - 1, or None without weights.
@@ -194,7 +194,7 @@ class FitEvidence:
     rss_null: float
     rss_core: float
     n_data: int
-    shape_noise_rel: float
+    shape_noise_rel: tuple[float, ...]
     freq_noise_rel: tuple[float, ...]
     null_fit: dict[str, float]
     null_at_bound: tuple[str, ...]
@@ -246,7 +246,7 @@ class InspectionDetails:
             "statistic": f.statistic, "dof": list(f.dof), "p_value": f.p_value,
             "rss_null": f.rss_null, "rss_core": f.rss_core,
             "n_modes": self.n_modes, "n_data": f.n_data,
-            "shape_noise_rel": f.shape_noise_rel,
+            "shape_noise_rel": list(f.shape_noise_rel),
             "freq_noise_rel": list(f.freq_noise_rel),
             "null_fit": dict(f.null_fit),
             "null_at_bound": list(f.null_at_bound),
@@ -282,7 +282,7 @@ class InspectionDetails:
             statistic=str(d.get("statistic") or ""), dof=(int(dof[0]), int(dof[1])),
             p_value=_num(d.get("p_value")), rss_null=_num(d.get("rss_null")),
             rss_core=_num(d.get("rss_core")), n_data=int(d.get("n_data") or 0),
-            shape_noise_rel=_num(d.get("shape_noise_rel")),
+            shape_noise_rel=_levels(d.get("shape_noise_rel")),
             freq_noise_rel=tuple(float(v) for v in d.get("freq_noise_rel") or ()),
             null_fit=dict(d.get("null_fit") or {}),
             null_at_bound=tuple(d.get("null_at_bound") or ()),
@@ -299,6 +299,14 @@ class InspectionDetails:
             plug_m=_num(d.get("plug_m")), fill_modulus_ratio=_num(d.get("fill_modulus_ratio")),
             empty_m=_num(d.get("empty_m")))
         return cls(n_modes, time_s, fit)
+
+
+def _levels(v: Any) -> tuple[float, ...]:
+    """Stored noise levels: a list per mode, or one number (records before per-mode shape
+    noise); missing: ()."""
+    if v is None:
+        return ()
+    return tuple(_num(x) for x in v) if isinstance(v, list | tuple) else (_num(v),)
 
 
 def _num(v: Any) -> float:

@@ -198,8 +198,8 @@ def with_changes(bat: VirtualBat, **changes) -> VirtualBat:
 
 
 def simulate_modes(
-    bat: VirtualBat, n_modes: int = 6, freq_noise: float = 5e-4, shape_noise: float = 0.01,
-    seed: int | None = None,
+    bat: VirtualBat, n_modes: int = 6, freq_noise: float = 5e-4,
+    shape_noise: float | np.ndarray = 0.01, seed: int | None = None,
 ):
     """Modes as a good modal fit of ``bat``'s test would give them, without the FRF stage.
 
@@ -207,7 +207,8 @@ def simulate_modes(
     position included), mass-normalised, with relative Gaussian noise on frequencies and
     shape entries: ``shape_noise`` times sqrt((phi^2 + k^2 rms^2) / (1 + k^2)), an FRF's
     error relative to |H| with a floor near the nodes (k = ``SHAPE_NOISE_FLOOR``; the
-    shape's RMS noise is ``shape_noise`` times its RMS). Scaled as the fitter scales them,
+    shape's RMS noise is ``shape_noise`` times its RMS; one level, or (n_modes,) one per
+    mode). Scaled as the fitter scales them,
     through the driving-point FRF: an accelerometer off its labelled point multiplies each
     shape by sqrt(phi(sensor) / phi(driving point)) (``inspect.model.driving_point_scale``).
     For fast tests of the updating stage; the full path (simulate_test + ema fit) is the real
@@ -228,7 +229,7 @@ def simulate_modes(
     rng = np.random.default_rng(seed)
     f = modes.freq_hz[elastic] * (1 + freq_noise * rng.standard_normal(elastic.size))
     rms = np.sqrt(np.mean(shapes**2, axis=0))
-    sd = shape_noise * rms * shape_noise_profile(shapes, SHAPE_NOISE_FLOOR)
+    sd = np.asarray(shape_noise) * rms * shape_noise_profile(shapes, SHAPE_NOISE_FLOOR)
     shapes = shapes + sd * rng.standard_normal(shapes.shape)
     zeta = damping_ratios(modes.freq_hz[elastic], bat.zeta1, bat.zeta_exponent)
     return MeasuredModes(f, shapes, points, zeta, float(points[s]),
