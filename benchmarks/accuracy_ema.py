@@ -17,7 +17,7 @@ sys.path[:0] = [str(ROOT), str(ROOT / "tests")]
 
 from ema_synthetic import make_test  # noqa: E402
 
-from ema.fit import fit_test  # noqa: E402
+from ema.modal_fit import fit_test  # noqa: E402
 from ema.shapes.mac import mac  # noqa: E402
 
 

@@ -32,8 +32,8 @@ import numpy as np  # noqa: E402
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from ema.fit import fit_test  # noqa: E402
 from ema.io.frf_data import FrfTest  # noqa: E402
+from ema.modal_fit import fit_test  # noqa: E402
 from ema.shapes.mac import mac  # noqa: E402
 from rigs.modal_model import ModalModel  # noqa: E402
 

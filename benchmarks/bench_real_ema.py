@@ -38,9 +38,9 @@ import numpy as np  # noqa: E402
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from ema.fit import fit_test  # noqa: E402
 from ema.io.frf_data import FrfTest  # noqa: E402
 from ema.io.frf_io import read_test  # noqa: E402
+from ema.modal_fit import fit_test  # noqa: E402
 from ema.shapes.mac import mac  # noqa: E402
 
 REAL = ROOT / "data_samples" / "real"

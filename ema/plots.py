@@ -8,8 +8,8 @@ from pathlib import Path
 
 import numpy as np
 
-from ema.fit import ModalFit
 from ema.io.atomic_write import atomic_write
+from ema.modal_fit import ModalFit
 from ema.shapes.mac import auto_mac
 
 

@@ -37,7 +37,7 @@ UPDATING_LAYERS = {  # sub-package (or top module) -> the updating sub-packages 
 }
 
 APPLICATION_MAY_NOT_IMPORT = (  # the stages' runners: only the pipeline calls them
-    "rigs", "ema.fit", "ema.poles", "updating.diagnose", "updating.inspect.run",
+    "rigs", "ema.modal_fit", "ema.poles", "updating.diagnose", "updating.inspect.run",
     "updating.msso", "updating.simulate", "updating.solid",
 )
 

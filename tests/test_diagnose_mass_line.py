@@ -1,5 +1,5 @@
 """The mass line in diagnose: the accelerometer's mass separated from E by the rigid-body
-flexibility, on the full FRF path (virtual rig -> ema.fit -> diagnose), and the data sheet.
+flexibility, on the full FRF path (virtual rig -> ema.modal_fit -> diagnose), and the data sheet.
 
 Hidden effect: an accelerometer of 2-6 g at the barrel-end driving point (1 in from the end),
 where it lowers every mode by about the same fraction as a lower E does.
@@ -12,7 +12,7 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from ema.fit import fit_test
+from ema.modal_fit import fit_test
 from updating.correlate.measured import from_fit
 from updating.diagnose.model import CAUSES, Setup, State, free_parameters, rigid_flexibility
 from updating.diagnose.run import diagnose

@@ -5,7 +5,7 @@ paired in frequency order, and it says so."""
 import numpy as np
 
 from tests.test_diagnose import HANDBOOK, POINTS, PROFILE, meta_for
-from updating.diagnose.fit import DiagnosisFit
+from updating.diagnose.calibration import DiagnosisFit
 from updating.diagnose.model import BOUNDS, State
 from updating.diagnose.pairing_check import checked_pairing, pairing_warnings, refuse_causes
 from updating.diagnose.run import diagnose

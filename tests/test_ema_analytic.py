@@ -3,8 +3,8 @@
 import numpy as np
 import pytest
 
-from ema.fit import fit_test
 from ema.io.frf_data import FrfTest
+from ema.modal_fit import fit_test
 from ema.poles.mif import cmif, pick_peaks, receptance_power, sum_mif
 from ema.shapes.complexity import mpc, mpd, real_modes
 from ema.shapes.lsfd import lsfd

@@ -11,7 +11,7 @@ from ema_synthetic import make_test
 from hypothesis import Phase, given, settings
 from hypothesis import strategies as st
 
-from ema.fit import fit_test
+from ema.modal_fit import fit_test
 from ema.shapes.mac import mac
 
 NO_SHRINK = (Phase.explicit, Phase.generate)  # a fit per example: shrinking would take minutes

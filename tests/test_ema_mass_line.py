@@ -9,7 +9,7 @@ first pair is closer than its half-power width (fitted as one pole), 0.5 % noise
 import numpy as np
 import pytest
 
-from ema.fit import fit_test
+from ema.modal_fit import fit_test
 from updating.model.assembly import Attachment, build_model
 from updating.model.mass_properties import mass_properties
 from updating.model.material import Material

@@ -16,8 +16,8 @@ from scipy.io import loadmat
 from scipy.optimize import brentq
 
 from batlab.cli import main
-from ema.fit import fit_test
 from ema.io.frf_io import read_test
+from ema.modal_fit import fit_test
 
 REAL = Path(__file__).resolve().parents[1] / "data_samples" / "real" / "pyuff_measurement"
 VTB = REAL.parent / "vibration_toolbox"

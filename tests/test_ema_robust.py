@@ -10,8 +10,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from batlab.cli import main
-from ema.fit import fit_test
 from ema.io.frf_data import FrfTest
+from ema.modal_fit import fit_test
 from ema.mode_checks import mode_warnings
 from ema.shapes.mac import mac
 from rigs.modal_model import ModalModel

@@ -27,7 +27,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from updating.inspect.fit import SHAPE_NOISE_PRIOR_POINTS, NullBounds, ParamSpace
+from updating.inspect.hypotheses import SHAPE_NOISE_PRIOR_POINTS, NullBounds, ParamSpace
 from updating.inspect.model import ChangePredictor, baseline_sensor_offset
 from updating.inspect.run import differences, fit_hypotheses, inspect_retest, pair_tests
 from updating.model.sections import Core

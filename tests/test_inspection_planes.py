@@ -18,7 +18,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from updating.correlate.pairing import align_signs
-from updating.inspect.fit import PLANE_MIX_MAX
+from updating.inspect.hypotheses import PLANE_MIX_MAX
 from updating.inspect.model import ChangeParams, make_predictor
 from updating.inspect.run import ELASTIC_MIN_HZ, inspect_retest, shear_sensitivity
 from updating.simulate.fleet import case_modes, random_case

@@ -101,7 +101,7 @@ def test_frf_test_of_the_solid_carries_its_modes_and_mass_line(cylinder_modes):
     """3D-simulated roving-hammer FRFs (updating.simulate.solid_test) through the real modal
     fit: the bending frequencies of the solid and its exact mass line
     1/M + (x - x_c)(x_d - x_c)/I come back (0.5 % noise, bungees)."""
-    from ema.fit import fit_test
+    from ema.modal_fit import fit_test
     from updating.simulate.solid_test import tap_test_frf
 
     x = np.linspace(0.02, 0.78, 13)

@@ -11,8 +11,8 @@ with the Moore-Penrose pseudo-inverse, so that a rank-deficient Jacobian (an uno
 combination of parameters) gives a finite covariance on the observable part instead of an
 error. Residuals already divided by their standard deviations take s^2 = 1.
 
-Callers: the diagnosis fit (updating.diagnose.fit), the change fit of an inspection
-(updating.inspect.fit) and, for the covariance only, the MSSO refinement
+Callers: the diagnosis fit (updating.diagnose.calibration), the change fit of an inspection
+(updating.inspect.hypotheses) and, for the covariance only, the MSSO refinement
 (updating.msso.iterate, whose Levenberg-Marquardt loop carries per-mode scales and a
 one-sided step limit that scipy's bounds do not express).
 """

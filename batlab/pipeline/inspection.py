@@ -24,9 +24,9 @@ import numpy as np
 
 from batlab import __version__
 from batlab import registry as reg
-from ema.fit import MIN_SNR
 from ema.io.atomic_write import atomic_write
 from ema.io.frf_data import FrfTest
+from ema.modal_fit import MIN_SNR
 from updating.correlate.measured import MeasuredModes, from_fit
 from updating.inspect.planes import merge_plane_pairs
 from updating.inspect.retest_meta import (
@@ -57,7 +57,7 @@ class FittedTest:
     Attributes:
         name: the file's name (for messages and the report).
         test: the FRFs.
-        fit: the modal fit (``ema.fit.ModalFit``), or None for a registered baseline whose
+        fit: the modal fit (``ema.modal_fit.ModalFit``), or None for a registered baseline whose
             modes come from the registry.
         modes: elastic modes at the impact points, in the baseline's point order.
     """
@@ -180,8 +180,8 @@ def match_points(baseline_x_m: np.ndarray, retest_x_m: np.ndarray, retest_name: 
 
 
 def fit_modes(test: FrfTest, known_mass_kg: float | None = None):
-    """The automatic modal fit of a test (``ema.fit.fit_test``, polyreference LSCF)."""
-    from ema.fit import fit_test
+    """The automatic modal fit of a test (``ema.modal_fit.fit_test``, polyreference LSCF)."""
+    from ema.modal_fit import fit_test
 
     return fit_test(test, known_mass_kg=known_mass_kg)
 
@@ -226,8 +226,8 @@ def read_test_file(path, require_driving: bool = True) -> FrfTest:
 def fit_test_file(test: FrfTest, band_hz=None, method: str = "lscf", max_order=None,
                   known_mass_kg: float | None = None, refine: bool = False,
                   min_snr: float = MIN_SNR):
-    """`batlab fit`: the automatic modal analysis of a test (``ema.fit.fit_test``)."""
-    from ema.fit import fit_test
+    """`batlab fit`: the automatic modal analysis of a test (``ema.modal_fit.fit_test``)."""
+    from ema.modal_fit import fit_test
 
     return fit_test(test, band_hz=band_hz, method=method, max_order=max_order,
                     known_mass_kg=known_mass_kg, refine=refine, min_snr=min_snr)
@@ -263,9 +263,9 @@ def calibrate(profile: Profile, meta: BatMeta, baseline: FittedTest):
 
 
 def fit_frf_file(frf_path, method: str, progress: Progress = _quiet):
-    """(ModalFit, MeasuredModes) of a test file by ``ema.fit.fit_test`` with ``method``; a
+    """(ModalFit, MeasuredModes) of a test file by ``ema.modal_fit.fit_test`` with ``method``; a
     test with no elastic mode is an error naming the file."""
-    from ema.fit import fit_test
+    from ema.modal_fit import fit_test
 
     test = read_frf(frf_path)
     progress(f"fitting the modes of {frf_path} ...")
@@ -281,7 +281,7 @@ def diagnose_files(
     progress: Progress = _quiet, solid: bool = False,
 ):
     """`batlab diagnose`: (meta, Diagnosis) of a baseline test file against the nominal model
-    (``updating.diagnose.run.diagnose``), its modes fitted by ``ema.fit.fit_test`` with
+    (``updating.diagnose.run.diagnose``), its modes fitted by ``ema.modal_fit.fit_test`` with
     ``method``; with ``solid``, a second pass tries the 3D solid's per-mode corrections
     (``updating.diagnose.solid.diagnose_with_solid``, about a minute)."""
     from updating.diagnose.run import MIN_GAIN_PCT, diagnose

@@ -31,7 +31,7 @@ L^-1 S_o and every order of the sweep costs one small solve and one eigenvalue p
 
 Roving-hammer tests (one accelerometer, many impacts) are fitted transposed: by reciprocity
 H_jk = H_kj, so the impacts become outputs and the single accelerometer the only reference.
-The caller passes the FRFs in that orientation (see ``ema.fit``).
+The caller passes the FRFs in that orientation (see ``ema.modal_fit``).
 """
 
 from __future__ import annotations

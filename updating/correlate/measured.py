@@ -2,7 +2,7 @@
 points sit on a model's mesh.
 
 ``MeasuredModes`` is the one measured mode-set type of ``updating``: ``from_fit`` converts an
-``ema`` modal fit (``ema.fit.ModalFit``) into it, ``sampled_modes`` turns a model's modes at
+``ema`` modal fit (``ema.modal_fit.ModalFit``) into it, ``sampled_modes`` turns a model's modes at
 chosen DOFs into a noise-free "test" (the paper's case), ``with_noise`` perturbs one.
 The model side is ``updating.model.modes.Modes`` (the FE eigen-solution).
 """
@@ -70,7 +70,7 @@ def from_fit(fit, sensor_x_m: float, min_hz: float = 20.0) -> MeasuredModes:
 def driving_mass_line(fit) -> np.ndarray | None:
     """The driving point's row of the rigid-body flexibility at the shape nodes (1/kg): from
     the suspension modes when the fit has two (sum_s phi_s(x) phi_s(x_d)), else the lower
-    residual's row (``ema.fit.ModalFit.mass_line``); None without a driving point or
+    residual's row (``ema.modal_fit.ModalFit.mass_line``); None without a driving point or
     when neither is there."""
     d = getattr(fit, "driving_index", None)
     frf = getattr(fit, "driving_frf", None)

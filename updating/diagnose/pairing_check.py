@@ -21,7 +21,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from updating.diagnose.fit import DiagnosisFit
+from updating.diagnose.calibration import DiagnosisFit
 from updating.diagnose.model import BOUNDS
 
 MIN_POINTS = 3

@@ -3,7 +3,7 @@
 1. Pair the measured modes with the nominal model's (Euler-Bernoulli, isotropic, handbook E
    and density, ~1 in elements, nothing attached) by MAC.
 2. Causes, by forward selection: from the nominal model, try each remaining extension
-   (updating.diagnose.model.CAUSES), refit all free parameters (updating.diagnose.fit), keep
+   (updating.diagnose.model.CAUSES), refit all free parameters (updating.diagnose.calibration), keep
    the one that lowers the RMS frequency error most. Its gain (percentage points) is measured,
    not assumed. It counts only if the gain is at least ``min_gain_pct`` and significant given
    the frequency uncertainty: the drop of the frequency chi-square sum(e_r^2) / sigma_f^2
@@ -35,7 +35,7 @@ import scipy.stats
 from ema.shapes.mac import mac
 from updating.correlate.measured import MeasuredModes
 from updating.correlate.pairing import pair_modes
-from updating.diagnose.fit import DiagnosisFit, Observations, fit_model, shape_sigma
+from updating.diagnose.calibration import DiagnosisFit, Observations, fit_model, shape_sigma
 from updating.diagnose.model import (
     BOUNDS,
     CAUSES,

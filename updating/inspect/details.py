@@ -55,7 +55,7 @@ class ModePair:
 
 @dataclass(frozen=True)
 class PositionScan:
-    """The linearised scan that seeds the core fit (``updating.inspect.fit.fit_core``).
+    """The linearised scan that seeds the core fit (``updating.inspect.hypotheses.fit_core``).
 
     Attributes:
         scan_norm: weighted residual norm of each trial (plug, length).

@@ -53,7 +53,7 @@ from updating.inspect.details import (
     ModePair,
     PositionScan,
 )
-from updating.inspect.fit import (
+from updating.inspect.hypotheses import (
     FREQ_MODEL_ERROR_REL,
     MAX_NFEV_CORE,
     N_CORE,

@@ -215,7 +215,7 @@ def simulate_modes(
     thing.
     """
     from updating.correlate.measured import MeasuredModes
-    from updating.inspect.fit import shape_noise_profile
+    from updating.inspect.hypotheses import shape_noise_profile
     from updating.inspect.model import driving_point_scale
 
     model = bat.truth_model()
