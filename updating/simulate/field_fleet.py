@@ -32,7 +32,7 @@ from updating.model.profile import Profile, write_profile_csv
 from updating.model.units import IN_TO_M, LB_TO_KG
 from updating.simulate import nuisances as nz
 from updating.simulate.alterations import KINDS, Alteration, AlterationKind, draw_alteration
-from updating.simulate.fleet import SPECIES, pro_profile
+from updating.simulate.fleet import SPECIES, pro_profile, random_wood
 from updating.simulate.integrity import INTEGRITY, Integrity, corrupt
 from updating.simulate.virtual_bat import VirtualBat, simulate_test
 
@@ -118,95 +118,138 @@ def lab_readings(rng: np.random.Generator, base: VirtualBat, retest: VirtualBat,
         ("retest_balance_in", cg_r, BALANCE_SIGMA_IN))}
 
 
-def random_wood(rng: np.random.Generator, species: str | None = None) -> tuple[str, Material]:
-    """A species (random unless given) and a board of it: E within +-15 %, density within
-    +-8 % of the handbook values, E/G 10-18."""
-    if species is None:
-        species = list(SPECIES)[int(rng.integers(len(SPECIES)))]
-    E_psi, wd = SPECIES[species]
-    nominal = material_from_imperial(E_psi, wd)
-    wood = Material(nominal.E_pa * rng.uniform(0.85, 1.15),
-                    nominal.rho_kg_m3 * rng.uniform(0.92, 1.08), rng.uniform(10.0, 18.0))
-    return species, wood
-
-
 def no_barrel_points_in(length_in: float) -> np.ndarray:
     """A layout that cannot see the barrel: every 2 in up to 15 in, and the end face (where
     the accelerometer goes)."""
     return np.append(np.arange(1.0, NO_BARREL[0], 2.0), np.floor(100 * length_in) / 100)
 
 
-def draw_case(
-    rng: np.random.Generator, kind: FieldKind = "none", nuisances=nz.NUISANCES,
-    integrity: Integrity | None = None, serial: str = "SIM-0001",
-) -> FieldCase:
-    """A random bat with the ``nuisances`` given, altered by ``kind`` ("none" or one of
-    ``alterations.KINDS``) and with an ``integrity`` slip (None or one of INTEGRITY)."""
-    nuis = tuple(nuisances)
-    unknown = set(nuis) - set(nz.NUISANCES) - set(nz.OPTIONAL_NUISANCES)
+def _check_request(kind: FieldKind, nuisances: tuple, integrity: Integrity | None) -> None:
+    """Raise ValueError for an unknown nuisance, alteration kind or integrity case."""
+    unknown = set(nuisances) - set(nz.NUISANCES) - set(nz.OPTIONAL_NUISANCES)
     if unknown:
         raise ValueError(f"unknown nuisance(s) {sorted(unknown)}")
     if kind != "none" and kind not in KINDS:
         raise ValueError(f"unknown alteration kind {kind!r} (none, {', '.join(KINDS)})")
     if integrity is not None and integrity not in INTEGRITY:
         raise ValueError(f"unknown integrity case {integrity!r} ({', '.join(INTEGRITY)})")
-    on = set(nuis)
-    rec: dict = {}
 
+
+def _draw_profiles(rng: np.random.Generator) -> tuple[Profile, Profile]:
+    """Draw a pro profile and the lab's caliper copy of it (0.003 in noise, 1 sigma).
+
+    Returns
+    -------
+    truth_profile, lab_profile : Profile
+        The bat's true profile and the one the lab measures.
+    """
     truth_profile = pro_profile(rng)
-    L = truth_profile.length_m
-    L_in = L / IN_TO_M
     profile = Profile(truth_profile.x_m, truth_profile.diameter_m
                       + 0.003 * IN_TO_M * rng.standard_normal(truth_profile.x_m.size))
-    species, wood = random_wood(rng)
-    E_psi, wd = SPECIES[species]
+    return truth_profile, profile
 
-    points_in = nz.lab_points_in(L_in)
+
+def _draw_test_setup(
+    rng: np.random.Generator, on: set, profile: Profile, nominal: Material,
+    integrity: Integrity | None, rec: dict,
+) -> tuple[np.ndarray, float, float]:
+    """Draw the impact points, the band and the FRF noise of both tests (recorded in ``rec``).
+
+    Returns
+    -------
+    points_in : ndarray
+        The impact points (in from the knob).
+    fmax_hz : float
+        The top of the measured band (Hz).
+    rel_noise : float
+        The FRF noise relative to the FRF's RMS.
+    """
+    length_in = profile.length_m / IN_TO_M
+    points_in = nz.lab_points_in(length_in)
     if "points" in on:
-        points_in = nz.draw_points(rng, L_in)
+        points_in = nz.draw_points(rng, length_in)
     if "model_points" in on:
-        points_in = nz.draw_model_points(rng, profile, material_from_imperial(E_psi, wd))
+        points_in = nz.draw_model_points(rng, profile, nominal)
     if integrity == "no_barrel_points":
-        points_in = no_barrel_points_in(L_in)
+        points_in = no_barrel_points_in(length_in)
     rec["points"] = len(points_in)
     fmax = nz.draw_band(rng) if "band" in on else 3200.0
     rec["fmax_hz"] = fmax
     noise = nz.draw_noise(rng) if "noise" in on else 0.005
     rec["noise"] = noise
+    return points_in, fmax, noise
 
+
+def _draw_rig(
+    rng: np.random.Generator, on: set, base: VirtualBat, rec: dict,
+) -> tuple[VirtualBat, dict]:
+    """Draw the accelerometer and the bungees of the baseline and their re-test changes.
+
+    Returns
+    -------
+    base : VirtualBat
+        ``base`` with a 2-6 g accelerometer up to 0.05 in off its label and bungees of
+        100-400 N/m.
+    re_changes : dict
+        The re-test's changes to them (``VirtualBat`` fields), for the nuisances ``on``.
+    """
     sensor_mass = rng.uniform(0.002, 0.006)
     offset = rng.uniform(-0.05, 0.05) * IN_TO_M
     bungee = rng.uniform(100.0, 400.0)
-    base = VirtualBat(truth_profile, wood, points_in * IN_TO_M, sensor_offset_m=offset,
-                      sensor_mass_kg=sensor_mass, bungee_k_n_per_m=bungee, rel_noise=noise)
+    base = replace(base, sensor_offset_m=offset, sensor_mass_kg=sensor_mass,
+                   bungee_k_n_per_m=bungee)
     re_changes: dict = {}
     if "accelerometer" in on:
         m, off, rec["accelerometer"] = nz.draw_accelerometer(rng, sensor_mass, offset)
         re_changes.update(sensor_mass_kg=m, sensor_offset_m=off)
     if "bungees" in on:
         re_changes["bungee_k_n_per_m"], rec["bungees"] = nz.draw_bungees(rng, bungee)
+    return base, re_changes
 
+
+def _draw_wood_fields(rng: np.random.Generator, on: set, length_m: float, rec: dict):
+    """Draw the wood's fields along the bat: billet, temperature, moisture, uniform drift.
+
+    Returns
+    -------
+    base_field, retest_field : WoodField or None
+        The combined fields of the baseline and of the re-test.
+    """
     base_fields, re_fields = [], []
     if "billet" in on:
-        f, rec["billet"] = nz.draw_billet(rng, L)
+        f, rec["billet"] = nz.draw_billet(rng, length_m)
         base_fields.append(f)
         re_fields.append(f)
     if "temperature" in on:
-        fb, fr, rec["temperature"] = nz.draw_temperature(rng, L)
+        fb, fr, rec["temperature"] = nz.draw_temperature(rng, length_m)
         base_fields.append(fb)
         re_fields.append(fr)
     if "moisture" in on:
-        f, rec["moisture"] = nz.draw_moisture(rng, L)
+        f, rec["moisture"] = nz.draw_moisture(rng, length_m)
         re_fields.append(f)
     if "uniform_drift" in on:
-        f, rec["uniform_drift"] = nz.draw_uniform_drift(rng, L)
+        f, rec["uniform_drift"] = nz.draw_uniform_drift(rng, length_m)
         re_fields.append(f)
-    base = replace(base, wood=nz.combine(*base_fields))
-    re_changes["wood"] = nz.combine(*re_fields)
+    return nz.combine(*base_fields), nz.combine(*re_fields)
 
+
+def _draw_planes_and_cup(
+    rng: np.random.Generator, on: set, base: VirtualBat, re_changes: dict, rec: dict,
+) -> tuple[VirtualBat, float]:
+    """Draw the two bending planes (E/G, grain angle) and a cupped end, as ``on`` asks.
+
+    The re-test's grain angle goes into ``re_changes``.
+
+    Returns
+    -------
+    base : VirtualBat
+        The baseline with its planes and cup.
+    cup_depth_in : float
+        The cup's depth (in), 0 without one.
+    """
     if "planes" in on:
         eg_r, eg_t, th_b, th_r, rec["planes"] = nz.draw_planes(rng)
-        base = replace(base, material=replace(wood, e_over_g=eg_r), e_over_g_t=eg_t,
+        base = replace(base, material=replace(base.material, e_over_g=eg_r), e_over_g_t=eg_t,
                        theta_deg=th_b)
         re_changes["theta_deg"] = th_r
     cup_depth_in = 0.0
@@ -214,14 +257,87 @@ def draw_case(
         cup, rec["cup"] = nz.draw_cup(rng)
         base = replace(base, cavities=(cup,))
         cup_depth_in = rec["cup"]["depth_in"]
+    return base, cup_depth_in
+
+
+def _lab_meta(
+    serial: str, species: str, points_in: np.ndarray, retest: VirtualBat, truth: dict,
+) -> tuple[dict, dict]:
+    """Write down meta.json's and retest.json's content from the scale readings in ``truth``.
+
+    Returns
+    -------
+    meta, retest_meta : dict
+        The two files' content.
+    """
+    E_psi, wd = SPECIES[species]
+    meas = truth["lab_readings"]
+    meta = {"serial": serial, "species": species, "nominal_E_psi": E_psi,
+            "nominal_weight_density_lbf_in3": round(wd, 5),
+            "weight_lb": round(meas["baseline_lb"], 4),
+            "points_in": [round(float(x), 3) for x in points_in]}
+    t_re = truth["drawn"].get("temperature", {}).get("retest_c", 21.0)
+    retest_meta = {"weight_lb": round(meas["retest_lb"], 4),
+                   "accelerometer_mass_g": round(1e3 * retest.sensor_mass_kg, 2),
+                   "temperature_c": round(t_re, 1), "tested_on": "2026-05-02"}
+    return meta, retest_meta
+
+
+def _expected_answer(kind: FieldKind, integrity: Integrity | None) -> str:
+    """Return the inspection's expected answer for a case of ``kind`` and ``integrity``."""
+    if integrity:
+        return "inconclusive"
+    return "altered" if kind != "none" else "not_altered"
+
+
+def draw_case(
+    rng: np.random.Generator, kind: FieldKind = "none", nuisances=nz.NUISANCES,
+    integrity: Integrity | None = None, serial: str = "SIM-0001",
+) -> FieldCase:
+    """Draw a random bat with its lab files and its hidden truth.
+
+    The draws come in a fixed order (profile, wood, test set-up, rig, wood fields, planes and
+    cup, alteration, other bat, scale readings), so a seed gives the same case every time.
+
+    Parameters
+    ----------
+    rng : numpy.random.Generator
+        The source of every random draw.
+    kind : {"none", "cork", ...}
+        "none" (unaltered) or one of ``alterations.KINDS``.
+    nuisances : iterable of str
+        The nuisances to draw (``nuisances.NUISANCES`` and ``OPTIONAL_NUISANCES``).
+    integrity : str or None
+        None or a data-integrity slip of ``INTEGRITY``.
+    serial : str
+        The bat's serial in meta.json.
+
+    Returns
+    -------
+    FieldCase
+        The lab's files (as objects) and the truth behind them.
+    """
+    nuis = tuple(nuisances)
+    _check_request(kind, nuis, integrity)
+    on = set(nuis)
+    rec: dict = {}
+    truth_profile, profile = _draw_profiles(rng)
+    length_m = truth_profile.length_m
+    species, wood = random_wood(rng)
+    nominal = material_from_imperial(*SPECIES[species])
+    points_in, fmax, noise = _draw_test_setup(rng, on, profile, nominal, integrity, rec)
+    base = VirtualBat(truth_profile, wood, points_in * IN_TO_M, rel_noise=noise)
+    base, re_changes = _draw_rig(rng, on, base, rec)
+    base_field, re_changes["wood"] = _draw_wood_fields(rng, on, length_m, rec)
+    base = replace(base, wood=base_field)
+    base, cup_depth_in = _draw_planes_and_cup(rng, on, base, re_changes, rec)
 
     retest = replace(base, **re_changes)
     truth = {"kind": kind, "altered": kind != "none", "integrity": integrity,
-             "expected": "inconclusive" if integrity else
-             ("altered" if kind != "none" else "not_altered"),
+             "expected": _expected_answer(kind, integrity),
              "nuisances": list(nuis), "drawn": rec, "serial": serial}
     if kind != "none":
-        alt = draw_alteration(rng, kind, L_in, min_plug_in=cup_depth_in + 0.25)
+        alt = draw_alteration(rng, kind, length_m / IN_TO_M, min_plug_in=cup_depth_in + 0.25)
         retest = replace(retest, core=alt.core, cavities=retest.cavities + alt.cavities)
         truth.update(alt.truth())
     else:
@@ -231,15 +347,7 @@ def draw_case(
         retest = replace(retest, material=replace(other_wood, e_over_g=retest.material.e_over_g))
 
     lab_readings(rng, base, retest, truth)
-    meas = truth["lab_readings"]
-    meta = {"serial": serial, "species": species, "nominal_E_psi": E_psi,
-            "nominal_weight_density_lbf_in3": round(wd, 5),
-            "weight_lb": round(meas["baseline_lb"], 4),
-            "points_in": [round(float(x), 3) for x in points_in]}
-    t_re = rec.get("temperature", {}).get("retest_c", 21.0)
-    retest_meta = {"weight_lb": round(meas["retest_lb"], 4),
-                   "accelerometer_mass_g": round(1e3 * retest.sensor_mass_kg, 2),
-                   "temperature_c": round(t_re, 1), "tested_on": "2026-05-02"}
+    meta, retest_meta = _lab_meta(serial, species, points_in, retest, truth)
     freq = np.arange(0.0, fmax + 0.25, 0.5)
     return FieldCase(profile, meta, retest_meta, base, retest, freq, integrity, truth)
 

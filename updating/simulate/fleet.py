@@ -131,6 +131,34 @@ SPECIES = {  # handbook values at 12 % moisture (docs/method.md, real bats): E p
     "sugar maple": (1.83e6, 0.63 * 0.036127),
 }
 
+def random_wood(rng: np.random.Generator, species: str | None = None) -> tuple[str, Material]:
+    """Draw a species (random unless given) and a board of it.
+
+    E is drawn within +-15 % and density within +-8 % of the species' handbook values
+    (``SPECIES``), E/G within 10-18.
+
+    Parameters
+    ----------
+    rng : numpy.random.Generator
+        The source of the draws.
+    species : str or None
+        A key of ``SPECIES``; None draws one.
+
+    Returns
+    -------
+    species : str
+        The species.
+    wood : Material
+        The board's E (Pa), density (kg/m^3) and E/G.
+    """
+    if species is None:
+        species = list(SPECIES)[int(rng.integers(len(SPECIES)))]
+    E_psi, wd = SPECIES[species]
+    nominal = material_from_imperial(E_psi, wd)
+    wood = Material(nominal.E_pa * rng.uniform(0.85, 1.15),
+                    nominal.rho_kg_m3 * rng.uniform(0.92, 1.08), rng.uniform(10.0, 18.0))
+    return species, wood
+
 
 @dataclass(frozen=True)
 class LabCase:
@@ -168,11 +196,8 @@ def lab_case(rng: np.random.Generator, kind: Kind = "none", serial: str = "SIM-0
     truth_profile = pro_profile(rng)
     profile = Profile(truth_profile.x_m, truth_profile.diameter_m
                       + 0.003 * IN_TO_M * rng.standard_normal(truth_profile.x_m.size))
-    species = list(SPECIES)[int(rng.integers(len(SPECIES)))]
+    species, wood = random_wood(rng)
     E_psi, wd = SPECIES[species]
-    nominal = material_from_imperial(E_psi, wd)
-    wood = Material(nominal.E_pa * rng.uniform(0.85, 1.15),
-                    nominal.rho_kg_m3 * rng.uniform(0.92, 1.08), rng.uniform(10.0, 18.0))
     L_in = truth_profile.length_m / IN_TO_M
     points_in = np.append(np.arange(1.0, L_in - 1.5, 2.0), round(L_in - 1.0, 2))
     offset = rng.uniform(-0.05, 0.05) * IN_TO_M
