@@ -10,11 +10,11 @@ the file and the key.
 from __future__ import annotations
 
 import datetime as dt
-import json
 import math
 from dataclasses import dataclass
 from pathlib import Path
 
+from updating.model.json_input import read_json_object
 from updating.model.units import LB_TO_KG
 
 RANGES = {  # key: (lowest, highest) accepted, in the file's units
@@ -56,17 +56,7 @@ def _number(path: Path, raw: dict, key: str) -> float | None:
 def read_retest_meta(path: str | Path) -> RetestConditions:
     """Read retest.json; ValueError (one line, naming the file and key) when unusable."""
     path = Path(path)
-    if not path.is_file():
-        raise ValueError(f"{path}: no such file")
-    try:
-        raw = json.loads(path.read_text())
-    except json.JSONDecodeError as exc:
-        raise ValueError(f"{path}: not valid JSON ({exc.msg}, line {exc.lineno})") from None
-    except UnicodeDecodeError:
-        raise ValueError(f"{path}: not a text file") from None
-    if not isinstance(raw, dict):
-        raise ValueError(f"{path}: expected a JSON object")
-    return conditions_from_dict(raw, path)
+    return conditions_from_dict(read_json_object(path), path)
 
 
 def conditions_from_dict(raw: dict, source: str | Path) -> RetestConditions:

@@ -21,13 +21,13 @@ Bar description file (JSON; every length key says its unit, `_mm` or `_m`):
 
 from __future__ import annotations
 
-import json
 from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
 
 from updating.model.assembly import Attachment, BatModel, build_model, parts_from_samples
+from updating.model.json_input import read_json_object
 from updating.model.material import Material
 from updating.model.profile import make_profile
 from updating.model.sections import SectionProps, section_props
@@ -141,12 +141,4 @@ def bar_from_dict(d: dict, source: str = "bar") -> Bar:
 def read_bar_json(path: str | Path) -> Bar:
     """Read a bar description file."""
     path = Path(path)
-    try:
-        d = json.loads(path.read_text())
-    except OSError as exc:
-        raise ValueError(f"{path}: cannot read ({exc.strerror})") from None
-    except json.JSONDecodeError as exc:
-        raise ValueError(f"{path}: not JSON ({exc.msg}, line {exc.lineno})") from None
-    if not isinstance(d, dict):
-        raise ValueError(f"{path}: expected a JSON object")
-    return bar_from_dict(d, str(path))
+    return bar_from_dict(read_json_object(path), str(path))

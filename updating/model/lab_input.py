@@ -7,12 +7,12 @@ accelerometer's data sheet, used by diagnose as a prior); other keys are ignored
 
 from __future__ import annotations
 
-import json
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
+from updating.model.json_input import read_json_object
 from updating.model.material import ISOTROPIC_E_OVER_G, Material, material_from_imperial
 from updating.model.sections import Core
 from updating.model.units import IN_TO_M, LB_TO_KG
@@ -32,12 +32,7 @@ class BatMeta:
 def read_meta(path: str | Path, e_over_g: float = ISOTROPIC_E_OVER_G) -> BatMeta:
     """Read meta.json; raise ValueError naming the file and the missing/bad key."""
     path = Path(path)
-    try:
-        raw = json.loads(path.read_text())
-    except json.JSONDecodeError as exc:
-        raise ValueError(f"{path}: not valid JSON ({exc.msg}, line {exc.lineno})") from None
-    if not isinstance(raw, dict):
-        raise ValueError(f"{path}: expected a JSON object")
+    raw = read_json_object(path)
     for key in ("serial", "nominal_E_psi", "nominal_weight_density_lbf_in3"):
         if key not in raw:
             raise ValueError(f"{path}: missing key {key!r}")
