@@ -11,8 +11,14 @@ from __future__ import annotations
 import argparse
 import json
 import sys
-from dataclasses import asdict
+from dataclasses import asdict, dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING
+
+from updating.model.json_input import read_json_object
+
+if TYPE_CHECKING:
+    from rigs.capture import CaptureSettings
 
 HELP = "run a roving-hammer impact test over a serial port (or replay a recorded stream)"
 EXAMPLE = ("batlab acquire --port /dev/ttyACM0 --points 1,3,5,7,9,11,13,15,16 "
@@ -20,6 +26,7 @@ EXAMPLE = ("batlab acquire --port /dev/ttyACM0 --points 1,3,5,7,9,11,13,15,16 "
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
+    """Add `batlab acquire`'s flags to ``parser``."""
     src = parser.add_mutually_exclusive_group(required=True)
     src.add_argument("--port", help="serial port or pyserial URL of the acquisition box")
     src.add_argument("--replay", help="recorded raw stream (.raw.bin) to process again")
@@ -62,18 +69,20 @@ def _int_list(text: str, what: str) -> list[int]:
 
 
 def _positions_m(args: argparse.Namespace, points: list[int], side: dict) -> dict[int, float]:
-    """Point positions (m) by point number: --meta's points_in, else --points-in, else the
-    recorded session's sidecar, else the default marks (every 2 in from 1 in)."""
+    """Return the point positions (m) by point number.
+
+    The positions are --meta's points_in, else --points-in, else the recorded session's
+    sidecar's, else the default marks (every 2 in from 1 in).
+    """
     import numpy as np
 
     from batlab.pipeline import DEFAULT_POINTS_IN, IN_TO_M
 
     where = "default marks"
     if args.meta:
-        try:
-            pts = json.loads(Path(args.meta).read_text())["points_in"]
-        except (OSError, KeyError, json.JSONDecodeError, TypeError) as exc:
-            raise ValueError(f"{args.meta}: cannot read points_in ({exc})") from None
+        pts = read_json_object(args.meta).get("points_in")
+        if pts is None:
+            raise ValueError(f"{args.meta}: cannot read points_in (no key 'points_in')")
         where = args.meta
     elif args.points_in:
         pts, where = args.points_in.split(","), "--points-in"
@@ -97,42 +106,24 @@ def _read_sidecar(path: Path, required: bool) -> dict:
         if required:
             raise ValueError(f"{path}: no recorded session there to resume")
         return {}
-    try:
-        return json.loads(path.read_text())
-    except json.JSONDecodeError as exc:
-        raise ValueError(f"{path}: not valid JSON ({exc.msg})") from None
+    return read_json_object(path)
 
 
 def _resume_raw(raw: Path) -> Path:
-    """The next free continuation file of a raw stream: RAW.resume1, RAW.resume2, ..."""
+    """Return the next free continuation file of a raw stream: RAW.resume1, RAW.resume2, ..."""
     k = 1
     while Path(f"{raw}.resume{k}").exists():
         k += 1
     return Path(f"{raw}.resume{k}")
 
 
-def run(args: argparse.Namespace) -> int:
-    import numpy as np
+def _progress(msg: str) -> None:
+    """Print a progress line on stderr."""
+    print(msg, file=sys.stderr, flush=True)
 
-    from batlab.pipeline import (
-        IN_TO_M,
-        CaptureSettings,
-        ReplaySource,
-        SerialDevice,
-        SessionInterrupted,
-        combine,
-        device_info_from_dict,
-        load_points,
-        open_port,
-        run_session,
-        save_points,
-        write_json_atomic,
-        write_session_test,
-    )
 
-    def progress(msg: str) -> None:
-        print(msg, file=sys.stderr, flush=True)
-
+def _check_flags(args: argparse.Namespace) -> None:
+    """Raise ValueError for a combination of flags that cannot run."""
     if args.replay and not args.output:
         raise ValueError("--replay needs -o OUTPUT (the FRF file to write from the recording)")
     if args.resume and not args.port:
@@ -141,11 +132,28 @@ def run(args: argparse.Namespace) -> int:
         raise ValueError("give -o OUTPUT or --raw PATH: the raw stream must be saved")
     if args.partial and not args.replay:
         raise ValueError("--partial applies to --replay (a live session saves its points)")
-    raw = Path(args.replay) if args.replay else Path(
-        args.raw or Path(args.output).with_suffix(".raw.bin"))
-    side_path = Path(str(raw) + ".json")
-    side = _read_sidecar(side_path, required=bool(args.resume)) if (
-        args.replay or args.resume) else {}
+
+
+@dataclass(frozen=True)
+class _Plan:
+    """What a session measures and how: flags, else the recorded session's sidecar."""
+
+    raw: Path
+    side_path: Path
+    side: dict
+    points: list[int]
+    hits: int
+    driving: int
+    node_x: dict[int, float]
+    settings: CaptureSettings
+    tau: float | None
+    csv_dict: dict | None
+    csv_info: object
+
+
+def _points_plan(args: argparse.Namespace, side: dict, side_path: Path
+                 ) -> tuple[list[int], int, int]:
+    """Return the impact points, the hits per point and the driving point of the session."""
     points = _int_list(args.points, "--points") if args.points else side.get("points")
     if args.resume and args.points and points != side.get("points"):
         raise ValueError(f"--points {args.points} differs from the session being resumed "
@@ -158,101 +166,200 @@ def run(args: argparse.Namespace) -> int:
         raise ValueError("--driving-point is required")
     if driving not in points:
         raise ValueError(f"--driving-point {driving} is not one of the impact points")
+    return points, hits, driving
+
+
+def _channels(args: argparse.Namespace, side: dict) -> tuple[dict | None, object]:
+    """Return the CSV channel description (--csv-info, else the sidecar's) as read and parsed."""
+    from batlab.pipeline import device_info_from_dict
+
+    csv_dict = read_json_object(args.csv_info) if args.csv_info else side.get("csv_info")
+    if not csv_dict:
+        return csv_dict, None
+    return csv_dict, device_info_from_dict(csv_dict, args.csv_info or "sidecar csv_info")
+
+
+def _plan(args: argparse.Namespace) -> _Plan:
+    """Gather the session's plan from the flags and, for a replay or a resume, the sidecar."""
+    from batlab.pipeline import CaptureSettings
+
+    raw = Path(args.replay) if args.replay else Path(
+        args.raw or Path(args.output).with_suffix(".raw.bin"))
+    side_path = Path(str(raw) + ".json")
+    side = _read_sidecar(side_path, required=bool(args.resume)) if (
+        args.replay or args.resume) else {}
+    points, hits, driving = _points_plan(args, side, side_path)
     node_x = _positions_m(args, points + [driving], side)
     settings = CaptureSettings(args.trigger_n, args.trigger_n / 2, args.pretrigger_s,
                                args.record_s, args.min_force_n)
     if side.get("settings") and (args.replay or args.resume):
         settings = CaptureSettings(**side["settings"])
     tau = args.exp_window_tau if args.exp_window_tau is not None else side.get("exp_window_tau_s")
-    csv_dict, csv_info = side.get("csv_info"), None
-    if args.csv_info:
-        try:
-            csv_dict = json.loads(Path(args.csv_info).read_text())
-        except (OSError, json.JSONDecodeError) as exc:
-            raise ValueError(f"{args.csv_info}: cannot read channel description ({exc})") from None
-    if csv_dict:
-        csv_info = device_info_from_dict(csv_dict, args.csv_info or "sidecar csv_info")
+    csv_dict, csv_info = _channels(args, side)
     if args.output:
         out = Path(args.output)
         if out.parent and not out.parent.is_dir():
             raise ValueError(f"{out}: output directory {out.parent} does not exist")
+    return _Plan(raw, side_path, side, points, hits, driving, node_x, settings, tau, csv_dict,
+                 csv_info)
 
-    points_file = Path(str(raw) + ".points.npz")
-    done = load_points(points_file, tau) if args.resume else {}
-    log_before = list(side.get("log") or []) if args.resume else []
-    resumed = sorted(done)
+
+def _open_live(args: argparse.Namespace, plan: _Plan, done: dict, log_before: list,
+               points_file: Path):
+    """Open the serial port and write the new session's sidecar.
+
+    Returns
+    -------
+    source : SerialDevice
+        The box, its bytes going to the raw stream (a continuation file when resuming).
+    side : dict
+        The sidecar written.
+    """
+    from batlab.pipeline import IN_TO_M, SerialDevice, open_port, write_json_atomic
+
+    raw = plan.raw
+    seg = _resume_raw(raw) if args.resume else raw
+    port = open_port(args.port, args.baud)  # a missing port fails here: nothing written
+    positions_in = [round(plan.node_x[n] / IN_TO_M, 4) for n in range(1, len(plan.node_x) + 1)]
+    side = {"points": plan.points, "hits": plan.hits, "driving_point": plan.driving,
+            "settings": asdict(plan.settings), "exp_window_tau_s": plan.tau,
+            "csv_info": plan.csv_dict, "points_in": positions_in,
+            "points_file": points_file.name, "completed": sorted(done),
+            "segments": plan.side.get("segments", [raw.name])
+            + ([seg.name] if args.resume else []), "log": log_before}
+    write_json_atomic(plan.side_path, side)
+    return SerialDevice(port, seg, plan.csv_info, silence_s=args.timeout_s), side
+
+
+def _resume_hint(args: argparse.Namespace, raw: Path) -> str:
+    """Return the command that continues a killed live session."""
+    return (f"batlab acquire --port PORT --resume --raw {raw}"
+            + (f" -o {args.output}" if args.output else ""))
+
+
+def _partial_result(args: argparse.Namespace, plan: _Plan, interrupted):
+    """Return the completed points of a cut recording and their session result (--partial).
+
+    Raises ValueError when --partial is not given, nothing was completed or the driving
+    point is missing.
+    """
+    from batlab.pipeline import combine
+
+    points = plan.points
+    completed = [n for n in points if n in interrupted.completed]
+    if not (args.partial and completed):
+        raise ValueError(f"{interrupted} after {len(completed)} of {len(points)} points "
+                         "(completed: " + (", ".join(map(str, completed)) or "none") + ")"
+                         + ("; add --partial to write them" if completed else "")) from None
+    _progress(f"batlab acquire: recording ends after {len(completed)} of {len(points)} "
+              f"points: writing points {', '.join(map(str, completed))}")
+    result = combine(completed, interrupted.completed, plan.tau, interrupted.log,
+                     interrupted.info)
+    if plan.driving not in completed:
+        raise ValueError(f"{plan.raw}: the driving point {plan.driving} was not completed: "
+                         "the partial test has no driving point") from None
+    return completed, result
+
+
+def _measure(args: argparse.Namespace, plan: _Plan, done: dict, log_before: list,
+             points_file: Path):
+    """Run the session (live or replayed) and return its points, result and sidecar.
+
+    A live session saves every completed point and its hit log as it completes; an
+    interrupted one says how to resume; a cut replay gives its completed points with
+    --partial.
+    """
+    from batlab.pipeline import (
+        ReplaySource,
+        SessionInterrupted,
+        run_session,
+        save_points,
+        write_json_atomic,
+    )
+
+    side = plan.side
     if args.port:
-        seg = _resume_raw(raw) if args.resume else raw
-        port = open_port(args.port, args.baud)  # a missing port fails here: nothing written
-        positions_in = [round(node_x[n] / IN_TO_M, 4) for n in range(1, len(node_x) + 1)]
-        side = {"points": points, "hits": hits, "driving_point": driving,
-                "settings": asdict(settings), "exp_window_tau_s": tau, "csv_info": csv_dict,
-                "points_in": positions_in, "points_file": points_file.name,
-                "completed": sorted(done), "segments": side.get("segments", [raw.name])
-                + ([seg.name] if args.resume else []), "log": log_before}
-        write_json_atomic(side_path, side)
-        source = SerialDevice(port, seg, csv_info, silence_s=args.timeout_s)
+        source, side = _open_live(args, plan, done, log_before, points_file)
     else:
-        source = ReplaySource(raw, csv_info)
+        source = ReplaySource(plan.raw, plan.csv_info)
 
     def on_point(point: int, est, log) -> None:
         done[point] = est
         if args.port:  # completed points and their hit log are on disk as they complete
             save_points(points_file, done)
-            write_json_atomic(side_path, side | {"completed": sorted(done), "log": log_before
-                                                  + [asdict(h) for h in log]})
+            write_json_atomic(plan.side_path, side | {"completed": sorted(done), "log":
+                                                      log_before + [asdict(h) for h in log]})
 
-    interrupted: SessionInterrupted | None = None
     try:
         source.handshake(args.sample_rate)
-        result = run_session(source, points, hits, settings, tau, args.fmax, progress,
-                             done=done, on_point=on_point)
+        result = run_session(source, plan.points, plan.hits, plan.settings, plan.tau,
+                             args.fmax, _progress, done=done, on_point=on_point)
         source.stop()
+        return plan.points, result, side
     except SessionInterrupted as exc:
         interrupted = exc
     except KeyboardInterrupt:
         if args.port:
-            progress(f"batlab acquire: interrupted; {len(done)} of {len(points)} points saved "
-                     f"in {points_file}: continue with batlab acquire --port PORT --resume "
-                     f"--raw {raw}" + (f" -o {args.output}" if args.output else ""))
+            _progress(f"batlab acquire: interrupted; {len(done)} of {len(plan.points)} points "
+                      f"saved in {points_file}: continue with {_resume_hint(args, plan.raw)}")
         raise
     finally:
         source.close()
-    if interrupted is not None:
-        log = log_before + [asdict(h) for h in interrupted.log]
-        if args.port:
-            write_json_atomic(side_path, side | {"completed": sorted(done), "log": log})
-            raise ValueError(f"{interrupted}; {len(done)} of {len(points)} points saved in "
-                             f"{points_file}: continue with batlab acquire --port PORT "
-                             f"--resume --raw {raw}"
-                             + (f" -o {args.output}" if args.output else "")) from None
-        completed = [n for n in points if n in interrupted.completed]
-        if not (args.partial and completed):
-            raise ValueError(f"{interrupted} after {len(completed)} of {len(points)} points "
-                             "(completed: " + (", ".join(map(str, completed)) or "none") + ")"
-                             + ("; add --partial to write them" if completed else "")) from None
-        progress(f"batlab acquire: recording ends after {len(completed)} of {len(points)} "
-                 f"points: writing points {', '.join(map(str, completed))}")
-        points = completed
-        result = combine(points, interrupted.completed, tau, interrupted.log, interrupted.info)
-        if driving not in points:
-            raise ValueError(f"{raw}: the driving point {driving} was not completed: "
-                             "the partial test has no driving point") from None
-
-    log_all = log_before + result.hits_as_dicts()
     if args.port:
-        write_json_atomic(side_path, side | {"completed": sorted(done), "log": log_all})
-    if args.output:  # atomic (temporary name, then os.replace)
-        write_session_test(Path(args.output), result, points, driving, node_x, tau, raw, hits)
+        log = log_before + [asdict(h) for h in interrupted.log]
+        write_json_atomic(plan.side_path, side | {"completed": sorted(done), "log": log})
+        raise ValueError(f"{interrupted}; {len(done)} of {len(plan.points)} points saved in "
+                         f"{points_file}: continue with {_resume_hint(args, plan.raw)}") from None
+    points, result = _partial_result(args, plan, interrupted)
+    return points, result, side
+
+
+def _summary(args: argparse.Namespace, plan: _Plan, result, log_all: list[dict],
+             resumed: list[int]) -> dict:
+    """Return the JSON summary of a session: hits accepted and rejected, files, averages."""
+    import numpy as np
+
     rejected = [{"point": h["point"], "hit": h["hit"], "reason": h["reason"],
                  "detail": h["detail"]} for h in log_all if not h["accepted"]]
-    summary = {"accepted": int(sum(h["accepted"] for h in log_all)), "rejected": rejected,
-               "points": [int(v) for v in result.points], "driving_point": driving,
-               "raw": str(raw), "output": args.output, "exp_window_tau_s": tau,
-               "sample_rate_hz": result.info.sample_rate_hz,
-               "n_averages": np.asarray(result.n_averages).tolist(),
-               "resumed_points": resumed}
-    progress(f"batlab acquire: {summary['accepted']} hits accepted, {len(rejected)} rejected")
+    return {"accepted": int(sum(h["accepted"] for h in log_all)), "rejected": rejected,
+            "points": [int(v) for v in result.points], "driving_point": plan.driving,
+            "raw": str(plan.raw), "output": args.output, "exp_window_tau_s": plan.tau,
+            "sample_rate_hz": result.info.sample_rate_hz,
+            "n_averages": np.asarray(result.n_averages).tolist(),
+            "resumed_points": resumed}
+
+
+def run(args: argparse.Namespace) -> int:
+    """Run `batlab acquire`: measure (or replay) a session and write its FRFs.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed command line (``add_arguments``).
+
+    Returns
+    -------
+    int
+        The exit code, 0.
+    """
+    from batlab.pipeline import load_points, write_json_atomic, write_session_test
+
+    _check_flags(args)
+    plan = _plan(args)
+    points_file = Path(str(plan.raw) + ".points.npz")
+    done = load_points(points_file, plan.tau) if args.resume else {}
+    log_before = list(plan.side.get("log") or []) if args.resume else []
+    resumed = sorted(done)
+    points, result, side = _measure(args, plan, done, log_before, points_file)
+    log_all = log_before + result.hits_as_dicts()
+    if args.port:
+        write_json_atomic(plan.side_path, side | {"completed": sorted(done), "log": log_all})
+    if args.output:  # atomic (temporary name, then os.replace)
+        write_session_test(Path(args.output), result, points, plan.driving, plan.node_x,
+                           plan.tau, plan.raw, plan.hits)
+    summary = _summary(args, plan, result, log_all, resumed)
+    _progress(f"batlab acquire: {summary['accepted']} hits accepted, "
+              f"{len(summary['rejected'])} rejected")
     if args.json:
         print(json.dumps(summary))
     return 0
