@@ -99,6 +99,40 @@ def _run(model, test, groups_kw, msso_kw, expansions, do_refine, mass_normalised
     return f, first, res, rr, cond
 
 
+def _test_modes(model: BatModel, freq_hz, shapes_a, dofs_a) -> MeasuredModes:
+    """Check the measured modes against the model and wrap them as ``MeasuredModes``.
+
+    Raises ValueError when ``shapes_a`` is not (a, m) or ``dofs_a`` are not translational
+    DOFs of ``model``.
+    """
+    freq_hz = np.asarray(freq_hz, dtype=float)
+    shapes_a = np.asarray(shapes_a, dtype=float)
+    dofs_a = np.asarray(dofs_a, dtype=int)
+    m = freq_hz.size
+    if shapes_a.ndim != 2 or shapes_a.shape != (dofs_a.size, m):
+        raise ValueError(f"shapes_a must be (a={dofs_a.size}, m={m})")
+    if np.any(dofs_a % 2) or np.any(dofs_a >= model.n_dof):
+        raise ValueError("dofs_a must be translational DOFs of the model")
+    return MeasuredModes(freq_hz, shapes_a, model.node_x_m[dofs_a // 2], np.zeros(m),
+                         float("nan"))
+
+
+def _scaling_check(model: BatModel, test: MeasuredModes, dofs_a: np.ndarray,
+                   scaled: MeasuredModes, mass_normalised: bool) -> float:
+    """Return the largest off-diagonal pseudo-orthogonality of the (scaled) test shapes.
+
+    POC = psi^T M_a psi with M_a the SEREP-reduced reference mass; the shapes are sign-aligned
+    with the reference when given mass-normalised, else taken as ``mass_normalise`` scaled
+    them.
+    """
+    Phi = model_modes(model).shapes
+    dofs_a = np.asarray(dofs_a, dtype=int)
+    idx, T = paired_serep(Phi, test.shapes, dofs_a, 2)
+    sa = (align_signs(Phi[np.ix_(dofs_a, idx)], test.shapes) if mass_normalised
+          else scaled.shapes)
+    return pseudo_orthogonality(sa, T.reduce(assemble(model)[1])).max_offdiag
+
+
 def update_elements(
     model: BatModel, freq_hz, shapes_a, dofs_a, *, stiffness: Stiffness | None = "element",
     mass: Mass | None = "element", mass_normalised: bool = True, expansions: int = 1,
@@ -157,16 +191,7 @@ def update_elements(
         Final and one-pass factors, the MSSO and refinement results, SEREP condition,
         pseudo-orthogonality, resampled scatter.
     """
-    freq_hz = np.asarray(freq_hz, dtype=float)
-    shapes_a = np.asarray(shapes_a, dtype=float)
-    dofs_a = np.asarray(dofs_a, dtype=int)
-    m = freq_hz.size
-    if shapes_a.ndim != 2 or shapes_a.shape != (dofs_a.size, m):
-        raise ValueError(f"shapes_a must be (a={dofs_a.size}, m={m})")
-    if np.any(dofs_a % 2) or np.any(dofs_a >= model.n_dof):
-        raise ValueError("dofs_a must be translational DOFs of the model")
-    test = MeasuredModes(freq_hz, shapes_a, model.node_x_m[dofs_a // 2], np.zeros(m),
-                         float("nan"))
+    test = _test_modes(model, freq_hz, shapes_a, dofs_a)
     choose_groups(model, stiffness, mass)  # the string options checked here, once
     seed_s, seed_m = (stiffness, mass) if msso_parts is None else msso_parts
     choose_groups(model, seed_s, seed_m)
@@ -175,28 +200,23 @@ def update_elements(
     msso_kw = {"regularisation": regularisation, "weights": weights,
                "weighed_mass_kg": weighed_mass_kg}
     sig = (freq_sigma, shape_sigma)
+
     def groups_kw():
         return {"stiffness": seed_s, "mass": seed_m, "refine_stiffness": stiffness,
                 "refine_mass": mass}
 
+    def run_once(modes: MeasuredModes, scaled: MeasuredModes | None = None):
+        return _run(model, modes, groups_kw(), msso_kw, expansions, refine_fit,
+                    mass_normalised, sig, prior_sigma, scaled)
+
     scaled = test if mass_normalised else mass_normalise(model, test)  # once, used twice
-    f, first, res, rr, cond = _run(model, test, groups_kw(), msso_kw, expansions, refine_fit,
-                                   mass_normalised, sig, prior_sigma, scaled)
-    # scaling check: POC of the (scaled) test shapes with the SEREP-reduced reference mass
-    Phi = model_modes(model).shapes
-    idx, T = paired_serep(Phi, shapes_a, dofs_a, 2)
-    sa = align_signs(Phi[np.ix_(dofs_a, idx)], shapes_a) if mass_normalised else scaled.shapes
-    poc = pseudo_orthogonality(sa, T.reduce(assemble(model)[1]))
+    f, first, res, rr, cond = run_once(test, scaled)
+    poc_max = _scaling_check(model, test, dofs_a, scaled, mass_normalised)
     std, draws = None, None
     if n_resample > 0:
         rng = np.random.default_rng() if rng is None else rng
-        out = []
-        for _ in range(n_resample):
-            noisy = with_noise(test, shape_sigma, freq_sigma, rng)
-            fd = _run(model, noisy, groups_kw(), msso_kw, expansions, refine_fit,
-                      mass_normalised, sig, prior_sigma)[0]
-            out.append(np.stack(fd.as_tuple()))
-        draws = np.stack(out)
+        draws = np.stack([np.stack(run_once(with_noise(test, shape_sigma, freq_sigma, rng))[0]
+                                   .as_tuple()) for _ in range(n_resample)])
         std = ElementFactors(*draws.std(axis=0, ddof=1))
     return ElementUpdate(f, first, choose_groups(model, stiffness, mass), res, rr, cond,
-                         poc.max_offdiag, max(1, expansions), std, draws)
+                         poc_max, max(1, expansions), std, draws)
