@@ -15,10 +15,8 @@ from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from updating.model.json_input import read_json_object
-
 if TYPE_CHECKING:
-    from rigs.capture import CaptureSettings
+    from batlab.pipeline import CaptureSettings
 
 HELP = "run a roving-hammer impact test over a serial port (or replay a recorded stream)"
 EXAMPLE = ("batlab acquire --port /dev/ttyACM0 --points 1,3,5,7,9,11,13,15,16 "
@@ -76,7 +74,7 @@ def _positions_m(args: argparse.Namespace, points: list[int], side: dict) -> dic
     """
     import numpy as np
 
-    from batlab.pipeline import DEFAULT_POINTS_IN, IN_TO_M
+    from batlab.pipeline import DEFAULT_POINTS_IN, IN_TO_M, read_json_object
 
     where = "default marks"
     if args.meta:
@@ -106,6 +104,8 @@ def _read_sidecar(path: Path, required: bool) -> dict:
         if required:
             raise ValueError(f"{path}: no recorded session there to resume")
         return {}
+    from batlab.pipeline import read_json_object
+
     return read_json_object(path)
 
 
@@ -171,7 +171,7 @@ def _points_plan(args: argparse.Namespace, side: dict, side_path: Path
 
 def _channels(args: argparse.Namespace, side: dict) -> tuple[dict | None, object]:
     """Return the CSV channel description (--csv-info, else the sidecar's) as read and parsed."""
-    from batlab.pipeline import device_info_from_dict
+    from batlab.pipeline import device_info_from_dict, read_json_object
 
     csv_dict = read_json_object(args.csv_info) if args.csv_info else side.get("csv_info")
     if not csv_dict:

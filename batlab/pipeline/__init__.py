@@ -99,6 +99,7 @@ from batlab.pipeline.paper import (
     plot_figures,
     run_paper_case,
 )
+from updating.model.json_input import read_json_object
 from updating.model.units import (
     IN_TO_M,
     KG_M2_TO_LB_IN2,
@@ -118,7 +119,7 @@ __all__ = [
     "inspect_modes", "inspect_registered", "jsonable", "load_points", "match_points",
     "meta_points_m", "note_report", "nuisance_names", "open_port", "plot_figures",
     "plot_fit_files", "point_positions_m", "provenance", "read_bat_files", "read_conditions",
-    "read_frf", "read_meta_dict", "read_test_file", "register_files", "reorder",
+    "read_frf", "read_json_object", "read_meta_dict", "read_test_file", "register_files", "reorder",
     "report_inputs", "run_paper_case", "run_session", "save_points", "sensor_x_m",
     "simulate_bat_test", "simulate_demo_pair", "simulate_field_case", "store_inspection",
     "stored_bat", "stored_report_inputs", "summarise_model", "uniform_beam_model",
