@@ -41,6 +41,10 @@ APPLICATION_MAY_NOT_IMPORT = (  # the stages' runners: only the pipeline calls t
     "updating.msso", "updating.simulate", "updating.solid",
 )
 
+FLEET_MAY_IMPORT = (  # batlab/fleet runs virtual bats through the real command line
+    "batlab.cli", "batlab.fleet", "batlab.pipeline", "updating.simulate",
+)
+
 COMMAND_MAY_IMPORT = {  # what a command may import from batlab besides batlab.pipeline
     "batlab", "batlab.cli_support", "batlab.formatting", "batlab.registry", "batlab.report",
     "batlab.diagnose_report",
@@ -137,4 +141,20 @@ def test_commands_reach_the_stages_only_through_the_pipeline():
                 elif name not in COMMAND_MAY_IMPORT and ".".join(parts[:-1]) \
                         not in COMMAND_MAY_IMPORT:
                     bad.append(where + " (not the pipeline nor a presenting module)")
+    assert not bad, "\n".join(bad)
+
+
+def test_fleet_runs_bats_through_the_command_line():
+    """batlab/fleet (the fleet benchmarks' runner) reaches batlab through the CLI's ``main``
+    or the pipeline and the stages only through the virtual bats; no other batlab module
+    imports it."""
+    fleet = files_of("batlab/fleet")
+    assert fleet
+    bad = [f"{p.relative_to(ROOT)}:{line} imports {name}"
+           for p in fleet for line, name in imported_modules(p)
+           if top(name) in PACKAGES
+           and not any(name == m or name.startswith(m + ".") for m in FLEET_MAY_IMPORT)]
+    bad += [f"{p.relative_to(ROOT)}:{line} imports {name}"
+            for p in files_of("batlab") if p not in fleet
+            for line, name in imported_modules(p) if name.startswith("batlab.fleet")]
     assert not bad, "\n".join(bad)
