@@ -67,18 +67,22 @@ class BatModel:
 
     @property
     def n_nodes(self) -> int:
+        """Return the number of nodes."""
         return self.node_x_m.size
 
     @property
     def n_dof(self) -> int:
+        """Return the number of DOFs (deflection and rotation per node)."""
         return 2 * self.node_x_m.size
 
     @property
     def n_elements(self) -> int:
+        """Return the number of elements."""
         return self.node_x_m.size - 1
 
     @property
     def element_length_m(self) -> np.ndarray:
+        """Return the element lengths, m."""
         return np.diff(self.node_x_m)
 
     @property
@@ -88,6 +92,7 @@ class BatModel:
 
     @property
     def translational_dofs(self) -> np.ndarray:
+        """Return the translational DOFs (2 i for node i)."""
         return 2 * np.arange(self.n_nodes)
 
     def element_average(self, values: np.ndarray) -> np.ndarray:
@@ -202,7 +207,7 @@ def build_model(
 def scale_sections(
     model: BatModel, ei=1.0, kga=1.0, rhoa=1.0, rhoi=1.0,
 ) -> BatModel:
-    """The model with per-element (e,) or uniform factors on EI, kGA, rhoA, rhoI, rebuilt exactly.
+    """Rebuild the model exactly with per-element (e,) or uniform factors on EI, kGA, rhoA, rhoI.
 
     Unlike adding beta_i k_i (first order), this recomputes phi, so it is the exact model of
     changed section properties; the nonlinear refinement and the virtual rig use it.

@@ -63,11 +63,12 @@ class Bar:
 
     @property
     def mass_kg(self) -> float:
+        """Return the bar's mass, kg (attachments excluded)."""
         return float(self.section().rhoa) * self.length_m
 
     def model(self, n_elements: int = 60, stations_m=(), sensor_x_m: float | None = None
               ) -> BatModel:
-        """The bar's free-free Timoshenko model, with the accelerometer at sensor_x_m."""
+        """Build the bar's free-free Timoshenko model, with the accelerometer at sensor_x_m."""
         L = self.length_m
         att = ()
         if self.sensor_mass_kg and sensor_x_m is not None:

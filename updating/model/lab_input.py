@@ -20,6 +20,24 @@ from updating.model.units import IN_TO_M, LB_TO_KG
 
 @dataclass(frozen=True)
 class BatMeta:
+    """A bat's meta.json read into model inputs.
+
+    Attributes
+    ----------
+    serial, species : str
+        The bat's serial and species.
+    material : Material
+        The species' handbook wood.
+    weight_kg : float or None
+        The registered weight, kg.
+    points_m : ndarray
+        The impact points from the knob end, m.
+    extra : dict
+        The file's whole content.
+    accelerometer_mass_kg : float or None
+        The accelerometer's data-sheet mass, kg.
+    """
+
     serial: str
     species: str
     material: Material

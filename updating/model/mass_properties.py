@@ -1,7 +1,7 @@
 """Mass properties of the bat model, from the same section quadrature as the mass matrix.
 
-    m = int rhoA dx,  x_cg = int rhoA x dx / m,  I_knob = int (rhoA x^2 + rhoI) dx,
-    I_cg = I_knob - m x_cg^2   (about a transverse axis; point masses added).
+m = int rhoA dx,  x_cg = int rhoA x dx / m,  I_knob = int (rhoA x^2 + rhoI) dx,
+I_cg = I_knob - m x_cg^2   (about a transverse axis; point masses added).
 """
 
 from __future__ import annotations
@@ -15,6 +15,18 @@ from updating.model.assembly import BatModel
 
 @dataclass(frozen=True)
 class MassProperties:
+    """A model's mass, centre of mass and transverse moments of inertia.
+
+    Attributes
+    ----------
+    mass_kg : float
+        Mass, kg.
+    cg_m : float
+        Centre of mass from the knob end, m.
+    i_knob_kg_m2, i_cg_kg_m2 : float
+        Moment of inertia about the knob end and about the centre of mass, kg m^2.
+    """
+
     mass_kg: float
     cg_m: float
     i_knob_kg_m2: float

@@ -14,7 +14,8 @@ ISOTROPIC_E_OVER_G = 2.6
 class Material:
     """Beam material, SI.
 
-    Attributes:
+    Attributes
+    ----------
         E_pa: Young's modulus along the axis, Pa.
         rho_kg_m3: mass density, kg/m^3.
         e_over_g: E / G_LT (isotropic 2.6; wood 9-16).
@@ -31,6 +32,7 @@ class Material:
 
     @property
     def G_pa(self) -> float:
+        """Return the shear modulus G = E / (E/G), Pa."""
         return self.E_pa / self.e_over_g
 
     def scaled(self, stiffness: float = 1.0, density: float = 1.0) -> Material:
@@ -46,5 +48,5 @@ def material_from_imperial(
 
 
 def paper_material() -> Material:
-    """The paper's white birch: E = 1.8e6 psi, 0.02167 lbf/in^3, isotropic."""
+    """Return the paper's white birch: E = 1.8e6 psi, 0.02167 lbf/in^3, isotropic."""
     return material_from_imperial(1.8e6, 0.02167)

@@ -26,9 +26,11 @@ class Modes:
 
     @property
     def omega2(self) -> np.ndarray:
+        """Return the squared circular frequencies (2 pi f)^2, (rad/s)^2."""
         return (2 * np.pi * self.freq_hz) ** 2
 
     def elastic(self) -> Modes:
+        """Return the elastic modes alone (the rigid-body ones dropped)."""
         return Modes(self.freq_hz[self.n_rigid:], self.shapes[:, self.n_rigid:], 0)
 
 
@@ -45,21 +47,23 @@ def rigid_body_shapes(node_x_m: np.ndarray, M: np.ndarray) -> np.ndarray:
 
 
 def column_quadratic_forms(A: np.ndarray, V: np.ndarray) -> np.ndarray:
-    """diag(V^T A V), (m,), for a banded A (n, n) and V (n, m): A is read as a sparse matrix,
-    so the cost is O(nnz(A) m + n^2) instead of the dense product's O(n^2 m) -- for all modes
-    of a fine mesh (m = n) that is the difference between a fraction of the eigen-solution's
-    time and as much again."""
+    """Compute diag(V^T A V), (m,), for a banded A (n, n) and V (n, m).
+
+    A is read as a sparse matrix, so the cost is O(nnz(A) m + n^2) instead of the dense
+    product's O(n^2 m) -- for all modes of a fine mesh (m = n) that is the difference between
+    a fraction of the eigen-solution's time and as much again.
+    """
     return np.einsum("ij,ij->j", V, scipy.sparse.csr_array(A) @ V)
 
 
 def solve_modes(
     K: np.ndarray, M: np.ndarray, node_x_m: np.ndarray | None = None, n_modes: int | None = None,
 ) -> Modes:
-    """Lowest ``n_modes`` modes of (K, M) (all by default): the one eigen-solution of the
-    project (model, diagnosis, inspection predictor and MSSO all call it).
+    """Solve for the lowest ``n_modes`` modes of (K, M) (all by default).
 
-    When ``node_x_m`` is given the structure is taken as free-free: its two lowest modes are
-    returned as the exact rigid-body shapes at 0 Hz and the elastic modes follow.
+    The one eigen-solution of the project (model, diagnosis, inspection predictor and MSSO all
+    call it). When ``node_x_m`` is given the structure is taken as free-free: its two lowest
+    modes are returned as the exact rigid-body shapes at 0 Hz and the elastic modes follow.
     """
     free = node_x_m is not None
     n = K.shape[0]

@@ -1,10 +1,10 @@
-"""Test points for a bat: the barrel covered where a core could be, the rest by effective
-independence (Kammer 1991, J. Guid. Control Dyn.).
+"""Test points for a bat: the barrel covered where a core could be, the rest by EfI.
 
-Effective independence: candidates are translational DOFs; with target shapes Phi (c x m) the
-values E_D = diag(Phi (Phi^T Phi)^-1 Phi^T) measure each candidate's share of the Fisher
-information; the candidate with the smallest E_D is removed until ``n_points`` remain.
-Candidates that must stay (``keep``) are never removed.
+Effective independence (EfI; Kammer 1991, J. Guid. Control Dyn.): candidates are
+translational DOFs; with target shapes Phi (c x m) the values
+E_D = diag(Phi (Phi^T Phi)^-1 Phi^T) measure each candidate's share of the Fisher information;
+the candidate with the smallest E_D is removed until ``n_points`` remain. Candidates that
+must stay (``keep``) are never removed.
 
 EfI alone puts the points where the first bending modes are most independent and, on a bat,
 leaves the barrel bare (nothing between 16 and 34 in on a 34 in bat) -- exactly where an
@@ -39,8 +39,10 @@ END_MARGIN_IN = 1.0
 
 
 def effective_independence(shapes: np.ndarray, n_points: int, keep=()) -> np.ndarray:
-    """Indices (ascending) of the ``n_points`` rows of ``shapes`` (c x m) kept by EfI; rows
-    in ``keep`` are never removed."""
+    """Choose the ``n_points`` rows of ``shapes`` (c x m) Effective Independence keeps.
+
+    Rows in ``keep`` are never removed. Returns their indices, ascending.
+    """
     phi = np.asarray(shapes, dtype=float)
     if n_points < phi.shape[1]:
         raise ValueError("need at least as many points as target modes")
@@ -65,8 +67,11 @@ class PointLayout:
 
 
 def barrel_row_in(length_in: float, spacing_in: float) -> np.ndarray:
-    """The fixed barrel row: from the driving point towards the knob every ``spacing_in``,
-    over the last BARREL_ZONE_IN inches (ascending)."""
+    """Return the fixed barrel row, in (ascending).
+
+    From the driving point towards the knob every ``spacing_in``, over the last
+    BARREL_ZONE_IN inches.
+    """
     start = length_in - DRIVING_POINT_FROM_END_IN
     n = int(np.floor((BARREL_ZONE_IN - DRIVING_POINT_FROM_END_IN) / spacing_in + 1e-9)) + 1
     return np.sort(np.round(start - spacing_in * np.arange(n), 2))

@@ -21,7 +21,8 @@ from updating.model.units import IN_TO_M
 class Profile:
     """Outer diameter along the bat, SI.
 
-    Attributes:
+    Attributes
+    ----------
         x_m: (S,) stations from the knob end, m, non-decreasing (a repeated x is a step).
         diameter_m: (S,) outer diameter at each station, m.
     """
@@ -31,6 +32,7 @@ class Profile:
 
     @property
     def length_m(self) -> float:
+        """Return the bat's length, m."""
         return float(self.x_m[-1] - self.x_m[0])
 
     def segments(self) -> np.ndarray:
@@ -100,7 +102,10 @@ def write_profile_csv(path: str | Path, profile: Profile) -> None:
 
 
 def paper_profile() -> Profile:
-    """The paper's stepped bat: nub 1x1.25, handle 10x0.75, taper 10x1.725, barrel 12x2.7 in."""
+    """Return the paper's stepped bat.
+
+    Lengths x diameters, in: nub 1x1.25, handle 10x0.75, taper 10x1.725, barrel 12x2.7.
+    """
     x_in = [0, 1, 1, 11, 11, 21, 21, 33]
     d_in = [1.25, 1.25, 0.75, 0.75, 1.725, 1.725, 2.7, 2.7]
     return make_profile(np.array(x_in) * IN_TO_M, np.array(d_in) * IN_TO_M, "paper bat")

@@ -21,7 +21,8 @@ from updating.model.units import IN_TO_M
 class BatReference:
     """Calibrated model parameters, SI.
 
-    Attributes:
+    Attributes
+    ----------
         E_pa, rho_kg_m3, e_over_g, nu: the wood.
         beam: "euler" or "timoshenko"; rotary_inertia: include rhoI.
         sensor_mass_kg, sensor_x_m: accelerometer at the driving point.
@@ -53,10 +54,12 @@ class BatReference:
     beam_theory_corrections: tuple[tuple[float, ...], ...] | None = None
 
     def material(self) -> Material:
+        """Return the calibrated wood as a ``Material``."""
         return Material(self.E_pa, self.rho_kg_m3, self.e_over_g, self.nu,
                         self.shear_coefficient)
 
     def attachments(self, length_m: float) -> tuple[Attachment, ...]:
+        """Return the accelerometer and the two bungees (1 in from either end) as attachments."""
         out = []
         if self.sensor_mass_kg:
             out.append(Attachment(self.sensor_x_m, mass_kg=self.sensor_mass_kg))
@@ -69,8 +72,11 @@ class BatReference:
         self, profile: Profile, stations_m=(), core: Core | None = None,
         n_elements: int | None = None, element_length_m: float | None = None,
     ) -> BatModel:
-        """The reference FE model with nodes at ``stations_m`` (the test points), on the
-        calibrated mesh unless ``n_elements`` or ``element_length_m`` says otherwise."""
+        """Build the reference FE model with nodes at ``stations_m`` (the test points).
+
+        The mesh is the calibrated one unless ``n_elements`` or ``element_length_m`` says
+        otherwise.
+        """
         if n_elements is None and element_length_m is None:
             element_length_m = self.element_length_m
         return build_model(profile, self.material(), beam=self.beam,
@@ -79,10 +85,12 @@ class BatReference:
                            core=core, attachments=self.attachments(profile.length_m))
 
     def to_dict(self) -> dict:
+        """Return the reference as a JSON-able dict."""
         return asdict(self)
 
     @staticmethod
     def from_dict(d: dict) -> BatReference:
+        """Read a reference back from ``to_dict``'s dict (unknown keys ignored)."""
         kw = {k: d[k] for k in BatReference.__dataclass_fields__ if k in d}
         if kw.get("beam_theory_corrections") is not None:
             kw["beam_theory_corrections"] = tuple(tuple(r) for r in kw["beam_theory_corrections"])

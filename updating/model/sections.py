@@ -30,7 +30,8 @@ from updating.model.material import Material
 class Core:
     """An axial core drilled from the barrel end and filled (an alteration).
 
-    Attributes:
+    Attributes
+    ----------
         diameter_m: core diameter, m.
         depth_m: drilled depth from the barrel end, m.
         fill_density_ratio: fill density / wood density (cork ~0.2-0.4, heavy fill 1.5-2.2).
@@ -98,8 +99,10 @@ def section_props(
     D_m: np.ndarray, material: Material, core_d_m: np.ndarray | float = 0.0,
     fill_density_ratio: np.ndarray | float = 0.0, fill_modulus_ratio: np.ndarray | float = 0.0,
 ) -> SectionProps:
-    """Properties of circular sections of outer diameter D with a filled core of diameter d
-    (fill ratios per section or one for all)."""
+    """Compute the properties of circular sections of outer diameter D with a filled core.
+
+    The core has diameter d; fill ratios are given per section or one for all.
+    """
     D = np.asarray(D_m, dtype=float)
     d = np.broadcast_to(np.asarray(core_d_m, dtype=float), D.shape)
     if np.any(d >= D):

@@ -15,4 +15,5 @@ KG_M2_TO_LB_IN2 = 1.0 / (LB_TO_KG * IN_TO_M**2)
 
 
 def m_to_in(x_m):
+    """Convert metres to inches."""
     return x_m / IN_TO_M

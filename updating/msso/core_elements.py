@@ -22,9 +22,18 @@ from updating.model.sections import Core
 
 @dataclass(frozen=True)
 class CoreFactors:
-    """The element factors a physical core implies on the reference mesh, (e,) each, with the
-    element ends x0_m, x1_m: the truth that an MSSO result (``msso.factors.ElementFactors``,
-    the unknowns) is compared with."""
+    """Element factors a physical core implies on the reference mesh.
+
+    The truth an MSSO result (``msso.factors.ElementFactors``, the unknowns) is compared with:
+    (e,) arrays, one entry per element.
+
+    Attributes
+    ----------
+    x0_m, x1_m : ndarray
+        The elements' ends, m.
+    alpha, beta, beta_shear : ndarray
+        Translational mass, bending stiffness and shear stiffness factors.
+    """
 
     x0_m: np.ndarray
     x1_m: np.ndarray

@@ -50,7 +50,7 @@ def _noise(v: np.ndarray, std: np.ndarray | None) -> np.ndarray:
 
 def changed_region(beta: np.ndarray, alpha: np.ndarray, s_beta=None, s_alpha=None,
                    z_min: float = 3.0, min_change: float = 0.005) -> tuple[np.ndarray, float]:
-    """The changed region of an element map: the contiguous significant run around its peak.
+    """Find the changed region of an element map: the contiguous significant run around its peak.
 
     An element is significant when z = hypot(beta / s_beta, alpha / s_alpha) > ``z_min``
     and |beta| or |alpha| exceeds ``min_change``.
@@ -90,9 +90,11 @@ def changed_region(beta: np.ndarray, alpha: np.ndarray, s_beta=None, s_alpha=Non
 
 def core_from_factors(model: BatModel, elements: np.ndarray, beta: np.ndarray,
                       alpha: np.ndarray) -> tuple[float, float]:
-    """Core diameter d (m) and fill density ratio r from the factors over ``elements``:
-    d^4 = mean(-beta_i <D^4>_i), r = 1 + mean(alpha_i <D^2>_i) / d^2 (element-averaged
-    outer diameters D); (nan, nan) when the mean stiffness change is not a loss."""
+    """Read a core's diameter d (m) and fill density ratio r from the factors over ``elements``.
+
+    d^4 = mean(-beta_i <D^4>_i), r = 1 + mean(alpha_i <D^2>_i) / d^2 with D the
+    element-averaged outer diameters; (nan, nan) when the mean stiffness change is not a loss.
+    """
     D = model.profile.diameter_at(model.samples.x_m)
     D4 = model.element_average(D**4)[elements]
     D2 = model.element_average(D**2)[elements]
@@ -105,8 +107,26 @@ def core_from_factors(model: BatModel, elements: np.ndarray, beta: np.ndarray,
 
 def read_core(model: BatModel, update: ElementUpdate, z_min: float = 3.0,
               min_change: float = 0.005) -> CoreReading:
-    """Region, core diameter and fill ratio from an ElementUpdate (bending and translational
-    mass factors), with uncertainties from its resampled draws."""
+    """Read the region, core diameter and fill ratio from an ``ElementUpdate``.
+
+    The bending and translational mass factors are read (``changed_region``,
+    ``core_from_factors``), with uncertainties from the update's resampled draws.
+
+    Parameters
+    ----------
+    model : BatModel
+        The reference model the update was made on.
+    update : ElementUpdate
+        The element update.
+    z_min, min_change : float
+        As ``changed_region`` takes them.
+
+    Returns
+    -------
+    CoreReading
+        Found or not, the elements, region (m), mean factors, diameter (m), fill ratio and
+        their standard deviations, peak z.
+    """
     beta, alpha = update.factors.beta_bend, update.factors.alpha_trans
     s_b = update.std.beta_bend if update.std is not None else None
     s_a = update.std.alpha_trans if update.std is not None else None

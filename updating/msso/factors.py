@@ -40,6 +40,7 @@ SECTION_OF = {"bend": "ei", "shear": "kga", "trans": "rhoa", "rot": "rhoi"}
 
 
 def is_stiffness(group: str) -> bool:
+    """Return whether ``group`` is a stiffness group ("k", "bend" or "shear")."""
     return group in ("k", "bend", "shear")
 
 
@@ -53,9 +54,17 @@ def check_parameterisation(stiffness: Stiffness | None, mass: Mass | None) -> No
 
 def choose_groups(model: BatModel, stiffness: Stiffness | None = "element",
                   mass: Mass | None = "element") -> tuple[str, ...]:
-    """Groups for a stiffness option (element, separate, bend, None) and a mass option
-    (element, separate, trans, None); parts that are zero in the model (shear of an
-    Euler-Bernoulli beam, rotary inertia when off) are dropped."""
+    """Choose the factor groups of a stiffness and a mass option.
+
+    Stiffness: "element", "separate", "bend" or None; mass: "element", "separate", "trans"
+    or None. Parts that are zero in the model (shear of an Euler-Bernoulli beam, rotary
+    inertia when off) are dropped.
+
+    Returns
+    -------
+    tuple of str
+        The groups, stiffness first.
+    """
     check_parameterisation(stiffness, mass)
     out = []
     for g in STIFFNESS[stiffness] + MASS[mass]:
@@ -82,6 +91,7 @@ class ElementFactors:
     alpha_rot: np.ndarray
 
     def part(self, name: str) -> np.ndarray:
+        """Return one part's factors: "bend", "shear", "trans" or "rot"."""
         return {"bend": self.beta_bend, "shear": self.beta_shear, "trans": self.alpha_trans,
                 "rot": self.alpha_rot}[name]
 
@@ -95,10 +105,12 @@ class ElementFactors:
                                 zip(self.as_tuple(), other.as_tuple(), strict=True)])
 
     def as_tuple(self) -> tuple[np.ndarray, ...]:
+        """Return the four parts in the order bend, shear, trans, rot."""
         return self.beta_bend, self.beta_shear, self.alpha_trans, self.alpha_rot
 
 
 def zero_factors(n_elements: int) -> ElementFactors:
+    """Return all-zero factors (the unchanged reference) for ``n_elements`` elements."""
     z = np.zeros(n_elements)
     return ElementFactors(z, z.copy(), z.copy(), z.copy())
 
@@ -128,6 +140,6 @@ def factors_from_vector(y: np.ndarray, groups: tuple[str, ...], n_elements: int
 
 
 def apply_factors(model: BatModel, factors: ElementFactors) -> BatModel:
-    """The exact model with sections scaled: EI (1+beta_bend), kGA (1+beta_shear), ..."""
+    """Scale the exact model's sections: EI (1+beta_bend), kGA (1+beta_shear), ..."""
     return scale_sections(model, ei=1 + factors.beta_bend, kga=1 + factors.beta_shear,
                           rhoa=1 + factors.alpha_trans, rhoi=1 + factors.alpha_rot)

@@ -123,7 +123,7 @@ def _evaluate(model, test, y, groups, n_rigid, scales, want_jac, w):
 
 def mass_rows(model: BatModel, groups: tuple[str, ...], weighed_mass_kg: float | None,
               mass_sigma: float) -> tuple[np.ndarray, np.ndarray]:
-    """The weighed-mass residual (m0 + sum_i alpha_i m_i - m_w) / (sigma m_w) as (G, g0)."""
+    """Build the weighed-mass residual (m0 + sum_i alpha_i m_i - m_w) / (sigma m_w) as (G, g0)."""
     p = model.n_elements * len(groups)
     if weighed_mass_kg is None:
         return np.zeros((0, p)), np.zeros(0)
@@ -135,9 +135,12 @@ def mass_rows(model: BatModel, groups: tuple[str, ...], weighed_mass_kg: float |
 
 
 def prior_matrix(n_elements: int, n_groups: int, prior_sigma: float | None) -> np.ndarray:
-    """Rows of the prior: first differences of each group's factors along the bat over
-    sigma (a smooth or piecewise-uniform change is cheap, a lone spike is not) and the factors
-    themselves over 10 sigma; no rows without a prior."""
+    """Build the prior's rows.
+
+    First differences of each group's factors along the bat over sigma (a smooth or
+    piecewise-uniform change is cheap, a lone spike is not) and the factors themselves over
+    10 sigma; no rows without a prior.
+    """
     p = n_elements * n_groups
     if prior_sigma is None:
         return np.zeros((0, p))
@@ -147,8 +150,11 @@ def prior_matrix(n_elements: int, n_groups: int, prior_sigma: float | None) -> n
 
 
 def _with_scale_columns(J, phi_a, psi, w):
-    """J with the columns d r / d c_r of the per-mode scales appended: non-zero only in the
-    shape rows (block structure), zero in the frequency, mass and prior rows."""
+    """Append to J the columns d r / d c_r of the per-mode scales.
+
+    They are non-zero only in the shape rows (block structure), zero in the frequency, mass
+    and prior rows.
+    """
     a, m = phi_a.shape
     rms = np.sqrt(np.mean(psi**2, axis=0))
     J_c = np.zeros((a * m, m))

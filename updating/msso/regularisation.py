@@ -33,6 +33,22 @@ Regularisation = LambdaRule | float | None
 
 @dataclass(frozen=True)
 class Spectrum:
+    """SVD data of a system C y = d needed for every lam.
+
+    Attributes
+    ----------
+    s : ndarray
+        Singular values, descending.
+    V : ndarray
+        (p, k) right singular vectors.
+    beta : ndarray
+        u_i^T d.
+    d_norm2 : float
+        |d|^2.
+    n_rows : int
+        Rows of C.
+    """
+
     s: np.ndarray  # singular values, descending
     V: np.ndarray  # (p, k) right singular vectors
     beta: np.ndarray  # u_i^T d
@@ -41,11 +57,30 @@ class Spectrum:
 
     @property
     def rank(self) -> int:
+        """Return the numerical rank: singular values above RANK_TOL times the largest."""
         return int(np.sum(self.s > RANK_TOL * self.s[0])) if self.s.size else 0
 
 
 @dataclass(frozen=True)
 class RegularisedSolution:
+    """A regularised least-squares solution and its diagnostics.
+
+    Attributes
+    ----------
+    y : ndarray
+        The solution.
+    lam : float
+        The Tikhonov parameter used.
+    rank : int
+        Numerical rank of the system.
+    residual_norm : float
+        |C y - d|.
+    singular_values : ndarray
+        The system's singular values.
+    bounded : bool
+        Whether the bounded solve was used (the unbounded solution violated a bound).
+    """
+
     y: np.ndarray
     lam: float
     rank: int
@@ -91,7 +126,7 @@ def _grid(sp_: Spectrum, n: int = 200) -> np.ndarray:
 
 
 def gcv_lambda(sp_: Spectrum) -> float:
-    """lam minimising the generalised cross-validation function."""
+    """Return the lam minimising the generalised cross-validation function."""
     lams = _grid(sp_)
     scores = []
     for lam in lams:
@@ -101,7 +136,7 @@ def gcv_lambda(sp_: Spectrum) -> float:
 
 
 def lcurve_lambda(sp_: Spectrum) -> float:
-    """lam at the L-curve corner (largest curvature of log residual vs log solution norm)."""
+    """Return the lam at the L-curve corner (largest curvature of log residual vs log norm)."""
     lams = _grid(sp_)
     rho, eta = [], []
     for lam in lams:

@@ -46,28 +46,35 @@ class ElementUpdate:
 
     @property
     def alpha_trans(self) -> np.ndarray:
+        """Return the translational mass factors."""
         return self.factors.alpha_trans
 
     @property
     def alpha_rot(self) -> np.ndarray:
+        """Return the rotary inertia factors."""
         return self.factors.alpha_rot
 
     @property
     def beta_bend(self) -> np.ndarray:
+        """Return the bending stiffness factors."""
         return self.factors.beta_bend
 
     @property
     def beta_shear(self) -> np.ndarray:
+        """Return the shear stiffness factors."""
         return self.factors.beta_shear
 
     @property
     def rank(self) -> int:
+        """Return the rank of the MSSO system."""
         return self.msso.rank
 
 
 def mass_normalise(model: BatModel, test: MeasuredModes, n_rigid: int = 2) -> MeasuredModes:
-    """Scale unscaled test shapes to unit modal mass with the SEREP-reduced reference mass:
-    psi_r / sqrt(psi_r^T M_a psi_r), M_a = T^T M T."""
+    """Scale unscaled test shapes to unit modal mass with the SEREP-reduced reference mass.
+
+    psi_r / sqrt(psi_r^T M_a psi_r), M_a = T^T M T.
+    """
     Phi = model_modes(model).shapes
     dofs = dofs_at(model, test.x_m)
     _, T = paired_serep(Phi, test.shapes, dofs, n_rigid)
@@ -78,8 +85,11 @@ def mass_normalise(model: BatModel, test: MeasuredModes, n_rigid: int = 2) -> Me
 
 def _run(model, test, groups_kw, msso_kw, expansions, do_refine, mass_normalised, sigmas,
          prior_sigma, scaled: MeasuredModes | None = None):
-    """Expansion passes and the refinement; ``scaled``: ``test`` already mass-normalised
-    (``mass_normalise``, when the caller has it), else normalised here if need be."""
+    """Run the expansion passes and the refinement.
+
+    ``scaled``: ``test`` already mass-normalised (``mass_normalise``, when the caller has it),
+    else normalised here if need be.
+    """
     refine_groups = choose_groups(model, groups_kw.pop("refine_stiffness"),
                                   groups_kw.pop("refine_mass"))
     n_rigid = 2
