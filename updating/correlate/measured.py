@@ -1,5 +1,6 @@
-"""Measured modes as the updating stage consumes them (from any fitter), and where their
-points sit on a model's mesh.
+"""Measured modes as the updating stage consumes them, and where their points sit on a mesh.
+
+The modes may come from any fitter.
 
 ``MeasuredModes`` is the one measured mode-set type of ``updating``: ``from_fit`` converts an
 ``ema`` modal fit (``ema.modal_fit.ModalFit``) into it, ``sampled_modes`` turns a model's modes at
@@ -21,7 +22,8 @@ from updating.model.modes import Modes
 class MeasuredModes:
     """Identified elastic modes of one test.
 
-    Attributes:
+    Attributes
+    ----------
         freq_hz: (m,) natural frequencies, Hz, ascending.
         shapes: (n_points, m) real mass-normalised shapes at the impact points, 1/sqrt(kg).
         x_m: (n_points,) positions of the points from the knob end, m.
@@ -48,7 +50,7 @@ class MeasuredModes:
         return (2 * np.pi * np.asarray(self.freq_hz)) ** 2
 
     def select(self, idx) -> MeasuredModes:
-        """A subset of the modes."""
+        """Return a subset of the modes."""
         idx = np.asarray(idx)
         std = None if self.freq_std_hz is None else self.freq_std_hz[idx]
         return MeasuredModes(self.freq_hz[idx], self.shapes[:, idx], self.x_m,
@@ -56,9 +58,11 @@ class MeasuredModes:
 
 
 def from_fit(fit, sensor_x_m: float, min_hz: float = 20.0) -> MeasuredModes:
-    """Elastic modes (above ``min_hz``) of an ``ema`` modal fit (duck-typed: freq_hz,
-    damping_ratio, real_shapes, x_m, optional freq_std_hz and the mass line);
-    ``sensor_x_m`` is the driving point's position."""
+    """Convert an ``ema`` modal fit into its elastic modes above ``min_hz``.
+
+    The fit is duck-typed: freq_hz, damping_ratio, real_shapes, x_m, optional freq_std_hz and
+    the mass line; ``sensor_x_m`` is the driving point's position.
+    """
     keep = np.flatnonzero(np.asarray(fit.freq_hz) >= min_hz)
     std = getattr(fit, "freq_std_hz", None)
     return MeasuredModes(
@@ -68,10 +72,12 @@ def from_fit(fit, sensor_x_m: float, min_hz: float = 20.0) -> MeasuredModes:
 
 
 def driving_mass_line(fit) -> np.ndarray | None:
-    """The driving point's row of the rigid-body flexibility at the shape nodes (1/kg): from
-    the suspension modes when the fit has two (sum_s phi_s(x) phi_s(x_d)), else the lower
-    residual's row (``ema.modal_fit.ModalFit.mass_line``); None without a driving point or
-    when neither is there."""
+    """Return the driving point's row of the rigid-body flexibility at the shape nodes (1/kg).
+
+    From the suspension modes when the fit has two (sum_s phi_s(x) phi_s(x_d)), else the lower
+    residual's row (``ema.modal_fit.ModalFit.mass_line``); None without a driving point or when
+    neither is there.
+    """
     d = getattr(fit, "driving_index", None)
     frf = getattr(fit, "driving_frf", None)
     if d is None or frf is None:
@@ -91,8 +97,10 @@ def driving_mass_line(fit) -> np.ndarray | None:
 
 
 def sampled_modes(modes: Modes, dofs: np.ndarray, node_x_m: np.ndarray) -> MeasuredModes:
-    """A model's modes read at translational ``dofs`` (2 x node index) as a noise-free test:
-    shapes ``modes.shapes[dofs]`` at x = ``node_x_m[dofs // 2]``, no damping, no sensor."""
+    """Read a model's modes at translational ``dofs`` (2 x node index) as a noise-free test.
+
+    Shapes ``modes.shapes[dofs]`` at x = ``node_x_m[dofs // 2]``, no damping, no sensor.
+    """
     dofs = np.asarray(dofs, dtype=int)
     f = np.asarray(modes.freq_hz, dtype=float)
     return MeasuredModes(f, np.asarray(modes.shapes)[dofs], np.asarray(node_x_m)[dofs // 2],
@@ -109,7 +117,7 @@ def with_noise(test: MeasuredModes, shape_sigma: float, freq_sigma: float,
 
 
 def dofs_at(model: BatModel, x_m, tol_m: float = 1e-6) -> np.ndarray:
-    """Translational DOFs of the nodes at x_m (each must be a mesh node within tol_m)."""
+    """Return the translational DOFs of the nodes at x_m (each must be a mesh node within tol_m)."""
     x = np.atleast_1d(np.asarray(x_m, dtype=float))
     node = np.abs(model.node_x_m[None, :] - x[:, None]).argmin(axis=1)
     bad = np.flatnonzero(np.abs(model.node_x_m[node] - x) > tol_m)

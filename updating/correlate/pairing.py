@@ -29,8 +29,11 @@ from ema.shapes.mac import mac
 
 @dataclass(frozen=True)
 class ModePairs:
-    """Mode ``index_a[k]`` of set a pairs with mode ``index_b[k]`` of set b with MAC ``mac[k]``;
-    ascending in ``index_a``. Unpacks as ``(index_a, index_b, mac)``."""
+    """Mode pairs of two mode sets by MAC.
+
+    Mode ``index_a[k]`` of set a pairs with mode ``index_b[k]`` of set b with MAC ``mac[k]``;
+    ascending in ``index_a``. Unpacks as ``(index_a, index_b, mac)``.
+    """
 
     index_a: np.ndarray
     index_b: np.ndarray
@@ -41,6 +44,7 @@ class ModePairs:
 
     @property
     def size(self) -> int:
+        """Return the number of pairs."""
         return int(self.index_a.size)
 
 

@@ -75,9 +75,10 @@ def serep(basis_n: np.ndarray, dofs_a: np.ndarray) -> Serep:
 
 def paired_serep(model_shapes: np.ndarray, test_shapes: np.ndarray, dofs_a: np.ndarray,
                  n_rigid: int) -> tuple[np.ndarray, Serep]:
-    """SEREP on the test's own modes: the basis is the ``n_rigid`` rigid-body (or suspension)
-    modes and the model modes paired with the test modes by MAC at ``dofs_a``
-    (``correlate.pairing.paired_elastic``).
+    """Build SEREP on the test's own modes.
+
+    The basis is the ``n_rigid`` rigid-body (or suspension) modes and the model modes paired
+    with the test modes by MAC at ``dofs_a`` (``correlate.pairing.paired_elastic``).
 
     Parameters
     ----------

@@ -33,8 +33,10 @@ FINE_1D_M = 0.25 * IN_TO_M
 
 def beam_hz(profile: Profile, material: Material, n_modes: int,
             element_length_m: float | None = FINE_1D_M, stations_m=()) -> np.ndarray:
-    """Lowest n_modes elastic frequencies of the free-free 1D Timoshenko beam (0.25 in
-    elements unless a mesh is given: None is the reference's ~1 in grid)."""
+    """Compute the lowest n_modes elastic frequencies of the free-free 1D Timoshenko beam.
+
+    0.25 in elements unless a mesh is given (None is the reference's ~1 in grid).
+    """
     model = build_model(profile, material, beam="timoshenko", rotary_inertia=True,
                         element_length_m=element_length_m, stations_m=stations_m)
     return model_modes(model, n_modes + 2).elastic().freq_hz[:n_modes]
@@ -57,17 +59,21 @@ class PlaneCheck:
 
     @property
     def nominal_rms_pct(self) -> float:
+        """Return the RMS relative error of the nominal 1D frequencies against the 3D ones, %."""
         return float(100 * np.sqrt(np.mean((self.nominal_hz / self.solid_hz - 1) ** 2)))
 
     @property
     def calibrated_rms_pct(self) -> float:
+        """Return the RMS relative error of the calibrated 1D frequencies against the 3D ones, %."""
         return float(100 * np.sqrt(np.mean((self.calibrated_hz / self.solid_hz - 1) ** 2)))
 
     @property
     def corrections(self) -> np.ndarray:
-        """c_r = f_3D / f_1D(nominal) - 1: against the beam with the solid's own E_L and E/G,
-        so that a 1D model carrying them and fitted to a test estimates the physical E and
-        E/G (against the calibrated beam it would estimate the beam's biased ones)."""
+        """Return c_r = f_3D / f_1D(nominal) - 1 against the beam with the solid's own E_L and E/G.
+
+        So a 1D model carrying them and fitted to a test estimates the physical E and E/G (against
+        the calibrated beam it would estimate the beam's biased ones).
+        """
         return self.solid_hz / self.nominal_hz - 1
 
 
@@ -90,8 +96,11 @@ def calibrate(profile: Profile, target_hz: np.ndarray, start: Material) -> Mater
 def check_plane(profile: Profile, modes: SolidModes, wood: OrthotropicWood, plane: str,
                 n_modes: int, nu: float, shear_coefficient: str,
                 mesh: tuple[float | None, tuple] = (FINE_1D_M, ())) -> PlaneCheck:
-    """Compare the first n_modes bending modes of one plane; ``mesh`` (element length,
-    stations) of the 1D nominal beam (the calibration always uses the fine mesh)."""
+    """Compare the first n_modes bending modes of one plane, 3D against 1D.
+
+    ``mesh`` (element length, stations) is the 1D nominal beam's (the calibration always uses
+    the fine mesh).
+    """
     f3 = modes.bending_hz(plane)[:n_modes]
     if f3.size < n_modes:
         raise ValueError(f"the solid gave only {f3.size} bending modes in plane {plane}; "
@@ -123,10 +132,12 @@ def beam_corrections(profile: Profile, wood: OrthotropicWood, n_modes: int = 8,
                      n_axial: int = 40, n_section: int = 2, n_ring: int = 1, nu: float = 0.3,
                      shear_coefficient: str = "cowper", progress: bool = False,
                      mesh: tuple[float | None, tuple] = (FINE_1D_M, ())) -> np.ndarray:
-    """Per-mode corrections (2, n_modes) for a 1D reference, a row per bending plane (y: the
-    L-R plane, z: L-T): f_3D / f_1D(nominal) - 1 (planar grain), the 1D beam on ``mesh``
-    (element length or None for the ~1 in grid, stations): the reference's own mesh, so
-    that its discretisation error is corrected too."""
+    """Compute per-mode corrections (2, n_modes) for a 1D reference, a row per bending plane.
+
+    Rows y: the L-R plane, z: L-T. c = f_3D / f_1D(nominal) - 1 (planar grain), the 1D beam on
+    ``mesh`` (element length or None for the ~1 in grid, stations): the reference's own mesh,
+    so that its discretisation error is corrected too.
+    """
     checks = solid_check(profile, wood, n_modes, n_axial, n_section, n_ring, "planar", nu,
                          shear_coefficient, progress, mesh)
     return np.array([c.corrections for c in checks])

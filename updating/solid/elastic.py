@@ -58,7 +58,7 @@ class OrthotropicWood:
 
 
 def isotropic(E_pa: float, rho_kg_m3: float, nu: float) -> OrthotropicWood:
-    """An isotropic material in the same form (E/G = 2 (1 + nu))."""
+    """Return an isotropic material in the same form (E/G = 2 (1 + nu))."""
     r = 2 * (1 + nu)
     return OrthotropicWood(E_pa, rho_kg_m3, r, r, 1.0, 1.0, 1 / r, nu, nu, nu)
 
@@ -67,8 +67,11 @@ VOIGT = ((0, 0), (1, 1), (2, 2), (1, 2), (0, 2), (0, 1))
 
 
 def rotate_voigt(D: np.ndarray, R: np.ndarray) -> np.ndarray:
-    """Stiffness D (6x6, material axes) in global axes, R (..., 3, 3) with columns the
-    material axes in global components: C'_ijkl = R_ia R_jb R_kc R_ld C_abcd."""
+    """Rotate a stiffness D (6x6, material axes) into global axes.
+
+    R (..., 3, 3) has columns the material axes in global components:
+    C'_ijkl = R_ia R_jb R_kc R_ld C_abcd.
+    """
     C = np.zeros((3, 3, 3, 3))
     for I, (i, j) in enumerate(VOIGT):
         for J, (k, l) in enumerate(VOIGT):

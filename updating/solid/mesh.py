@@ -59,7 +59,7 @@ def reference_section_mesh(n: int, m: int, z: np.ndarray) -> MeshHex:
 
 
 def disc_map(y: np.ndarray, z: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """The reference square to the unit disc (module docstring)."""
+    """Map the reference square to the unit disc (module docstring)."""
     c = INNER
     out_y = c * np.tan(y * np.pi / (4 * c))
     out_z = c * np.tan(z * np.pi / (4 * c))
@@ -80,8 +80,10 @@ def disc_map(y: np.ndarray, z: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 
 def axial_nodes(profile: Profile, n_axial: int, step_m: float) -> tuple[np.ndarray, np.ndarray]:
-    """(axial element boundaries, radius there) with boundaries at every station; steps
-    become tapers over step_m."""
+    """Return the axial element boundaries and the radius there.
+
+    Boundaries fall at every station; steps become tapers over step_m.
+    """
     x = profile.x_m.astype(float).copy()
     r = profile.diameter_m / 2
     for i in np.flatnonzero(np.diff(x) == 0):

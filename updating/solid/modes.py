@@ -32,7 +32,8 @@ from updating.solid.elastic import OrthotropicWood, rotate_voigt
 class SolidModes:
     """Elastic modes of the solid, ascending.
 
-    Attributes:
+    Attributes
+    ----------
         freq_hz: (m,) all elastic frequencies found.
         kind: (m,) "bend_y", "bend_z", "axial" or "other".
         axis_x_m: (a,) positions of the axis nodes, sorted; axis_w: (a, m) the transverse
@@ -55,8 +56,10 @@ class SolidModes:
         return self.freq_hz[self.kind == f"bend_{plane}"]
 
     def one_plane(self) -> SolidModes:
-        """For an axisymmetric solid (both planes alike): one mode of each degenerate pair,
-        labelled "bend_y", the other "other"."""
+        """Keep one mode of each degenerate pair of an axisymmetric solid.
+
+        Both planes alike: one mode of each pair is labelled "bend_y", the other "other".
+        """
         kind = self.kind.astype(object).copy()
         bend = np.flatnonzero(np.char.startswith(self.kind.astype(str), "bend"))
         kind[bend] = "other"
@@ -134,10 +137,12 @@ def classify(u: np.ndarray, on_axis: np.ndarray) -> tuple[str, np.ndarray]:
 
 
 def rigid_body(M, doflocs: np.ndarray) -> tuple[float, float, float]:
-    """(mass, x_cg, pitch inertia about the centre of mass) in the x-y plane from the mass
-    matrix: with the rigid motions t (u_y = 1) and r (rotation about z through the origin:
-    u_x = -y, u_y = x), m = t^T M t, m x_cg = t^T M r, I_0 = r^T M r, I_cg = I_0 - m x_cg^2
-    (point masses and the sections' own rotary inertia included)."""
+    """Compute mass, x_cg and pitch inertia about the centre of mass in the x-y plane.
+
+    From the mass matrix, with the rigid motions t (u_y = 1) and r (rotation about z through
+    the origin: u_x = -y, u_y = x): m = t^T M t, m x_cg = t^T M r, I_0 = r^T M r,
+    I_cg = I_0 - m x_cg^2 (point masses and the sections' own rotary inertia included).
+    """
     n = doflocs.shape[1]
     t = np.zeros(3 * n)
     t[1::3] = 1.0
