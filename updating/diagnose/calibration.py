@@ -49,23 +49,37 @@ from updating.lsq import covariance, solve_bounded
 class Observations:
     """The measured data a fit matches.
 
-    Attributes:
-        freq_hz: (m,) paired elastic frequencies, Hz.
-        shapes: (n_points, m) their mass-normalised shapes at the test points.
-        model_index: (m,) the paired elastic mode of the model (0 = first elastic).
-        sigma_f: relative frequency uncertainty (residual scale).
-        sigma_s: uncertainty of a shape entry relative to its mode's RMS.
-        suspension_hz: (<= 2,) measured suspension (rigid-body) frequencies, Hz.
-        sigma_b: their relative uncertainty.
-        code: (m,) 0 / 1: the larger / smaller member of a split pair (two bending planes
-            seen), 2: a mode seen once; None: all seen once.
-        combined: (n_points, m) for the larger member of a pair its shape scaled to carry
-            the pair's amplitude sqrt(|y_1|^2 + |y_2|^2) (what a one-plane model predicts),
-            else the measured shape; None: the shapes.
-        mass_line: (n_points,) measured mass line at the test points, 1/kg, or None.
-        sigma_ml: its standard uncertainty per point, 1/kg.
-        sensor_prior_g: the accelerometer's mass from the lab's data sheet, g, or None.
-        sigma_prior_g: its standard uncertainty, g.
+    Attributes
+    ----------
+    freq_hz : np.ndarray
+        (m,) paired elastic frequencies, Hz.
+    shapes : np.ndarray
+        (n_points, m) their mass-normalised shapes at the test points.
+    model_index : np.ndarray
+        (m,) the paired elastic mode of the model (0 = first elastic).
+    sigma_f : float
+        Relative frequency uncertainty (residual scale).
+    sigma_s : float
+        Uncertainty of a shape entry relative to its mode's RMS.
+    suspension_hz : np.ndarray
+        (<= 2,) measured suspension (rigid-body) frequencies, Hz.
+    sigma_b : float
+        Their relative uncertainty.
+    code : np.ndarray | None
+        (m,) 0 / 1: the larger / smaller member of a split pair (two bending planes seen), 2: a
+        mode seen once; None: all seen once.
+    combined : np.ndarray | None
+        (n_points, m) for the larger member of a pair its shape scaled to carry the pair's
+        amplitude sqrt(|y_1|^2 + |y_2|^2) (what a one-plane model predicts), else the measured
+        shape; None: the shapes.
+    mass_line : np.ndarray | None
+        (n_points,) measured mass line at the test points, 1/kg, or None.
+    sigma_ml : float
+        Its standard uncertainty per point, 1/kg.
+    sensor_prior_g : float | None
+        The accelerometer's mass from the lab's data sheet, g, or None.
+    sigma_prior_g : float
+        Its standard uncertainty, g.
     """
 
     freq_hz: np.ndarray
@@ -84,10 +98,12 @@ class Observations:
 
     @property
     def n_model_modes(self) -> int:
+        """Return the number of model elastic modes the pairing reaches (highest index + 1)."""
         return int(self.model_index.max()) + 1
 
     @property
     def codes(self) -> np.ndarray:
+        """Return the split-pair code of every mode (2, seen once, when ``code`` is None)."""
         return np.full(self.freq_hz.size, 2) if self.code is None else self.code
 
     @property
@@ -99,10 +115,20 @@ class Observations:
 def columns(
     sol: ModalSensitivities, obs: Observations,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """(model column of each measured mode, measured modes with a shape residual, their
-    measured shapes): a one-plane model predicts a pair once (the larger member, with the
-    pair's combined shape), the two-plane model each member (module docstring of
-    updating.diagnose.model)."""
+    """Map measured modes to model columns.
+
+    A one-plane model predicts a pair once (the larger member, with the pair's combined
+    shape), the two-plane model each member (module docstring of updating.diagnose.model).
+
+    Returns
+    -------
+    model_column : ndarray
+        The model column of each measured mode.
+    shape_modes : ndarray
+        The measured modes with a shape residual.
+    shapes : ndarray
+        Their measured shapes.
+    """
     code = obs.codes
     if sol.n_planes == 2:
         k = sol.elastic_hz.size // 3
@@ -117,18 +143,31 @@ def columns(
 class DiagnosisFit:
     """One fitted model: its extensions, parameters, modes and residuals.
 
-    Attributes:
-        active: the extensions switched on.
-        state: fitted parameter values (inactive ones as given).
-        names: the free parameters; x their values; cov their covariance.
-        model_hz: (m,) model frequencies of the paired modes; mac: (m,) MAC with measured.
-        shapes: (n_points, m) the model's mass-normalised shapes of the paired modes.
-        rms_pct: RMS of 100 (f_model / f_measured - 1) over the paired modes.
-        ssr_freq, ssr_shape: sums of squared frequency and shape residuals (the
-            suspension residuals, present only with that extension, are left out so that
-            fits of different extensions compare).
-        ssr_mass: sum of squared mass-line and data-sheet residuals (present in every fit).
-        mass_line: (n_points,) the model's mass line at the test points, 1/kg.
+    Attributes
+    ----------
+    active : frozenset[str]
+        The extensions switched on.
+    state : State
+        Fitted parameter values (inactive ones as given).
+    names : tuple[str, ...]
+        The free parameters.
+    x, cov : np.ndarray
+        Their values and their covariance.
+    model_hz : np.ndarray
+        (m,) model frequencies of the paired modes.
+    mac : np.ndarray
+        (m,) their MAC with the measured shapes.
+    shapes : np.ndarray
+        (n_points, m) the model's mass-normalised shapes of the paired modes.
+    rms_pct : float
+        RMS of 100 (f_model / f_measured - 1) over the paired modes.
+    ssr_freq, ssr_shape : float
+        Sums of squared frequency and shape residuals (the suspension residuals, present only
+        with that extension, are left out so that fits of different extensions compare).
+    ssr_mass : float
+        Sum of squared mass-line and data-sheet residuals (present in every fit).
+    mass_line : np.ndarray | None
+        (n_points,) the model's mass line at the test points, 1/kg.
     """
 
     active: frozenset[str]
@@ -150,7 +189,7 @@ class DiagnosisFit:
         return (self.ssr_freq + self.ssr_shape + self.ssr_mass) / sigma_f**2
 
     def std(self, name: str) -> float:
-        """Standard uncertainty of a free parameter (in its own units: ln or grams or kN/m)."""
+        """Return a free parameter's standard uncertainty (its own units: ln, grams or kN/m)."""
         i = self.names.index(name)
         return float(np.sqrt(max(self.cov[i, i], 0.0)))
 
@@ -185,8 +224,19 @@ def scale_residuals(
     setup: Setup, active: frozenset[str], state: State, names: tuple[str, ...],
     obs: Observations,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """(residuals, Jacobian (N, p), the model's mass line) of the mass line and the
-    data-sheet accelerometer mass (module docstring); empty when neither is given."""
+    """Build the residuals of the mass line and of the data-sheet accelerometer mass.
+
+    See the module docstring; empty when neither is given.
+
+    Returns
+    -------
+    residuals : ndarray
+        The residuals.
+    jacobian : ndarray
+        (N, p) their derivatives.
+    mass_line : ndarray
+        The model's mass line.
+    """
     g, dg = rigid_flexibility(setup, active, state, names)
     res, jac = [np.zeros(0)], [np.zeros((0, len(names)))]
     if obs.mass_line is not None:
@@ -251,10 +301,12 @@ def fit_model(
 
 
 def shape_sigma(fit: DiagnosisFit, obs: Observations, floor: float) -> float:
-    """Random scatter of the measured shape entries about a fitted model's, relative to each
-    mode's RMS, once each mode's own scale q is taken out (so a wrong mass scale does not
-    pass for noise): median over modes of |y - q u| / |y| sqrt(n / (n - 1)), at least
-    ``floor``."""
+    """Estimate the random scatter of the measured shape entries about a fitted model's.
+
+    Relative to each mode's RMS, once each mode's own scale q is taken out (so a wrong mass
+    scale does not pass for noise): median over modes of |y - q u| / |y| sqrt(n / (n - 1)),
+    at least ``floor``.
+    """
     u, y = fit.shapes, obs.shapes
     q = np.sum(u * y, axis=0) / np.sum(u * u, axis=0)
     n = y.shape[0]

@@ -70,16 +70,24 @@ BUNGEE_FROM_END_M = IN_TO_M  # as BatReference places them
 class Setup:
     """What is known of one bat before any fit: profile, handbook wood, scale weight, test.
 
-    Attributes:
-        profile: caliper profile.
-        handbook: the species' handbook material (E, rho; isotropic E/G).
-        weight_kg: the bat's weight on a scale (accelerometer not mounted), or None.
-        points_m: impact points from the knob end, m.
-        sensor_x_m: the accelerometer (driving point) position, m.
-        fine_element_m: element length of the 'geometry' extension, m.
-        solid_corrections: (k,) or (2, k) per-mode frequency corrections c_r of the 1D beam
-            measured against a 3D solid (updating.solid.compare; a row per bending plane), or
-            None ('beam_theory' not tried).
+    Attributes
+    ----------
+    profile : Profile
+        Caliper profile.
+    handbook : Material
+        The species' handbook material (E, rho; isotropic E/G).
+    weight_kg : float | None
+        The bat's weight on a scale (accelerometer not mounted), or None.
+    points_m : np.ndarray
+        Impact points from the knob end, m.
+    sensor_x_m : float
+        The accelerometer (driving point) position, m.
+    fine_element_m : float
+        Element length of the 'geometry' extension, m.
+    solid_corrections : np.ndarray | None
+        (k,) or (2, k) per-mode frequency corrections c_r of the 1D beam measured against a 3D
+        solid (updating.solid.compare; a row per bending plane), or None ('beam_theory' not
+        tried).
     """
 
     profile: Profile
@@ -135,6 +143,10 @@ def free_parameters(active: frozenset[str], setup: Setup) -> tuple[str, ...]:
 
 
 def to_vector(state: State, names: tuple[str, ...]) -> np.ndarray:
+    """Return the values of the free parameters ``names`` of ``state``, in fit units.
+
+    ln E, ln rho, ln E/G, sensor grams, bungee kN/m, ln g_ratio, theta (rad).
+    """
     value = {"ln_E": np.log(state.E_pa), "ln_rho": np.log(state.rho_kg_m3),
              "ln_e_over_g": np.log(state.e_over_g), "sensor_g": 1e3 * state.sensor_mass_kg,
              "bungee_kn_per_m": 1e-3 * state.bungee_k_n_per_m,
@@ -143,6 +155,7 @@ def to_vector(state: State, names: tuple[str, ...]) -> np.ndarray:
 
 
 def from_vector(state: State, names: tuple[str, ...], x: np.ndarray) -> State:
+    """Return ``state`` with the free parameters ``names`` set from ``x`` (fit units)."""
     changes = {}
     for n, v in zip(names, x, strict=True):
         if n == "ln_E":
@@ -170,7 +183,7 @@ BOUNDS = {"ln_E": (np.log(1e8), np.log(1e11)), "ln_rho": (np.log(50.0), np.log(3
 
 
 def effective_state(setup: Setup, active: frozenset[str], state: State) -> State:
-    """The values the model of ``active`` really uses (nominal ones where an extension is off)."""
+    """Return the values the model of ``active`` really uses (nominal where an extension is off)."""
     hb = setup.handbook
     rho = hb.rho_kg_m3
     if "density" in active:
@@ -188,8 +201,10 @@ def effective_state(setup: Setup, active: frozenset[str], state: State) -> State
 
 def reference_of(setup: Setup, active: frozenset[str], state: State,
                  plane: int = 0) -> BatReference:
-    """The calibrated reference (updating.model.reference) of a fitted model; ``plane`` 1:
-    the model of the second bending plane (E/G times g_ratio)."""
+    """Build the calibrated reference (updating.model.reference) of a fitted model.
+
+    ``plane`` 1: the model of the second bending plane (E/G times g_ratio).
+    """
     s = effective_state(setup, active, state)
     shear = "shear_deformation" in active or "two_planes" in active
     two = "two_planes" in active
@@ -209,7 +224,7 @@ def reference_of(setup: Setup, active: frozenset[str], state: State,
 
 
 def build(setup: Setup, active: frozenset[str], state: State, plane: int = 0) -> BatModel:
-    """The FE model of the extensions ``active`` with parameter values ``state``."""
+    """Build the FE model of the extensions ``active`` with parameter values ``state``."""
     ref = reference_of(setup, active, state, plane)
     fine = "geometry" in active
     return ref.build(setup.profile, stations_m=setup.points_m if fine else (),
@@ -220,15 +235,22 @@ def build(setup: Setup, active: frozenset[str], state: State, plane: int = 0) ->
 class ModalSensitivities:
     """Modes of one model and their sensitivities to the free parameters.
 
-    Attributes:
-        elastic_hz: (k,) elastic frequencies (the two lowest modes, rigid or suspension,
-            excluded), Hz.
-        low_hz: (2,) the two lowest (suspension) frequencies, Hz; ~0 when free-free.
-        shapes: (n_points, k) mass-normalised elastic shapes at the test points.
-        dlnf: (p, k) d ln f / d parameter of the elastic modes.
-        dlnf_low: (p, 2) the same for the two lowest modes.
-        dshapes: (p, n_points, k) d shape / d parameter at the test points.
-        n_planes: 2 for the two-plane model, whose columns are 3 k (module docstring).
+    Attributes
+    ----------
+    elastic_hz : np.ndarray
+        (k,) elastic frequencies (the two lowest modes, rigid or suspension, excluded), Hz.
+    low_hz : np.ndarray
+        (2,) the two lowest (suspension) frequencies, Hz; ~0 when free-free.
+    shapes : np.ndarray
+        (n_points, k) mass-normalised elastic shapes at the test points.
+    dlnf : np.ndarray
+        (p, k) d ln f / d parameter of the elastic modes.
+    dlnf_low : np.ndarray
+        (p, 2) the same for the two lowest modes.
+    dshapes : np.ndarray
+        (p, n_points, k) d shape / d parameter at the test points.
+    n_planes : int
+        2 for the two-plane model, whose columns are 3 k (module docstring).
     """
 
     elastic_hz: np.ndarray
@@ -243,7 +265,7 @@ class ModalSensitivities:
 def rigid_flexibility(
     setup: Setup, active: frozenset[str], state: State, names: tuple[str, ...] = (),
 ) -> tuple[np.ndarray, np.ndarray]:
-    """The model's mass line at the test points and its derivatives (p, n_points).
+    """Compute the model's mass line at the test points and its derivatives (p, n_points).
 
     The rigid-body flexibility of the free bat with its accelerometer (mass m_s at x_s, the
     driving point), the driving point's row (ema.shapes.mass_line):
@@ -278,8 +300,11 @@ def rigid_flexibility(
 
 
 def interpolation_matrix(model: BatModel, x_m: np.ndarray) -> np.ndarray:
-    """(P, n) matrix N with w(x_p) = N[p] @ dofs: the element shape functions N_w at each x
-    (vectorised updating.model.assembly.displacement_at)."""
+    """Build the (P, n) matrix N with w(x_p) = N[p] @ dofs.
+
+    The element shape functions N_w at each x (vectorised
+    updating.model.assembly.displacement_at).
+    """
     from updating.model.element import shape_functions
 
     x = np.asarray(x_m, dtype=float)
@@ -358,7 +383,7 @@ def solve_plane(
     setup: Setup, active: frozenset[str], state: State, n_elastic: int,
     names: tuple[str, ...], plane: int,
 ) -> ModalSensitivities:
-    """The modes of one bending plane's model with their sensitivities."""
+    """Solve the modes of one bending plane's model with their sensitivities."""
     model = build(setup, active, state, plane)
     K, M = assemble(model)
     modes = solve_modes(K, M)

@@ -35,8 +35,15 @@ def checked_pairing(
     freq_hz: np.ndarray, n_points: int, meas_idx: np.ndarray, model_idx: np.ndarray,
     macs: np.ndarray, n_model: int,
 ) -> tuple[np.ndarray, np.ndarray, list[str]]:
-    """(measured index, model index, warnings): the MAC pairing, or frequency order when the
-    shapes are unreliable (module docstring)."""
+    """Pair by MAC, or in frequency order when the shapes are unreliable (module docstring).
+
+    Returns
+    -------
+    measured_index, model_index : ndarray
+        The pairs.
+    warnings : list of str
+        What made the pairing doubtful.
+    """
     m = int(np.asarray(freq_hz).size)
     why = None
     if n_points < MIN_POINTS:
@@ -81,5 +88,5 @@ def pairing_warnings(fit: DiagnosisFit, model_index: np.ndarray, by_mac: bool) -
 
 
 def refuse_causes(warnings: list[str]) -> bool:
-    """True when a warning makes the pairing untrustworthy (module docstring)."""
+    """Return whether a warning makes the pairing untrustworthy (module docstring)."""
     return any(key in w for w in warnings for key in REFUSING)

@@ -1,4 +1,4 @@
-"""Rig check on a reference bar: do the measured modes, damping and scaling match the bar?
+"""Rig check on a reference bar: whether the measured modes, damping and scaling match it.
 
 The bar's model (updating.model.bar: free-free Timoshenko, its accelerometer at the driving
 point) is paired with the measured modes by MAC. Checks, each with its tolerance:
@@ -60,9 +60,11 @@ class RigCheck:
 
     @property
     def ok(self) -> bool:
+        """Return whether every check passed."""
         return all(c.ok for c in self.checks)
 
     def to_json_dict(self) -> dict:
+        """Return the rig check as a JSON-able dict: ok, the paired modes and the checks."""
         return {
             "ok": self.ok,
             "modes": [{"model_hz": float(m), "measured_hz": float(f),

@@ -77,10 +77,12 @@ class Step:
 
     @property
     def named(self) -> bool:
+        """Return whether the extension is named a cause."""
         return self.role == "cause"
 
     @property
     def gain_pct(self) -> float:
+        """Return the drop of the RMS frequency error the extension brought, percentage points."""
         return self.rms_before_pct - self.rms_after_pct
 
 
@@ -88,23 +90,35 @@ class Step:
 class Diagnosis:
     """Result of diagnose().
 
-    Attributes:
-        measured_hz: (m,) paired measured frequencies, Hz (ascending).
-        measured_index: (m,) their index in the measured modes.
-        model_index: (m,) the paired elastic mode of the model (0: the first).
-        nominal: fit of the nominal model (no parameters); extended: the calibrated model.
-        steps: the selection path, each extension with its measured gain, in the order added
-            (their gains add up to the drop from the nominal to the calibrated RMS error, up
-            to the small shifts when the shape weights are re-estimated),
-            then the extensions left out (role "rejected").
-        unpaired_hz: measured modes no model mode matched (MAC below the threshold).
-        min_gain_pct: naming threshold, percentage points.
-        reference: the calibrated reference (updating.model.reference.BatReference).
-        fine_element_m: element length of the 'geometry' extension, m.
-        warnings: what the diagnosis could not establish, one sentence each: pairing problems
-            (``updating.diagnose.pairing_check``; when one makes the pairing untrustworthy no
-            cause is named) and the limits of the calibration.
-        n_split: measured bending pairs with both planes' members seen.
+    Attributes
+    ----------
+    measured_hz : np.ndarray
+        (m,) paired measured frequencies, Hz (ascending).
+    measured_index : np.ndarray
+        (m,) their index in the measured modes.
+    model_index : np.ndarray
+        (m,) the paired elastic mode of the model (0: the first).
+    nominal, extended : DiagnosisFit
+        Fit of the nominal model (no parameters) and of the calibrated model.
+    steps : tuple[Step, ...]
+        The selection path, each extension with its measured gain, in the order added (their
+        gains add up to the drop from the nominal to the calibrated RMS error, up to the small
+        shifts when the shape weights are re-estimated), then the extensions left out (role
+        "rejected").
+    unpaired_hz : np.ndarray
+        Measured modes no model mode matched (MAC below the threshold).
+    min_gain_pct : float
+        Naming threshold, percentage points.
+    reference : BatReference
+        The calibrated reference (updating.model.reference.BatReference).
+    fine_element_m : float
+        Element length of the 'geometry' extension, m.
+    warnings : tuple[str, ...]
+        What the diagnosis could not establish, one sentence each: pairing problems
+        (``updating.diagnose.pairing_check``; when one makes the pairing untrustworthy no cause
+        is named) and the limits of the calibration.
+    n_split : int
+        Measured bending pairs with both planes' members seen.
     """
 
     measured_hz: np.ndarray
@@ -126,8 +140,10 @@ class Diagnosis:
         return tuple(sorted((s for s in self.steps if s.named), key=lambda s: -s.gain_pct))
 
     def cause_value(self, name: str) -> tuple[dict, dict]:
-        """(value, standard uncertainty) of a cause in the contract's units, from the
-        calibrated model."""
+        """Return a cause's value and standard uncertainty in the contract's units.
+
+        Both from the calibrated model.
+        """
         ref, fit = self.reference, self.extended
 
         def rel_std(par: str) -> float:
@@ -165,7 +181,7 @@ class Diagnosis:
         return {}, {}
 
     def to_json_dict(self) -> dict:
-        """The contract's `batlab diagnose` object (docs/contract.md) plus extra keys."""
+        """Return the contract's `batlab diagnose` object (docs/contract.md) plus extra keys."""
         ref = self.reference
         modes = [{"measured_hz": float(f), "nominal_hz": float(n), "extended_hz": float(e),
                   "mac": float(m)}
@@ -202,13 +218,17 @@ def observations(
     setup: Setup, measured: MeasuredModes, suspension_hz, min_mac: float,
     max_split: float = 0.12,
 ) -> tuple[Observations, np.ndarray, np.ndarray, list[str]]:
-    """Pair measured modes with the nominal model's; (observations, measured index, unpaired,
-    pairing notes).
+    """Pair measured modes with the nominal model's.
 
     One-to-one pairing by MAC first (or in frequency order when the shapes are unreliable:
     ``pairing_check``); with a MAC pairing, a measured mode left over whose shape matches an
     already paired model mode (MAC >= min_mac) within ``max_split`` in frequency of its
     partner is the other bending plane's member of that pair (a split pair).
+
+    Returns
+    -------
+    tuple
+        (observations, measured index, unpaired, pairing notes).
     """
     m = measured.freq_hz.size
     nominal = modal_sensitivities(setup, frozenset(), start_state(setup, suspension_hz), m + 4)
@@ -268,11 +288,14 @@ weight with a 0-15 g accelerometer gives: ~10 g at the barrel end, or a 3 % cali
 
 
 def checked_mass_line(setup: Setup, obs: Observations) -> tuple[Observations, list[str]]:
-    """The observations without their mass line (and why) when no accelerometer of 0 to
-    ``ML_SENSOR_MAX_KG`` on the bat of this profile and scale weight explains its value at the
-    driving point within ``ML_MISMATCH_REL``: FRFs off in calibration (sensitivity, units) or
-    without the rigid body's response. Fitted anyway, such a mass line would put the
-    accelerometer at a bound and pull E with it. Without a scale weight nothing is checked."""
+    """Set the test's mass line aside (and say why) when no accelerometer explains it.
+
+    Set aside when no accelerometer of 0 to ``ML_SENSOR_MAX_KG`` on the bat of this profile
+    and scale weight explains its value at the driving point within ``ML_MISMATCH_REL``: FRFs
+    off in calibration (sensitivity, units) or without the rigid body's response. Fitted
+    anyway, such a mass line would put the accelerometer at a bound and pull E with it.
+    Without a scale weight nothing is checked.
+    """
     if obs.mass_line is None or setup.weight_kg is None:
         return obs, []
     d = int(np.argmin(np.abs(setup.points_m - setup.sensor_x_m)))
@@ -292,12 +315,13 @@ def checked_mass_line(setup: Setup, obs: Observations) -> tuple[Observations, li
 
 
 def measured_mass_line(measured: MeasuredModes) -> tuple[np.ndarray | None, float]:
-    """(the test's mass line at the points, its standard uncertainty per point, 1/kg).
+    """Return the test's mass line at the points and its standard uncertainty per point, 1/kg.
 
     The driving point's row of the rigid-body flexibility is a straight line in x (ema.shapes
     .mass_line); its uncertainty is the scatter about the least-squares line, sqrt(SSR /
     (n - 2)), at least ``ML_SIGMA_FLOOR`` of its largest value. None with fewer than 4
-    points or no (or a non-finite) mass line."""
+    points or no (or a non-finite) mass line.
+    """
     a = measured.mass_line
     if a is None or np.size(a) != measured.x_m.size or measured.x_m.size < 4:
         return None, 1.0
@@ -311,8 +335,11 @@ def measured_mass_line(measured: MeasuredModes) -> tuple[np.ndarray | None, floa
 
 
 def start_state(setup: Setup, suspension_hz=None) -> State:
-    """Starting values: handbook wood, typical wood E/G, a 1 g sensor, bungees from the
-    lowest suspension mode (bounce of the whole mass on two springs) or 100 N/m."""
+    """Return the starting values of a fit.
+
+    Handbook wood, typical wood E/G, a 1 g sensor, bungees from the lowest suspension mode
+    (bounce of the whole mass on two springs) or 100 N/m.
+    """
     rho = setup.rho_from_weight or setup.handbook.rho_kg_m3
     k = 100.0
     if suspension_hz is not None and len(suspension_hz) and setup.weight_kg:
@@ -363,8 +390,10 @@ def forward_select(
 def backward_check(
     setup: Setup, obs: Observations, path: list[Step], final: DiagnosisFit, nameable, facts,
 ) -> tuple[list[Step], DiagnosisFit, list[Step]]:
-    """Re-test each named cause, smallest gain first, by removing it from the final model
-    (what was measured, ``facts``, stays in the model)."""
+    """Re-test each named cause, smallest gain first, by removing it from the final model.
+
+    What was measured, ``facts``, stays in the model.
+    """
     dropped: list[Step] = []
     for step in sorted((s for s in path if s.named), key=lambda s: s.gain_pct):
         without = fit_model(setup, final.active - {step.name}, obs, final.state)
@@ -393,10 +422,13 @@ POOR = {"ln_E": 0.01, "ln_rho": 0.02, "ln_e_over_g": 0.05, "sensor_g": 0.5,
 
 def mass_line_limits(setup: Setup, obs: Observations, final: DiagnosisFit,
                      set_aside: list[str]) -> list[str]:
-    """What the mass line says and what it cannot: its fit at the driving point, and the
-    accelerometer mass that a 1 % error of the FRFs' calibration (sensitivity) would move,
-    a systematic error the stated uncertainty does not hold. Without one: why
-    (``set_aside``, from ``checked_mass_line``, or that the test gave none)."""
+    """Say what the mass line establishes and what it cannot.
+
+    Its fit at the driving point, and the accelerometer mass that a 1 % error of the FRFs'
+    calibration (sensitivity) would move, a systematic error the stated uncertainty does not
+    hold. Without one: why (``set_aside``, from ``checked_mass_line``, or that the test gave
+    none).
+    """
     if obs.mass_line is None:
         return set_aside or [
             "the test gave no mass line (no driving point, or the fitted band reaches below "
@@ -419,9 +451,11 @@ def mass_line_limits(setup: Setup, obs: Observations, final: DiagnosisFit,
 
 
 def data_sheet_check(setup: Setup, obs: Observations, final: DiagnosisFit) -> list[str]:
-    """Whether the data agree with meta.json's accelerometer_mass_g: the calibrated model
-    refitted without it (sensor mass free) against the data sheet, within 2.5 combined
-    standard uncertainties."""
+    """Check whether the data agree with meta.json's accelerometer_mass_g.
+
+    The calibrated model refitted without it (sensor mass free) against the data sheet, within
+    2.5 combined standard uncertainties.
+    """
     if obs.sensor_prior_g is None:
         return []
     free = fit_model(setup, final.active | {"sensor_mass"}, replace(obs, sensor_prior_g=None),
@@ -438,8 +472,10 @@ def data_sheet_check(setup: Setup, obs: Observations, final: DiagnosisFit) -> li
 
 def limits(obs: Observations, final: DiagnosisFit, solid_tried: bool,
            setup: Setup, mass_line_set_aside: list[str]) -> tuple[str, ...]:
-    """What the calibrated model could not establish, in words (Diagnosis.warnings);
-    ``mass_line_set_aside``: why the test's mass line was not used (``checked_mass_line``)."""
+    """Say what the calibrated model could not establish (Diagnosis.warnings).
+
+    ``mass_line_set_aside``: why the test's mass line was not used (``checked_mass_line``).
+    """
     out = []
     code = obs.codes
     if obs.n_split == 0:
@@ -491,17 +527,27 @@ def diagnose(
 ) -> Diagnosis:
     """Diagnose a baseline test against the nominal model and calibrate the bat's reference.
 
-    Args:
-        profile: the caliper profile; meta: meta.json (handbook wood, scale weight).
-        measured: the baseline's elastic modes (mass-normalised shapes at the test points).
-        suspension_hz: measured rigid-body (suspension) frequencies below 20 Hz, or None.
-        min_gain_pct: an extension must lower the RMS frequency error by this much (pp) to be
-            named a cause.
-        min_mac: pairing threshold.
-        fine_element_m: element length of the 'geometry' extension.
-        shape_sigma_floor: least relative uncertainty of a measured shape entry.
-        solid_corrections: per-mode corrections c_r of the 1D beam against a 3D solid
-            (updating.solid.compare); 'beam_theory' is tried only with them.
+    Parameters
+    ----------
+    profile : Profile
+        The caliper profile.
+    meta : BatMeta
+        meta.json (handbook wood, scale weight).
+    measured : MeasuredModes
+        The baseline's elastic modes (mass-normalised shapes at the test points).
+    suspension_hz
+        Measured rigid-body (suspension) frequencies below 20 Hz, or None.
+    min_gain_pct : float
+        An extension must lower the RMS frequency error by this much (pp) to be named a cause.
+    min_mac : float
+        Pairing threshold.
+    fine_element_m : float
+        Element length of the 'geometry' extension.
+    shape_sigma_floor : float
+        Least relative uncertainty of a measured shape entry.
+    solid_corrections : np.ndarray | None
+        Per-mode corrections c_r of the 1D beam against a 3D solid (updating.solid.compare);
+        'beam_theory' is tried only with them.
     """
     if measured.shapes.shape[0] != measured.x_m.size:
         raise ValueError("measured shapes do not match the number of test points")

@@ -74,10 +74,18 @@ def element_parts(
 ) -> ElementParts:
     """Integrate the parts from P quadrature samples.
 
-    Args:
-        elem: (P,) element index of each sample; xi: (P,) local coordinate; weight_m: (P,)
-            quadrature weight in metres; ei, kga, rhoa, rhoi: (P,) section properties there.
-        length_m, phi: (e,) element lengths and shear parameters (phi = 0: Euler-Bernoulli).
+    Parameters
+    ----------
+    elem : np.ndarray
+        (P,) element index of each sample.
+    xi : np.ndarray
+        (P,) local coordinate of each sample.
+    weight_m : np.ndarray
+        (P,) quadrature weight, m.
+    ei, kga, rhoa, rhoi : np.ndarray
+        (P,) section properties at the samples.
+    length_m, phi : np.ndarray
+        (e,) element lengths and shear parameters (phi = 0: Euler-Bernoulli).
     """
     sf = shape_functions(xi, length_m[elem], phi[elem])
     n_el = length_m.size

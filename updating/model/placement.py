@@ -82,12 +82,17 @@ def suggest_points(
 ) -> PointLayout:
     """``n_points`` test points for a bat ``length_m`` long.
 
-    Args:
-        length_m: bat length.
-        shapes_at: callable x_m (k,) -> (k, m) transverse displacements of the target
-            (elastic) modes there, e.g. ``lambda x: displacement_at(model, shapes, x)``.
-        n_points: number of points, at least a barrel row plus MIN_FREE_POINTS.
-        n_modes: how many target modes EfI uses for the free points.
+    Parameters
+    ----------
+    length_m : float
+        Bat length.
+    shapes_at
+        Callable x_m (k,) -> (k, m) transverse displacements of the target (elastic) modes
+        there, e.g. ``lambda x: displacement_at(model, shapes, x)``.
+    n_points : int
+        Number of points, at least a barrel row plus MIN_FREE_POINTS.
+    n_modes : int
+        How many target modes EfI uses for the free points.
     """
     length_in = length_m / IN_TO_M
     for spacing in BARREL_SPACINGS_IN:

@@ -38,13 +38,20 @@ CORK_RATIO = (0.2, 0.4)
 class Alteration:
     """What was done to the bat, and the reading a perfect inspection would give.
 
-    Attributes:
-        kind: one of KINDS.
-        core: the model's core (the filled part).
-        cavities: further cavities (the empty part of a partial fill).
-        region_in: (start, end) of the whole altered stretch from the knob end, in.
-        diameter_in: hole diameter, in.
-        fill_density_ratio: length-weighted mean fill density / wood density over the region.
+    Attributes
+    ----------
+    kind : AlterationKind
+        One of KINDS.
+    core : Core
+        The model's core (the filled part).
+    cavities : tuple[Core, ...]
+        Further cavities (the empty part of a partial fill).
+    region_in : tuple[float, float]
+        (start, end) of the whole altered stretch from the knob end, in.
+    diameter_in : float
+        Hole diameter, in.
+    fill_density_ratio : float
+        Length-weighted mean fill density / wood density over the region.
     """
 
     kind: AlterationKind
@@ -74,7 +81,8 @@ def partial_fill(
     plug_in: float,
 ) -> Alteration:
     """A hole of ``hole_in`` behind the plug, its bottom ``filled_fraction`` filled, the rest
-    empty (an empty cavity between the fill and the plug)."""
+    empty (an empty cavity between the fill and the plug).
+    """
     filled = filled_fraction * hole_in
     empty_len = hole_in - filled
     core = Core(d_in * IN_TO_M, (hole_in + plug_in) * IN_TO_M, ratio, 0.0,

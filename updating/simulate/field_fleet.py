@@ -50,16 +50,23 @@ the end face (where its accelerometer sits)."""
 class FieldCase:
     """One bat's lab files (as objects) and the truth behind them.
 
-    Attributes:
-        profile: the caliper profile the lab has (noisy copy of the truth's).
-        meta: meta.json's content (handbook values, registered weight, points).
-        retest_meta: retest.json's content.
-        baseline, retest: the truth of the two tests (the re-test of ``other_bat`` is
-            another bat's).
-        freq_hz: the frequency lines of both tests.
-        integrity: None or one of INTEGRITY (a slip applied to the re-test file).
-        truth: JSON-able hidden truth (kind, expected answer, alteration, nuisances drawn,
-            true and measured weights and balance points).
+    Attributes
+    ----------
+    profile : Profile
+        The caliper profile the lab has (noisy copy of the truth's).
+    meta : dict
+        The content of meta.json (handbook values, registered weight, points).
+    retest_meta : dict
+        The content of retest.json.
+    baseline, retest : VirtualBat
+        The truth of the two tests (the re-test of ``other_bat`` is another bat's).
+    freq_hz : np.ndarray
+        The frequency lines of both tests.
+    integrity : Integrity | None
+        None or one of INTEGRITY (a slip applied to the re-test file).
+    truth : dict
+        JSON-able hidden truth (kind, expected answer, alteration, nuisances drawn, true and
+        measured weights and balance points).
     """
 
     profile: Profile
@@ -82,7 +89,8 @@ class FieldCase:
     @property
     def registration_conditions(self) -> dict:
         """What a lab may record at registration beside the weight (meta.json's optional
-        keys): the baseline's temperature and accelerometer mass, read as retest.json's."""
+        keys): the baseline's temperature and accelerometer mass, read as retest.json's.
+        """
         t_base = self.truth["drawn"].get("temperature", {}).get("baseline_c", 21.0)
         return {"temperature_c": round(t_base, 1),
                 "accelerometer_mass_g": round(1e3 * self.baseline.sensor_mass_kg, 2)}
@@ -107,7 +115,8 @@ def bare(bat: VirtualBat) -> VirtualBat:
 def lab_readings(rng: np.random.Generator, base: VirtualBat, retest: VirtualBat,
                  truth: dict) -> None:
     """Put the true and the scale's (noisy) weights and balance points of both tests into
-    ``truth`` (keys true_weight_lb, true_balance_in, lab_readings)."""
+    ``truth`` (keys true_weight_lb, true_balance_in, lab_readings).
+    """
     w_b, cg_b = scale_reading(bare(base))
     w_r, cg_r = scale_reading(bare(retest))
     truth["true_weight_lb"] = {"baseline": w_b, "retest": w_r}
@@ -120,7 +129,8 @@ def lab_readings(rng: np.random.Generator, base: VirtualBat, retest: VirtualBat,
 
 def no_barrel_points_in(length_in: float) -> np.ndarray:
     """A layout that cannot see the barrel: every 2 in up to 15 in, and the end face (where
-    the accelerometer goes)."""
+    the accelerometer goes).
+    """
     return np.append(np.arange(1.0, NO_BARREL[0], 2.0), np.floor(100 * length_in) / 100)
 
 
@@ -358,7 +368,8 @@ def alter_case(
 ) -> FieldCase:
     """The same bat and the same re-test conditions with ``alteration`` instead of the
     re-test's own (clean bats: a core added); weights, balance points and retest.json's
-    weight re-read. For paired studies: one baseline, many re-tests."""
+    weight re-read. For paired studies: one baseline, many re-tests.
+    """
     cup = case.baseline.cavities  # the baseline's cavities are the bat's own (the cup)
     retest = replace(case.retest, core=alteration.core, cavities=cup + alteration.cavities)
     truth = dict(case.truth, altered=True,
@@ -376,7 +387,8 @@ def write_retest(
     case: FieldCase, uff_path, json_path, seed: int, retest_meta_keys=None,
 ) -> Path | None:
     """Write the re-test's file (slip applied, noise ``seed``) and its retest.json (only the
-    ``retest_meta_keys`` given, default all; none: not written). The JSON's path or None."""
+    ``retest_meta_keys`` given, default all; none: not written). The JSON's path or None.
+    """
     write_test(uff_path, corrupt(simulate_test(case.retest, case.freq_hz, seed=seed),
                                  case.integrity))
     keys = list(case.retest_meta) if retest_meta_keys is None else list(retest_meta_keys)

@@ -74,7 +74,8 @@ def pro_profile(rng: np.random.Generator, caliper_noise_in: float = 0.0) -> Prof
 
 def random_retest(rng: np.random.Generator, base: VirtualBat, kind: Kind) -> VirtualBat:
     """The re-test weeks later: a random core of ``kind`` (or none), moisture drift up to
-    +-1 point, the accelerometer re-mounted up to 0.1 in from where it was."""
+    +-1 point, the accelerometer re-mounted up to 0.1 in from where it was.
+    """
     core = None
     if kind != "none":
         lo, hi = FILLS[kind]
@@ -115,7 +116,8 @@ def case_modes(
     case: Case, rng: np.random.Generator, n_modes: int = 6,
 ) -> tuple[MeasuredModes, MeasuredModes]:
     """Baseline and re-test modes with realistic noise (frequency 0.02-0.05 %, shape entries
-    1-2 % of the mode's RMS), as a good modal fit gives them."""
+    1-2 % of the mode's RMS), as a good modal fit gives them.
+    """
     out = []
     for bat in (case.baseline, case.retest):
         out.append(simulate_modes(bat, n_modes, freq_noise=rng.uniform(2e-4, 5e-4),
@@ -165,13 +167,18 @@ class LabCase:
     """A bat as a lab receives it: what it writes down (profile, meta) and the truth behind
     its two tests.
 
-    Attributes:
-        profile: the caliper profile (noisy copy of the truth's).
-        meta: meta.json's content: species handbook values (not the truth), the scale weight
-            of the real bat (no accelerometer on it), the test points.
-        baseline, retest: the truth of the two tests (re-test: moisture drift, accelerometer
-            re-mounted, and the core if altered).
-        kind: "none" or a fill in FILLS.
+    Attributes
+    ----------
+    profile : Profile
+        The caliper profile (noisy copy of the truth's).
+    meta : dict
+        The content of meta.json: species handbook values (not the truth), the scale weight of the
+        real bat (no accelerometer on it), the test points.
+    baseline, retest : VirtualBat
+        The truth of the two tests (re-test: moisture drift, accelerometer re-mounted, and the
+        core if altered).
+    kind : Kind
+        "none" or a fill in FILLS.
     """
 
     profile: Profile
@@ -215,7 +222,8 @@ def lab_case(rng: np.random.Generator, kind: Kind = "none", serial: str = "SIM-0
 
 def write_lab_files(case: LabCase, folder, seed: int, freq_hz=None) -> dict:
     """Write profile.csv, meta.json, baseline.uff and retest.uff (as `batlab simulate` writes
-    them) into ``folder``; returns their paths by name."""
+    them) into ``folder``; returns their paths by name.
+    """
     folder = Path(folder)
     freq = DEFAULT_FREQ_HZ if freq_hz is None else np.asarray(freq_hz, dtype=float)
     paths = {k: folder / n for k, n in (("profile", "profile.csv"), ("meta", "meta.json"),

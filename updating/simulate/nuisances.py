@@ -111,7 +111,8 @@ def draw_points(rng: np.random.Generator, length_in: float) -> np.ndarray:
 
 def draw_model_points(rng: np.random.Generator, profile, material) -> np.ndarray:
     """The layout `batlab model --points N` suggests (N 11-20) for the lab's profile and the
-    species' handbook wood (Timoshenko, E/G 14), in."""
+    species' handbook wood (Timoshenko, E/G 14), in.
+    """
     from updating.model.assembly import build_model, displacement_at
     from updating.model.modes import model_modes
     from updating.model.placement import suggest_points

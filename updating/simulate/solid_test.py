@@ -33,7 +33,8 @@ def suspension_modes(
     rigid: tuple[float, float, float], bungee_x_m: tuple[float, ...], k_n_per_m: float,
 ) -> tuple[np.ndarray, np.ndarray]:
     """(frequencies Hz (2,), mass-normalised [translation, rotation] vectors (2, 2)) of a
-    rigid body (mass, x_cg, I_cg) on transverse springs ``k_n_per_m`` at ``bungee_x_m``."""
+    rigid body (mass, x_cg, I_cg) on transverse springs ``k_n_per_m`` at ``bungee_x_m``.
+    """
     mass, cg, i_cg = rigid
     R = np.array([[mass, mass * cg], [mass * cg, i_cg + mass * cg**2]])
     K = sum(k_n_per_m * np.outer([1.0, x], [1.0, x]) for x in bungee_x_m)
@@ -48,7 +49,8 @@ def tap_test_frf(
     floor_noise: float = 1e-3, seed: int | None = None,
 ) -> FrfTest:
     """The roving-hammer test of the solid (module docstring): one FRF per point, the
-    accelerometer at ``points_m[sensor_index]`` (``modes`` solved with its mass there)."""
+    accelerometer at ``points_m[sensor_index]`` (``modes`` solved with its mass there).
+    """
     if modes.rigid is None:
         raise ValueError("the solid's modes carry no rigid-body properties")
     x = np.asarray(points_m, dtype=float)

@@ -52,25 +52,42 @@ def moisture_scales(moisture_pct: float) -> tuple[float, float]:
 class VirtualBat:
     """A physical bat and its test set-up.
 
-    Attributes:
-        profile, material: the real bat (true E, density, E/G).
-        points_m: impact points from the knob end, m (node numbers 1..n in this order).
-        sensor_index: which point carries the accelerometer (driving point); -1: nearest to
-            1 in from the barrel end.
-        sensor_offset_m: the accelerometer sits this far from its labelled point (re-mounting).
-        sensor_mass_kg: accelerometer (and cable) mass.
-        bungee_k_n_per_m: stiffness of each of the two bungees, 1 in from either end.
-        beam: beam theory of the truth model.
-        core: an alteration, or None.
-        moisture_pct: moisture-content change since registration, percentage points.
-        zeta1, zeta_exponent: damping ratio of mode r is zeta1 (f_r / f_1) ** zeta_exponent.
-        rel_noise, floor_noise: measurement noise (see rigs.virtual_test.simulate_frf).
-        element_length_m: mesh of the truth model.
-        wood: modulus and density factors along the bat (moisture profile, temperature,
-            billet), or None (uniform wood).
-        cavities: cavities besides ``core`` (``Core`` each; a cup has plug 0).
-        e_over_g_t: E/G of the tangential bending plane; None: one plane (``material``'s).
-        theta_deg: angle of hammer and accelerometer to the radial plane, degrees.
+    Attributes
+    ----------
+    profile, material
+        The real bat (true E, density, E/G).
+    points_m : np.ndarray
+        Impact points from the knob end, m (node numbers 1..n in this order).
+    sensor_index : int
+        Which point carries the accelerometer (driving point); -1: nearest to 1 in from the
+        barrel end.
+    sensor_offset_m : float
+        The accelerometer sits this far from its labelled point (re-mounting).
+    sensor_mass_kg : float
+        Accelerometer (and cable) mass.
+    bungee_k_n_per_m : float
+        Stiffness of each of the two bungees, 1 in from either end.
+    beam : Beam
+        Beam theory of the truth model.
+    core : Core | None
+        An alteration, or None.
+    moisture_pct : float
+        Moisture-content change since registration, percentage points.
+    zeta1, zeta_exponent : float
+        Damping ratio of mode r is zeta1 (f_r / f_1) ** zeta_exponent.
+    rel_noise, floor_noise : float
+        Measurement noise (see rigs.virtual_test.simulate_frf).
+    element_length_m : float
+        Mesh of the truth model.
+    wood : WoodField | None
+        Modulus and density factors along the bat (moisture profile, temperature, billet), or
+        None (uniform wood).
+    cavities : tuple[Core, ...]
+        Cavities besides ``core`` (``Core`` each; a cup has plug 0).
+    e_over_g_t : float | None
+        E/G of the tangential bending plane; None: one plane (``material``'s).
+    theta_deg : float
+        Angle of hammer and accelerometer to the radial plane, degrees.
     """
 
     profile: Profile
@@ -95,7 +112,8 @@ class VirtualBat:
 
     def planes(self) -> tuple[tuple[str, float], ...]:
         """(plane, weight) pairs of the measured FRF: cos^2 theta radial, sin^2 theta
-        tangential; one plane when ``e_over_g_t`` is None."""
+        tangential; one plane when ``e_over_g_t`` is None.
+        """
         if self.e_over_g_t is None:
             return (("radial", 1.0),)
         t = np.radians(self.theta_deg)
@@ -109,7 +127,8 @@ class VirtualBat:
 
     def sensor_x_m(self) -> float:
         """Where the accelerometer really sits: its labelled point plus the offset, kept on
-        the bat (a sensor on the end face cannot move past it)."""
+        the bat (a sensor on the end face cannot move past it).
+        """
         x = float(np.asarray(self.points_m, dtype=float)[self.sensor_point()])
         return float(np.clip(x + self.sensor_offset_m, 0.0, self.profile.length_m))
 
@@ -154,7 +173,8 @@ def modal_model(
     bat: VirtualBat, max_mode_hz: float = 12000.0, plane: str = "radial",
 ) -> tuple[ModalModel, np.ndarray]:
     """The truth's modes below ``max_mode_hz`` at the impact points, and the accelerometer's
-    own shape row (1, m) at its true position (which may be off its labelled point)."""
+    own shape row (1, m) at its true position (which may be off its labelled point).
+    """
     model = bat.truth_model(plane)
     modes = model_modes(model, n_modes=min(model.n_dof, 60))
     keep = modes.freq_hz <= max_mode_hz
@@ -172,7 +192,8 @@ def simulate_test(
     max_mode_hz: float = 12000.0,
 ) -> FrfTest:
     """Simulate the roving-hammer, fixed-accelerometer test of ``bat``: one FRF per point
-    (both bending planes weighted by ``bat.planes()``, then the noise)."""
+    (both bending planes weighted by ``bat.planes()``, then the noise).
+    """
     s = bat.sensor_point()
     points = np.asarray(bat.points_m, dtype=float)
     h = 0.0

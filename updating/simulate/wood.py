@@ -37,10 +37,14 @@ MOISTURE_MASS_PER_POINT = 0.01
 class WoodField:
     """Modulus and density factors sampled along the bat (linear interpolation between).
 
-    Attributes:
-        x_m: (n,) ascending positions from the knob end, m.
-        e_factor: (n,) factor on E and G there.
-        rho_factor: (n,) factor on density there.
+    Attributes
+    ----------
+    x_m : np.ndarray
+        (n,) ascending positions from the knob end, m.
+    e_factor : np.ndarray
+        (n,) factor on E and G there.
+    rho_factor : np.ndarray
+        (n,) factor on density there.
     """
 
     x_m: np.ndarray
@@ -95,7 +99,8 @@ def moisture_field(
     barrel_end_ratio: float = 1.0, decay_in: float = 2.0,
 ) -> WoodField:
     """Coupled E and density factors of a moisture change (``moisture_profile_pct``):
-    E x (1 - 0.02 dMC), density x (1 + 0.01 dMC)."""
+    E x (1 - 0.02 dMC), density x (1 + 0.01 dMC).
+    """
     x = grid_m(length_m)
     d = moisture_profile_pct(x, length_m, middle_pct, knob_end_ratio, barrel_end_ratio,
                              decay_in)
@@ -112,7 +117,8 @@ def billet_field(
 ) -> WoodField:
     """Smooth billet gradients: E x (1 + a_E g(x)), density x (1 + a_rho g(x)),
     g(x) = cos(pi x / L + phase), a half-wave across the bat (one end stiffer and denser
-    than the other when the amplitudes share a sign)."""
+    than the other when the amplitudes share a sign).
+    """
     x = grid_m(length_m)
     g = np.cos(np.pi * x / length_m + phase)
     return WoodField(x, 1 + e_amplitude * g, 1 + rho_amplitude * g)
@@ -120,7 +126,8 @@ def billet_field(
 
 def apply_wood_field(model: BatModel, field: WoodField | None) -> BatModel:
     """The model with its section properties multiplied by the field at every quadrature
-    sample (EI, kGA by the modulus factor; rhoA, rhoI by the density factor), rebuilt."""
+    sample (EI, kGA by the modulus factor; rhoA, rhoI by the density factor), rebuilt.
+    """
     if field is None:
         return model
     s = model.samples

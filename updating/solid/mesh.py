@@ -101,11 +101,16 @@ def bat_mesh(profile: Profile, n_axial: int = 40, n_section: int = 2, n_ring: in
              step_m: float = 0.0025) -> MeshHex2:
     """Quadratic (27-node) hexahedral mesh of the bat: x along the axis from the knob end.
 
-    Args:
-        n_axial: about this many elements along the bat (plus nodes at the stations).
-        n_section: cells per side of the inner square (the section has n^2 + 4 n m cells).
-        n_ring: radial cells in the ring.
-        step_m: length of the transition replacing a step, m.
+    Parameters
+    ----------
+    n_axial : int
+        About this many elements along the bat (plus nodes at the stations).
+    n_section : int
+        Cells per side of the inner square (the section has n^2 + 4 n m cells).
+    n_ring : int
+        Radial cells in the ring.
+    step_m : float
+        Length of the transition replacing a step, m.
     """
     if n_axial < 1 or n_section < 1 or n_ring < 1:
         raise ValueError("mesh divisions must be at least 1")
