@@ -62,6 +62,7 @@ class Alteration:
     fill_density_ratio: float
 
     def truth(self) -> dict:
+        """Return the JSON-able truth: kind, region (in), core diameter (in), fill density ratio."""
         return {"kind": self.kind, "region_in": [round(v, 3) for v in self.region_in],
                 "core_diameter_in": round(self.diameter_in, 4),
                 "fill_density_ratio": round(self.fill_density_ratio, 4)}
@@ -80,8 +81,9 @@ def partial_fill(
     length_in: float, d_in: float, hole_in: float, filled_fraction: float, ratio: float,
     plug_in: float,
 ) -> Alteration:
-    """A hole of ``hole_in`` behind the plug, its bottom ``filled_fraction`` filled, the rest
-    empty (an empty cavity between the fill and the plug).
+    """Make a hole of ``hole_in`` behind the plug, its bottom ``filled_fraction`` filled.
+
+    The rest is empty (an empty cavity between the fill and the plug).
     """
     filled = filled_fraction * hole_in
     empty_len = hole_in - filled
@@ -95,7 +97,7 @@ def partial_fill(
 def draw_alteration(
     rng: np.random.Generator, kind: AlterationKind, length_in: float, min_plug_in: float = 0.0,
 ) -> Alteration:
-    """A random alteration of ``kind`` (see the module's table) in a bat ``length_in`` long."""
+    """Draw a random alteration of ``kind`` (see the module's table) in a bat ``length_in`` long."""
     u = rng.uniform
     if kind == "cork":
         return end_bored(kind, length_in, u(0.5, 1.25), u(3.0, 12.0), u(*CORK_RATIO),

@@ -35,7 +35,7 @@ def cavity_stations_m(cavities: tuple[Core, ...], length_m: float) -> np.ndarray
 
 
 def apply_cavities(model: BatModel, material: Material, cavities: tuple[Core, ...]) -> BatModel:
-    """The model with each cavity's sections recomputed (exact for nodes at the cavity ends)."""
+    """Recompute the model's sections in each cavity (exact for nodes at the cavity ends)."""
     if not cavities:
         return model
     profile = model.profile

@@ -80,16 +80,20 @@ class FieldCase:
 
     @property
     def kind(self) -> FieldKind:
+        """Return the re-test's alteration kind ("none" when clean)."""
         return self.truth["kind"]
 
     @property
     def expected(self) -> str:
+        """Return the answer expected of the inspection."""
         return self.truth["expected"]
 
     @property
     def registration_conditions(self) -> dict:
-        """What a lab may record at registration beside the weight (meta.json's optional
-        keys): the baseline's temperature and accelerometer mass, read as retest.json's.
+        """Return what a lab may record at registration beside the weight.
+
+        meta.json's optional keys: the baseline's temperature and accelerometer mass, read as
+        retest.json's.
         """
         t_base = self.truth["drawn"].get("temperature", {}).get("baseline_c", 21.0)
         return {"temperature_c": round(t_base, 1),
@@ -108,14 +112,16 @@ def scale_reading(bat: VirtualBat) -> tuple[float, float]:
 
 
 def bare(bat: VirtualBat) -> VirtualBat:
-    """The bat off the rig: no accelerometer, no bungees (what the scale weighs)."""
+    """Take the bat off the rig: no accelerometer, no bungees (what the scale weighs)."""
     return replace(bat, sensor_mass_kg=0.0, bungee_k_n_per_m=0.0)
 
 
 def lab_readings(rng: np.random.Generator, base: VirtualBat, retest: VirtualBat,
                  truth: dict) -> None:
-    """Put the true and the scale's (noisy) weights and balance points of both tests into
-    ``truth`` (keys true_weight_lb, true_balance_in, lab_readings).
+    """Put the true and the scale's (noisy) weights and balance points of both tests in ``truth``.
+
+    Keys true_weight_lb, true_balance_in and lab_readings (baseline_lb, retest_lb,
+    baseline_balance_in, retest_balance_in).
     """
     w_b, cg_b = scale_reading(bare(base))
     w_r, cg_r = scale_reading(bare(retest))
@@ -128,8 +134,9 @@ def lab_readings(rng: np.random.Generator, base: VirtualBat, retest: VirtualBat,
 
 
 def no_barrel_points_in(length_in: float) -> np.ndarray:
-    """A layout that cannot see the barrel: every 2 in up to 15 in, and the end face (where
-    the accelerometer goes).
+    """Return a layout that cannot see the barrel, in.
+
+    Every 2 in up to 15 in, and the end face (where the accelerometer goes).
     """
     return np.append(np.arange(1.0, NO_BARREL[0], 2.0), np.floor(100 * length_in) / 100)
 
@@ -366,9 +373,26 @@ def alter_case(
     case: FieldCase, alteration: Alteration, rng: np.random.Generator,
     serial: str | None = None,
 ) -> FieldCase:
-    """The same bat and the same re-test conditions with ``alteration`` instead of the
-    re-test's own (clean bats: a core added); weights, balance points and retest.json's
-    weight re-read. For paired studies: one baseline, many re-tests.
+    """Re-test the same bat under the same conditions with ``alteration`` instead of its own.
+
+    Clean bats get a core added; weights, balance points and retest.json's weight are read
+    again. For paired studies: one baseline, many re-tests.
+
+    Parameters
+    ----------
+    case : FieldCase
+        The bat and its re-test conditions.
+    alteration : Alteration
+        The alteration of the new re-test.
+    rng : numpy.random.Generator
+        The scale readings' noise.
+    serial : str or None
+        A new serial, or None to keep the case's.
+
+    Returns
+    -------
+    FieldCase
+        The case with the new re-test, truth and retest.json content.
     """
     cup = case.baseline.cavities  # the baseline's cavities are the bat's own (the cup)
     retest = replace(case.retest, core=alteration.core, cavities=cup + alteration.cavities)
@@ -386,8 +410,10 @@ def alter_case(
 def write_retest(
     case: FieldCase, uff_path, json_path, seed: int, retest_meta_keys=None,
 ) -> Path | None:
-    """Write the re-test's file (slip applied, noise ``seed``) and its retest.json (only the
-    ``retest_meta_keys`` given, default all; none: not written). The JSON's path or None.
+    """Write the re-test's file (slip applied, noise ``seed``) and its retest.json.
+
+    retest.json holds only the ``retest_meta_keys`` given (default all; none: not written).
+    Returns the JSON's path or None.
     """
     write_test(uff_path, corrupt(simulate_test(case.retest, case.freq_hz, seed=seed),
                                  case.integrity))
@@ -402,11 +428,18 @@ def write_case(
     case: FieldCase, folder, seed: int, retest_meta_keys=None, truth: bool = False,
     registration: bool = False,
 ) -> dict:
-    """Write profile.csv, meta.json, baseline.uff, retest.uff, retest.json (only the
+    """Write a case's lab files into ``folder``.
+
+    profile.csv, meta.json, baseline.uff, retest.uff, retest.json (only the
     ``retest_meta_keys`` given, default all; none: no retest.json) and, with ``truth``,
-    truth.json into ``folder``; returns the paths by name (retest_meta None when not written).
-    With ``registration`` meta.json also holds ``FieldCase.registration_conditions`` (the
-    baseline's temperature and accelerometer mass, as a lab records them at registration).
+    truth.json. With ``registration`` meta.json also holds
+    ``FieldCase.registration_conditions`` (the baseline's temperature and accelerometer mass,
+    as a lab records them at registration).
+
+    Returns
+    -------
+    dict
+        The paths by name (retest_meta None when not written).
     """
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)

@@ -49,16 +49,18 @@ class Case:
 
     @property
     def core(self) -> Core | None:
+        """Return the re-test's core (None when unaltered)."""
         return self.retest.core
 
 
 def smoothstep(t: np.ndarray) -> np.ndarray:
+    """Return the smooth step 3 t^2 - 2 t^3 of t clipped to [0, 1]."""
     t = np.clip(t, 0.0, 1.0)
     return t * t * (3 - 2 * t)
 
 
 def pro_profile(rng: np.random.Generator, caliper_noise_in: float = 0.0) -> Profile:
-    """A smooth random pro-style profile, stations every 0.5 in."""
+    """Draw a smooth random pro-style profile, stations every 0.5 in."""
     length = rng.uniform(32.0, 34.0)
     d_knob, d_handle = rng.uniform(1.3, 1.7), rng.uniform(0.9, 1.0)
     d_barrel = rng.uniform(2.45, 2.61)
@@ -73,8 +75,10 @@ def pro_profile(rng: np.random.Generator, caliper_noise_in: float = 0.0) -> Prof
 
 
 def random_retest(rng: np.random.Generator, base: VirtualBat, kind: Kind) -> VirtualBat:
-    """The re-test weeks later: a random core of ``kind`` (or none), moisture drift up to
-    +-1 point, the accelerometer re-mounted up to 0.1 in from where it was.
+    """Draw the re-test weeks later.
+
+    A random core of ``kind`` (or none), moisture drift up to +-1 point, the accelerometer
+    re-mounted up to 0.1 in from where it was.
     """
     core = None
     if kind != "none":
@@ -86,7 +90,7 @@ def random_retest(rng: np.random.Generator, base: VirtualBat, kind: Kind) -> Vir
 
 
 def random_case(rng: np.random.Generator, kind: Kind = "none") -> Case:
-    """A random bat; ``kind`` "none" (unaltered) or a fill in FILLS."""
+    """Draw a random bat; ``kind`` "none" (unaltered) or a fill in FILLS."""
     truth_profile = pro_profile(rng)
     profile = Profile(truth_profile.x_m, truth_profile.diameter_m
                       + 0.003 * IN_TO_M * rng.standard_normal(truth_profile.x_m.size))
@@ -115,8 +119,10 @@ def random_case(rng: np.random.Generator, kind: Kind = "none") -> Case:
 def case_modes(
     case: Case, rng: np.random.Generator, n_modes: int = 6,
 ) -> tuple[MeasuredModes, MeasuredModes]:
-    """Baseline and re-test modes with realistic noise (frequency 0.02-0.05 %, shape entries
-    1-2 % of the mode's RMS), as a good modal fit gives them.
+    """Simulate baseline and re-test modes with realistic noise.
+
+    Frequency noise 0.02-0.05 %, shape entries 1-2 % of the mode's RMS, as a good modal fit
+    gives them.
     """
     out = []
     for bat in (case.baseline, case.retest):
@@ -164,8 +170,7 @@ def random_wood(rng: np.random.Generator, species: str | None = None) -> tuple[s
 
 @dataclass(frozen=True)
 class LabCase:
-    """A bat as a lab receives it: what it writes down (profile, meta) and the truth behind
-    its two tests.
+    """A bat as a lab receives it: what it writes down and the truth behind its two tests.
 
     Attributes
     ----------
@@ -189,11 +194,12 @@ class LabCase:
 
     @property
     def core(self) -> Core | None:
+        """Return the re-test's core (None when unaltered)."""
         return self.retest.core
 
 
 def lab_case(rng: np.random.Generator, kind: Kind = "none", serial: str = "SIM-0001") -> LabCase:
-    """A random bat for the full path (FRF files to verdict), ``kind`` "none" or a fill.
+    """Draw a random bat for the full path (FRF files to verdict), ``kind`` "none" or a fill.
 
     Truth: a random pro profile, a random species with E within +-15 % and density within
     +-8 % of its handbook values, Timoshenko with E/G 10-18, a 2-6 g accelerometer up to
@@ -221,8 +227,9 @@ def lab_case(rng: np.random.Generator, kind: Kind = "none", serial: str = "SIM-0
 
 
 def write_lab_files(case: LabCase, folder, seed: int, freq_hz=None) -> dict:
-    """Write profile.csv, meta.json, baseline.uff and retest.uff (as `batlab simulate` writes
-    them) into ``folder``; returns their paths by name.
+    """Write profile.csv, meta.json, baseline.uff and retest.uff into ``folder``.
+
+    As `batlab simulate` writes them; returns their paths by name.
     """
     folder = Path(folder)
     freq = DEFAULT_FREQ_HZ if freq_hz is None else np.asarray(freq_hz, dtype=float)

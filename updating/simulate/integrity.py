@@ -25,7 +25,7 @@ INTEGRITY: tuple[Integrity, ...] = get_args(Integrity)
 
 
 def receptance_labelled_accelerance(test: FrfTest) -> FrfTest:
-    """The accelerance test re-expressed as receptance, still labelled accelerance."""
+    """Re-express the accelerance test as receptance, still labelled accelerance."""
     w2 = (2 * np.pi * test.freq_hz) ** 2
     h = np.empty_like(test.frf)
     pos = w2 > 0
@@ -36,7 +36,7 @@ def receptance_labelled_accelerance(test: FrfTest) -> FrfTest:
 
 
 def g_per_n_labelled_si(test: FrfTest) -> FrfTest:
-    """The accelerance test in g/N, labelled SI."""
+    """Convert the accelerance test to g/N, labelled SI."""
     return replace(test, frf=test.frf / G0_M_S2)
 
 

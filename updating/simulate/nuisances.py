@@ -42,6 +42,7 @@ OPTIONAL_NUISANCES = ("uniform_drift", "model_points")
 
 
 def signed(rng: np.random.Generator, lo: float, hi: float) -> float:
+    """Draw a magnitude uniform in [lo, hi] with a random sign."""
     return float(rng.uniform(lo, hi) * rng.choice([-1.0, 1.0]))
 
 
@@ -53,6 +54,7 @@ def draw_moisture(rng: np.random.Generator, length_m: float) -> tuple[WoodField,
 
 
 def draw_uniform_drift(rng: np.random.Generator, length_m: float) -> tuple[WoodField, dict]:
+    """Draw a uniform moisture drift of 1.5-2 points either way (field and record)."""
     rec = {"middle_pct": signed(rng, 1.5, 2.0)}
     return moisture_field(length_m, rec["middle_pct"]), rec
 
@@ -70,6 +72,7 @@ def draw_temperature(
 
 
 def draw_billet(rng: np.random.Generator, length_m: float) -> tuple[WoodField, dict]:
+    """Draw smooth billet gradients: E +-4 %, density +-3 % across the bat (field and record)."""
     rec = {"e_amplitude": rng.uniform(-0.04, 0.04), "rho_amplitude": rng.uniform(-0.03, 0.03),
            "phase": rng.uniform(0.0, np.pi)}
     return billet_field(length_m, **rec), rec
@@ -86,12 +89,13 @@ def draw_planes(rng: np.random.Generator) -> tuple[float, float, float, float, d
 
 
 def draw_cup(rng: np.random.Generator) -> tuple[Core, dict]:
-    """A cupped barrel end: an empty cavity at the end, plug 0."""
+    """Draw a cupped barrel end: an empty cavity at the end, plug 0 (cavity and record)."""
     rec = {"depth_in": rng.uniform(0.25, 1.0), "diameter_in": rng.uniform(1.0, 1.6)}
     return Core(rec["diameter_in"] * IN_TO_M, rec["depth_in"] * IN_TO_M, 0.0, 0.0, 0.0), rec
 
 
 def draw_noise(rng: np.random.Generator) -> float:
+    """Draw the FRF noise, 1-2 % of the FRF."""
     return float(rng.uniform(0.01, 0.02))
 
 
@@ -101,17 +105,19 @@ def even_points_in(length_in: float, n: int) -> np.ndarray:
 
 
 def lab_points_in(length_in: float) -> np.ndarray:
-    """The usual layout: every 2 in from 1 in, and the driving point 1 in from the end."""
+    """Return the usual layout: every 2 in from 1 in, and the driving point 1 in from the end."""
     return np.append(np.arange(1.0, length_in - 1.5, 2.0), round(length_in - 1.0, 2))
 
 
 def draw_points(rng: np.random.Generator, length_in: float) -> np.ndarray:
+    """Draw an even layout of 8-20 points, in."""
     return even_points_in(length_in, int(rng.integers(8, 21)))
 
 
 def draw_model_points(rng: np.random.Generator, profile, material) -> np.ndarray:
-    """The layout `batlab model --points N` suggests (N 11-20) for the lab's profile and the
-    species' handbook wood (Timoshenko, E/G 14), in.
+    """Draw the layout `batlab model --points N` suggests (N 11-20), in.
+
+    For the lab's profile and the species' handbook wood (Timoshenko, E/G 14).
     """
     from updating.model.assembly import build_model, displacement_at
     from updating.model.modes import model_modes
@@ -125,6 +131,7 @@ def draw_model_points(rng: np.random.Generator, profile, material) -> np.ndarray
 
 
 def draw_band(rng: np.random.Generator) -> float:
+    """Draw the measured band's top: 2 kHz or 3.2 kHz, even odds."""
     return 2000.0 if rng.uniform() < 0.5 else 3200.0
 
 
@@ -141,12 +148,13 @@ def draw_accelerometer(
 
 
 def draw_bungees(rng: np.random.Generator, k_n_per_m: float) -> tuple[float, dict]:
+    """Draw re-hung bungees: the stiffness times 0.7-1.4 (stiffness and record)."""
     factor = rng.uniform(0.7, 1.4)
     return k_n_per_m * factor, {"stiffness_factor": factor}
 
 
 def combine(*fields: WoodField | None) -> WoodField | None:
-    """The product of the fields given (None when none is)."""
+    """Multiply the fields given (None when none is)."""
     out = None
     for f in fields:
         if f is not None:

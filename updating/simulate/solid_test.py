@@ -1,5 +1,6 @@
-"""3D-simulated roving-hammer tests: the FRFs of a bat's 3D solid (updating.solid), as
-updating.simulate.virtual_bat.simulate_test makes them for the 1D bat.
+"""3D-simulated roving-hammer tests: the FRFs of a bat's 3D solid (updating.solid).
+
+They are made as updating.simulate.virtual_bat.simulate_test makes them for the 1D bat.
 
 A hammer and accelerometer along the angle theta from the y axis (the radial grain plane of
 planar grain) measure
@@ -32,8 +33,16 @@ from updating.solid.modes import SolidModes
 def suspension_modes(
     rigid: tuple[float, float, float], bungee_x_m: tuple[float, ...], k_n_per_m: float,
 ) -> tuple[np.ndarray, np.ndarray]:
-    """(frequencies Hz (2,), mass-normalised [translation, rotation] vectors (2, 2)) of a
-    rigid body (mass, x_cg, I_cg) on transverse springs ``k_n_per_m`` at ``bungee_x_m``.
+    """Compute the modes of a rigid body (mass, x_cg, I_cg) on transverse springs.
+
+    The springs ``k_n_per_m`` sit at ``bungee_x_m``.
+
+    Returns
+    -------
+    freq_hz : ndarray
+        (2,) frequencies, Hz.
+    vectors : ndarray
+        (2, 2) mass-normalised [translation, rotation] vectors.
     """
     mass, cg, i_cg = rigid
     R = np.array([[mass, mass * cg], [mass * cg, i_cg + mass * cg**2]])
@@ -48,8 +57,9 @@ def tap_test_frf(
     zeta1: float = 0.005, zeta_exponent: float = 0.3, rel_noise: float = 0.005,
     floor_noise: float = 1e-3, seed: int | None = None,
 ) -> FrfTest:
-    """The roving-hammer test of the solid (module docstring): one FRF per point, the
-    accelerometer at ``points_m[sensor_index]`` (``modes`` solved with its mass there).
+    """Simulate the roving-hammer test of the solid (module docstring): one FRF per point.
+
+    The accelerometer is at ``points_m[sensor_index]`` (``modes`` solved with its mass there).
     """
     if modes.rigid is None:
         raise ValueError("the solid's modes carry no rigid-body properties")

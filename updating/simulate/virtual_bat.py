@@ -111,8 +111,9 @@ class VirtualBat:
     theta_deg: float = 0.0
 
     def planes(self) -> tuple[tuple[str, float], ...]:
-        """(plane, weight) pairs of the measured FRF: cos^2 theta radial, sin^2 theta
-        tangential; one plane when ``e_over_g_t`` is None.
+        """Return the (plane, weight) pairs of the measured FRF.
+
+        cos^2 theta radial, sin^2 theta tangential; one plane when ``e_over_g_t`` is None.
         """
         if self.e_over_g_t is None:
             return (("radial", 1.0),)
@@ -120,20 +121,26 @@ class VirtualBat:
         return (("radial", float(np.cos(t) ** 2)), ("tangential", float(np.sin(t) ** 2)))
 
     def sensor_point(self) -> int:
+        """Return the index of the point carrying the accelerometer.
+
+        ``sensor_index``, or when it is -1 the point nearest to 1 in from the barrel end.
+        """
         if self.sensor_index >= 0:
             return self.sensor_index
         target = self.profile.length_m - IN_TO_M
         return int(np.argmin(np.abs(np.asarray(self.points_m) - target)))
 
     def sensor_x_m(self) -> float:
-        """Where the accelerometer really sits: its labelled point plus the offset, kept on
-        the bat (a sensor on the end face cannot move past it).
+        """Return where the accelerometer really sits, m.
+
+        Its labelled point plus the offset, kept on the bat (a sensor on the end face cannot move
+        past it).
         """
         x = float(np.asarray(self.points_m, dtype=float)[self.sensor_point()])
         return float(np.clip(x + self.sensor_offset_m, 0.0, self.profile.length_m))
 
     def truth_model(self, plane: str = "radial"):
-        """The FE model of one bending plane that generates the data (attachments included)."""
+        """Build the FE model of one bending plane that generates the data (with attachments)."""
         stiff, dens = moisture_scales(self.moisture_pct)
         material = self.material.scaled(stiff, dens)
         if plane == "tangential":
@@ -172,8 +179,10 @@ def damping_ratios(freq_hz: np.ndarray, zeta1: float, exponent: float) -> np.nda
 def modal_model(
     bat: VirtualBat, max_mode_hz: float = 12000.0, plane: str = "radial",
 ) -> tuple[ModalModel, np.ndarray]:
-    """The truth's modes below ``max_mode_hz`` at the impact points, and the accelerometer's
-    own shape row (1, m) at its true position (which may be off its labelled point).
+    """Compute the truth's modes below ``max_mode_hz`` at the impact points.
+
+    Also the accelerometer's own shape row (1, m) at its true position (which may be off its
+    labelled point).
     """
     model = bat.truth_model(plane)
     modes = model_modes(model, n_modes=min(model.n_dof, 60))
@@ -191,8 +200,9 @@ def simulate_test(
     bat: VirtualBat, freq_hz: np.ndarray = DEFAULT_FREQ_HZ, seed: int | None = None,
     max_mode_hz: float = 12000.0,
 ) -> FrfTest:
-    """Simulate the roving-hammer, fixed-accelerometer test of ``bat``: one FRF per point
-    (both bending planes weighted by ``bat.planes()``, then the noise).
+    """Simulate the roving-hammer, fixed-accelerometer test of ``bat``: one FRF per point.
+
+    Both bending planes weighted by ``bat.planes()``, then the noise.
     """
     s = bat.sensor_point()
     points = np.asarray(bat.points_m, dtype=float)
@@ -214,7 +224,7 @@ def simulate_test(
 
 
 def with_changes(bat: VirtualBat, **changes) -> VirtualBat:
-    """A copy of the set-up with some fields changed (a re-test weeks later, say)."""
+    """Copy the set-up with some fields changed (a re-test weeks later, say)."""
     return replace(bat, **changes)
 
 

@@ -57,7 +57,7 @@ class WoodField:
         return (np.interp(x, self.x_m, self.e_factor), np.interp(x, self.x_m, self.rho_factor))
 
     def times(self, other: WoodField | None) -> WoodField:
-        """The product of two fields, on the union of their sample positions."""
+        """Multiply two fields, on the union of their sample positions."""
         if other is None:
             return self
         x = np.union1d(self.x_m, other.x_m)
@@ -73,6 +73,7 @@ def grid_m(length_m: float, step_in: float = 0.25) -> np.ndarray:
 
 
 def uniform_field(length_m: float, e_factor: float = 1.0, rho_factor: float = 1.0) -> WoodField:
+    """Return a uniform field: factors ``e_factor`` and ``rho_factor`` along the whole bat."""
     x = np.array([0.0, length_m])
     return WoodField(x, np.full(2, e_factor), np.full(2, rho_factor))
 
@@ -98,7 +99,8 @@ def moisture_field(
     length_m: float, middle_pct: float, knob_end_ratio: float = 1.0,
     barrel_end_ratio: float = 1.0, decay_in: float = 2.0,
 ) -> WoodField:
-    """Coupled E and density factors of a moisture change (``moisture_profile_pct``):
+    """Return the coupled E and density factors of a moisture change (``moisture_profile_pct``).
+
     E x (1 - 0.02 dMC), density x (1 + 0.01 dMC).
     """
     x = grid_m(length_m)
@@ -115,9 +117,10 @@ def temperature_field(length_m: float, delta_c: float, per_c: float = 0.002) -> 
 def billet_field(
     length_m: float, e_amplitude: float, rho_amplitude: float, phase: float,
 ) -> WoodField:
-    """Smooth billet gradients: E x (1 + a_E g(x)), density x (1 + a_rho g(x)),
-    g(x) = cos(pi x / L + phase), a half-wave across the bat (one end stiffer and denser
-    than the other when the amplitudes share a sign).
+    """Return smooth billet gradients: E x (1 + a_E g(x)), density x (1 + a_rho g(x)).
+
+    g(x) = cos(pi x / L + phase), a half-wave across the bat (one end stiffer and denser than
+    the other when the amplitudes share a sign).
     """
     x = grid_m(length_m)
     g = np.cos(np.pi * x / length_m + phase)
@@ -125,8 +128,10 @@ def billet_field(
 
 
 def apply_wood_field(model: BatModel, field: WoodField | None) -> BatModel:
-    """The model with its section properties multiplied by the field at every quadrature
-    sample (EI, kGA by the modulus factor; rhoA, rhoI by the density factor), rebuilt.
+    """Rebuild the model with its section properties multiplied by the field.
+
+    At every quadrature sample: EI, kGA by the modulus factor; rhoA, rhoI by the density
+    factor.
     """
     if field is None:
         return model
