@@ -47,7 +47,7 @@ def _seal_problems(page: str, where: str, trusted: set[str]) -> list[str]:
 
 def _content_problems(conn: sqlite3.Connection, page: str, where: str,
                       verdict_seq: int) -> list[str]:
-    """The page's verdict words, reasons and head against the stored inspection and chain."""
+    """Check the page's verdict words, reasons and head against the inspection and chain."""
     from batlab.registry import custody_rows, get_inspection
 
     problems = []
