@@ -32,8 +32,11 @@ BUSY_TIMEOUT_S = 60.0
 
 
 def default_db_path(env: dict | None = None) -> Path:
-    """``$BATLAB_DB``, else ``$XDG_DATA_HOME/batlab/registry.sqlite``, else
-    ``~/.local/share/batlab/registry.sqlite``."""
+    """Return the registry's path.
+
+    ``$BATLAB_DB``, else ``$XDG_DATA_HOME/batlab/registry.sqlite``, else
+    ``~/.local/share/batlab/registry.sqlite``.
+    """
     env = os.environ if env is None else env
     if env.get("BATLAB_DB"):
         return Path(env["BATLAB_DB"]).expanduser()
@@ -42,6 +45,7 @@ def default_db_path(env: dict | None = None) -> Path:
 
 
 def sha256_bytes(data: bytes) -> str:
+    """Return the hex SHA-256 of ``data``."""
     return hashlib.sha256(data).hexdigest()
 
 
@@ -55,8 +59,10 @@ def now_utc() -> str:
 
 
 def _script(conn: sqlite3.Connection, sql: str) -> None:
-    """Run ``;``-separated statements inside the current transaction (``executescript``
-    would commit it)."""
+    """Run ``;``-separated statements inside the current transaction.
+
+    ``executescript`` would commit it.
+    """
     for stmt in sql.split(";"):
         if stmt.strip():
             conn.execute(stmt)
@@ -87,9 +93,12 @@ def _migrate_1(conn: sqlite3.Connection) -> None:
 
 
 def _migrate_2(conn: sqlite3.Connection) -> None:
-    """Version 2: profile stations in their own table, species column, baseline files stored
+    """Migrate to version 2.
+
+    Profile stations in their own table, species column, baseline files stored
     once by checksum, inspections record the baseline they were judged against, the verdict's
-    decision as a column, the re-test's file name and the report written."""
+    decision as a column, the re-test's file name and the report written.
+    """
     profiles = conn.execute("SELECT serial, profile_json FROM bats").fetchall()
     _script(conn, """
         CREATE TABLE baseline_files (
@@ -152,11 +161,14 @@ _canonical = custody.canonical
 
 
 def _migrate_3(conn: sqlite3.Connection) -> None:
-    """Version 3: every judged file kept (``baseline_files`` becomes ``files``: re-tests too),
+    """Migrate to version 3.
+
+    Every judged file kept (``baseline_files`` becomes ``files``: re-tests too),
     inspections name the reference record they were judged against, their report inputs and
     their status, and the hash-chained custody log (``custody``) covering every stored file,
     reference and verdict. Existing content is chained in the order files, bats, inspections;
-    an inspection made before version 3 has no re-test file and no reference record."""
+    an inspection made before version 3 has no re-test file and no reference record.
+    """
     _script(conn, """
         ALTER TABLE baseline_files RENAME TO files;
         ALTER TABLE inspections ADD COLUMN status TEXT;
@@ -189,10 +201,13 @@ def _migrate_3(conn: sqlite3.Connection) -> None:
 
 
 def _migrate_4(conn: sqlite3.Connection) -> None:
-    """Version 4: signed custody records (``signer``, ``signature``; a ``seal`` kind) and no
+    """Migrate to version 4.
+
+    Signed custody records (``signer``, ``signature``; a ``seal`` kind) and no
     ``inspections.altered`` (written, never read: ``status`` says it). Existing records stay
     unsigned legacy records; when there are any, a signed seal record naming how many follows
-    them, so they cannot be extended or stripped later without the lab's key."""
+    them, so they cannot be extended or stripped later without the lab's key.
+    """
     _script(conn, """
         CREATE TABLE custody_v4 (
             seq INTEGER PRIMARY KEY,
@@ -226,7 +241,7 @@ SCHEMA_VERSION = max(MIGRATIONS)
 
 
 def schema_version(conn: sqlite3.Connection) -> int:
-    """The database's schema version (0 for an empty database)."""
+    """Return the database's schema version (0 for an empty database)."""
     has = conn.execute(
         "SELECT 1 FROM sqlite_master WHERE type = 'table' AND name = 'schema_version'").fetchone()
     if not has:
@@ -350,20 +365,29 @@ def connect(
 
 
 def _refuse_foreign_file(path: Path) -> None:
-    """Look at an existing file without changing it; ValueError if it is not a registry."""
+    """Look at an existing file without changing it.
+
+    ValueError if it holds tables of its own and no batlab schema. A file SQLite cannot read
+    here (not a database, or one being created by another process) is left to the normal opening
+    to judge.
+    """
     try:
         probe = sqlite3.connect(f"{path.resolve().as_uri()}?mode=ro&immutable=1", uri=True)
-        try:
-            _refuse_foreign(probe, path)
-        finally:
-            probe.close()
-    except sqlite3.DatabaseError as exc:
-        raise ValueError(f"{path}: not a usable batlab registry ({exc})") from None
+    except sqlite3.DatabaseError:
+        return
+    try:
+        _refuse_foreign(probe, path)
+    except sqlite3.DatabaseError:
+        return
+    finally:
+        probe.close()
 
 
 class _ReadOnlyConnection(sqlite3.Connection):
-    """A read-only connection that removes the ``-wal``/``-shm`` files its opening created
-    (left behind, they are this user's and lock the owner out)."""
+    """A read-only connection that removes the ``-wal``/``-shm`` files its opening created.
+
+    Left behind, they are this user's and lock the owner out.
+    """
 
     created: tuple[Path, ...] = ()
 
@@ -376,7 +400,7 @@ class _ReadOnlyConnection(sqlite3.Connection):
 
 
 def _connect_readonly(path: Path, migratable: bool = False) -> sqlite3.Connection | None:
-    """A read-only connection that leaves nothing behind and never reads stale data.
+    """Open a read-only connection that leaves nothing behind and never reads stale data.
 
     With no write-ahead log content the file is opened ``immutable=1`` (no ``-shm`` needed,
     none created); with WAL content ``mode=ro`` reads it through the ``-shm`` index and the
@@ -411,8 +435,11 @@ def _connect_readonly(path: Path, migratable: bool = False) -> sqlite3.Connectio
 
 @contextmanager
 def transaction(conn: sqlite3.Connection) -> Iterator[sqlite3.Connection]:
-    """``BEGIN IMMEDIATE`` ... ``COMMIT``; rolled back on any exception (or never committed
-    if the process dies). A read-only registry is a one-line ValueError."""
+    """Run the block in ``BEGIN IMMEDIATE`` ... ``COMMIT``.
+
+    Rolled back on any exception (or never committed if the process dies). A read-only
+    registry is a one-line ValueError.
+    """
     try:
         conn.execute("BEGIN IMMEDIATE")
         try:
@@ -449,7 +476,7 @@ _KEYS: dict[str, object] = {}
 
 
 def _lab_key():
-    """The lab's signing key (created on first write), loaded once per key file."""
+    """Return the lab's signing key (created on first write), loaded once per key file."""
     path = str(signing.key_path())
     if path not in _KEYS:
         _KEYS[path] = signing.signing_key(create=True)
@@ -479,8 +506,10 @@ def _append_legacy_record(conn: sqlite3.Connection, kind: str, subject: str,
 
 def _append_record(conn: sqlite3.Connection, kind: str, subject: str,
                    content_sha256: str | None, payload: str | None) -> int:
-    """Append a signed custody record (inside the caller's transaction); returns its sequence
-    number. ``content_sha256`` defaults to the hash of ``payload``."""
+    """Append a signed custody record (inside the caller's transaction).
+
+    ``content_sha256`` defaults to the hash of ``payload``; returns the record's number.
+    """
     if content_sha256 is None:
         content_sha256 = sha256_bytes(payload.encode("utf-8"))
     key = _lab_key()
@@ -498,7 +527,7 @@ def _append_record(conn: sqlite3.Connection, kind: str, subject: str,
 
 
 def _bat_payload(conn: sqlite3.Connection, serial: str) -> dict:
-    """What a reference record holds: the bat's row and profile as stored now."""
+    """Return what a reference record holds: the bat's row and profile as stored now."""
     row = conn.execute("SELECT serial, species, meta_json, reference_json, modes_json, "
                        "baseline_sha256, registered_at FROM bats WHERE serial = ?",
                        (serial,)).fetchone()
@@ -513,8 +542,11 @@ def _bat_payload(conn: sqlite3.Connection, serial: str) -> dict:
 
 
 def _inspection_payload(conn: sqlite3.Connection, inspection_id: int) -> dict:
-    """What a verdict record holds: the inspection's row as stored now (but ``report_path``,
-    a note of where a copy of the report was written, and ``record_seq``)."""
+    """Return what a verdict record holds: the inspection's row as stored now.
+
+    All but ``report_path`` (a note of where a copy of the report was written) and
+    ``record_seq``.
+    """
     row = conn.execute("SELECT id, serial, status, verdict_json, retest_name, retest_sha256, "
                        "baseline_sha256, reference_seq, inputs_json, inspected_at "
                        "FROM inspections WHERE id = ?", (inspection_id,)).fetchone()
@@ -548,7 +580,7 @@ def custody_record(conn: sqlite3.Connection, seq: int) -> CustodyRecord:
 
 
 def chain_head(conn: sqlite3.Connection) -> CustodyRecord | None:
-    """The last custody record (its hash seals everything before it)."""
+    """Return the last custody record (its hash seals everything before it)."""
     row = conn.execute("SELECT max(seq) FROM custody").fetchone()
     return None if row[0] is None else custody_record(conn, int(row[0]))
 
@@ -568,9 +600,11 @@ def custody_rows(conn: sqlite3.Connection) -> list[custody.Row]:
 
 @dataclass(frozen=True)
 class CheckResult:
-    """``registry check``: ``problems`` is empty when the registry is intact; ``first_changed``
-    is the first custody record that no longer verifies (None if none); ``head`` the chain's
-    head as ``SEQ:SHA256``."""
+    """The result of ``registry check``.
+
+    ``problems`` is empty when the registry is intact; ``first_changed`` is the first custody
+    record that no longer verifies (None if none); ``head`` the chain's head as ``SEQ:SHA256``.
+    """
 
     n_records: int
     n_files: int
@@ -582,18 +616,22 @@ class CheckResult:
 
     @property
     def ok(self) -> bool:
+        """Whether nothing is wrong."""
         return not self.problems
 
 
 def check(conn: sqlite3.Connection, trusted: set[str] | None = None,
           head_seen: str | None = None) -> CheckResult:
-    """Verify the registry: SQLite's integrity and foreign keys, every stored file against its
+    """Verify the registry.
+
+    SQLite's integrity and foreign keys, every stored file against its
     SHA-256, every file an inspection or bat names is present, the custody chain (each
     record's hash, link, content hash and signature by a trusted key: ``trusted``, default
     the lab's own key), coverage (every bat, file and inspection row has its one custody
     record, every record's row exists) and, with ``head_seen`` (``SEQ:SHA256`` noted
     earlier), that the chain still holds that record. Names the first changed record; a
-    registry too damaged to read is one problem naming SQLite's complaint."""
+    registry too damaged to read is one problem naming SQLite's complaint.
+    """
     if trusted is None:
         trusted = signing.trusted_keys()
     if head_seen is not None:
@@ -648,9 +686,11 @@ def _by_subject(rows: list[custody.Row], kind: str) -> dict[str, list[custody.Ro
 
 def _check_coverage(conn: sqlite3.Connection, rows: list[custody.Row], files: dict,
                     problems: list[str]) -> list[int]:
-    """Every file, bat and inspection row has its custody record (one per file and verdict,
-    the latest registration for a bat) matching it, and every record's row exists; returns
-    the numbers of the records whose row was changed."""
+    """Check that every row has its custody record and every record its row.
+
+    One record per file and verdict, the latest registration for a bat, each matching its row;
+    returns the numbers of the records whose row was changed.
+    """
     changed = []
     for sha, recs in _by_subject(rows, "file").items():
         if sha not in files:
@@ -729,7 +769,8 @@ def _check(conn: sqlite3.Connection, trusted: set[str], head_seen: str | None) -
 class BatRecord:
     """A registered bat, SI, in plain data (the pipeline turns it into model objects).
 
-    Attributes:
+    Attributes
+    ----------
         serial: the bat's serial number.
         profile_x_m, profile_diameter_m: profile stations from the knob end, m.
         meta: meta.json as read.
@@ -758,6 +799,8 @@ class BatRecord:
 
 @dataclass(frozen=True)
 class BatSummary:
+    """One line of ``batlab bats``: a bat, its inspection count and latest decision."""
+
     serial: str
     species: str
     registered_at: str
@@ -769,9 +812,12 @@ class BatSummary:
 
 @dataclass(frozen=True)
 class Inspection:
-    """A stored inspection. ``altered`` is None when the verdict was inconclusive;
+    """A stored inspection.
+
+    ``altered`` is None when the verdict was inconclusive;
     ``reference_seq`` the custody record of the registration it was judged against (None
-    before schema 3); ``record_seq``/``record_sha256`` its own custody record."""
+    before schema 3); ``record_seq``/``record_sha256`` its own custody record.
+    """
 
     id: int
     serial: str
@@ -790,8 +836,10 @@ class Inspection:
 
 
 def encode_modes(m) -> dict:
-    """Fitted modes (``updating.correlate.measured.MeasuredModes``) as the registry stores them
-    (``modes_json``): plain lists, SI."""
+    """Return fitted modes as the registry stores them (``modes_json``): plain lists, SI.
+
+    ``m`` is an ``updating.correlate.measured.MeasuredModes``.
+    """
     import numpy as np
 
     return {"freq_hz": np.asarray(m.freq_hz).tolist(),
@@ -802,7 +850,7 @@ def encode_modes(m) -> dict:
 
 
 def decode_modes(d: dict):
-    """The stored modes back as ``MeasuredModes`` (shapes points x modes)."""
+    """Return the stored modes as ``MeasuredModes`` (shapes points x modes)."""
     import numpy as np
 
     from updating.correlate.measured import MeasuredModes
@@ -815,16 +863,20 @@ def decode_modes(d: dict):
 
 
 def has_file(conn: sqlite3.Connection, sha256: str) -> bool:
+    """Return whether a file with this SHA-256 is stored."""
     return conn.execute("SELECT 1 FROM files WHERE sha256 = ?", (sha256,)).fetchone() is not None
 
 
 def has_bat(conn: sqlite3.Connection, serial: str) -> bool:
+    """Return whether the serial is registered."""
     return conn.execute("SELECT 1 FROM bats WHERE serial = ?", (serial,)).fetchone() is not None
 
 
 def store_file(conn: sqlite3.Connection, name: str, content: bytes) -> str:
-    """Keep a test file (inside the caller's transaction), once per content: returns its
-    SHA-256. A new file gets a custody record."""
+    """Keep a test file (inside the caller's transaction), once per content.
+
+    A new file gets a custody record; returns its SHA-256.
+    """
     digest = sha256_bytes(content)
     cur = conn.execute("INSERT OR IGNORE INTO files (sha256, name, size, content) "
                        "VALUES (?, ?, ?, ?)", (digest, name, len(content), content))
@@ -837,9 +889,12 @@ def add_bat(
     conn: sqlite3.Connection, bat: BatRecord, baseline_name: str, baseline: bytes,
     replace: bool = False,
 ) -> BatRecord:
-    """Store a bat with a copy of its baseline file; ValueError if the serial exists and not
-    ``replace``. Replacing keeps the bat's inspections, each naming the registration (custody
-    record) it was judged against, and every file ever stored."""
+    """Store a bat with a copy of its baseline file.
+
+    ValueError if the serial exists and not ``replace``. Replacing keeps the bat's inspections,
+    each naming the registration (custody record) it was judged against, and every file ever
+    stored.
+    """
     if not bat.serial.strip():
         raise ValueError("serial number is empty")
     stamp = now_utc()
@@ -878,7 +933,7 @@ def _bat_from_payload(p: dict, seq: int) -> BatRecord:
 
 
 def get_bat(conn: sqlite3.Connection, serial: str) -> BatRecord:
-    """The registered bat as it is now; ValueError naming the serial if it is unknown."""
+    """Return the registered bat as it is now; ValueError naming the serial if unknown."""
     if not has_bat(conn, serial):
         raise ValueError(f"unknown serial {serial!r}: no such bat in the registry")
     seq = conn.execute("SELECT max(seq) FROM custody WHERE kind = 'reference' AND subject = ?",
@@ -887,9 +942,11 @@ def get_bat(conn: sqlite3.Connection, serial: str) -> BatRecord:
 
 
 def bat_as_registered(conn: sqlite3.Connection, reference_seq: int) -> BatRecord:
-    """The bat as registration record ``reference_seq`` stored it (after a ``--replace`` the
-    bat's current row differs; this is what an earlier inspection was judged against). The
-    record's content is checked against its hash."""
+    """Return the bat as registration record ``reference_seq`` stored it.
+
+    After a ``--replace`` the bat's current row differs; this is what an earlier inspection was
+    judged against. The record's content is checked against its hash.
+    """
     row = conn.execute("SELECT payload, content_sha256 FROM custody WHERE seq = ? AND "
                        "kind = 'reference'", (reference_seq,)).fetchone()
     if row is None:
@@ -901,8 +958,10 @@ def bat_as_registered(conn: sqlite3.Connection, reference_seq: int) -> BatRecord
 
 
 def stored_file(conn: sqlite3.Connection, sha256: str, what: str) -> tuple[str, bytes]:
-    """(name, bytes) of a stored file after checking its SHA-256; ValueError naming ``what``
-    when it is missing or changed."""
+    """Return (name, bytes) of a stored file after checking its SHA-256.
+
+    ValueError naming ``what`` when it is missing or changed.
+    """
     row = conn.execute("SELECT name, content FROM files WHERE sha256 = ?", (sha256,)).fetchone()
     if row is None:
         raise ValueError(f"{what}: file {sha256[:12]} missing from the registry")
@@ -914,7 +973,7 @@ def stored_file(conn: sqlite3.Connection, sha256: str, what: str) -> tuple[str, 
 
 
 def baseline_file(conn: sqlite3.Connection, bat: BatRecord) -> bytes:
-    """The stored baseline file of ``bat``, after checking its SHA-256; ValueError on mismatch."""
+    """Return the stored baseline file of ``bat`` after checking its SHA-256."""
     return stored_file(conn, bat.baseline_sha256, f"bat {bat.serial!r} baseline")[1]
 
 
@@ -937,10 +996,12 @@ def add_inspection(
     reference_seq: int | None = None, inputs: dict | None = None,
     report_path: str | None = None,
 ) -> Inspection:
-    """Store one inspection of a registered bat with its re-test file, the registration
-    (custody record ``reference_seq``, default: the bat's current one) it was judged against
-    and the report's other inputs; appends its verdict record to the custody chain.
-    ``verdict`` holds ``status`` or ``altered``."""
+    """Store one inspection of a registered bat.
+
+    With its re-test file, the registration (custody record ``reference_seq``, default: the
+    bat's current one) it was judged against and the report's other inputs; appends its verdict
+    record to the custody chain. ``verdict`` holds ``status`` or ``altered``.
+    """
     stamp = now_utc()
     with transaction(conn):
         if not has_bat(conn, serial):
@@ -987,6 +1048,7 @@ def _inspection(r) -> Inspection:
 
 
 def get_inspection(conn: sqlite3.Connection, inspection_id: int) -> Inspection:
+    """Return stored inspection ``inspection_id``; ValueError if there is none."""
     row = conn.execute(f"SELECT {_INSPECTION_COLUMNS} FROM inspections i LEFT JOIN custody c "
                        "ON c.seq = i.record_seq WHERE i.id = ?", (inspection_id,)).fetchone()
     if row is None:
@@ -995,7 +1057,7 @@ def get_inspection(conn: sqlite3.Connection, inspection_id: int) -> Inspection:
 
 
 def history(conn: sqlite3.Connection, serial: str) -> list[Inspection]:
-    """The bat's inspections, oldest first; ValueError if the serial is unknown."""
+    """Return the bat's inspections, oldest first; ValueError if the serial is unknown."""
     if not has_bat(conn, serial):
         raise ValueError(f"unknown serial {serial!r}: no such bat in the registry")
     rows = conn.execute(
