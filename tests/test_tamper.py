@@ -177,6 +177,24 @@ def _rechain(path: Path, key=None) -> list[tuple]:
     return rows
 
 
+def test_a_second_verdict_record_for_an_inspection_is_found(copy, tmp_path, monkeypatch):
+    """A cleared verdict appended for inspection #1 (so the latest record would win), signed
+    with another key: both the duplicate and the key are named."""
+    import batlab.registry as reg
+
+    intruder = _other_key(tmp_path, monkeypatch)
+    with reg.open_registry(copy) as conn, reg.transaction(conn):
+        payload = reg._inspection_payload(conn, 1)
+        seq = reg._append_record(conn, "verdict", "1", None,
+                                 reg._canonical({**payload, "status": "not_altered"}))
+    monkeypatch.delenv("BATLAB_KEY")
+    code, problems = check(copy)
+    assert code == 1
+    assert any(f"custody record #{seq} (verdict 1): signed by a key not trusted here "
+               f"({intruder})" == p for p in problems), problems
+    assert any(p.startswith("inspection #1: 2 verdict records") for p in problems)
+
+
 def test_a_chain_recomputed_after_an_edit_is_found(copy, tmp_path, monkeypatch):
     """Edit a verdict and its record, then re-hash and re-sign the whole chain with another
     key, or re-hash it unsigned: the signatures say so, record by record."""
