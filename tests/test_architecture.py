@@ -43,7 +43,7 @@ APPLICATION_MAY_NOT_IMPORT = (  # the stages' runners: only the pipeline calls t
 
 COMMAND_MAY_IMPORT = {  # what a command may import from batlab besides batlab.pipeline
     "batlab", "batlab.cli_support", "batlab.formatting", "batlab.registry", "batlab.report",
-    "batlab.diagnose_report",
+    "batlab.diagnose_report", "batlab.report_check",
 }
 
 
