@@ -86,12 +86,13 @@ def read_profile_csv(path: str | Path) -> Profile:
             raise ValueError(f"{path}: missing column {col!r} (header must be x_in,diameter_in)")
     ix, idia = header.index("x_in"), header.index("diameter_in")
     try:
-        x = [finite_number(r[ix], f"{path}: row {n} x_in", -100.0, 200.0)
-             for n, r in enumerate(rows, 2)]
-        d = [finite_number(r[idia], f"{path}: row {n} diameter_in", -np.inf, 20.0)
-             for n, r in enumerate(rows, 2)]
-    except IndexError:
+        x = [float(r[ix]) for r in rows]
+        d = [float(r[idia]) for r in rows]
+    except (ValueError, IndexError):
         raise ValueError(f"{path}: a row is not two numbers") from None
+    for n, (xi, di) in enumerate(zip(x, d, strict=True), 2):
+        finite_number(xi, f"{path}: row {n} x_in", -100.0, 200.0)
+        finite_number(di, f"{path}: row {n} diameter_in", -np.inf, 20.0)
     return make_profile(np.array(x) * IN_TO_M, np.array(d) * IN_TO_M, str(path))
 
 
