@@ -25,14 +25,18 @@ from dataclasses import dataclass
 from datetime import datetime, timezone
 from pathlib import Path
 
+from batlab import custody, signing
 from batlab.formatting import status_of
 
 BUSY_TIMEOUT_S = 60.0
 
 
 def default_db_path(env: dict | None = None) -> Path:
-    """``$BATLAB_DB``, else ``$XDG_DATA_HOME/batlab/registry.sqlite``, else
-    ``~/.local/share/batlab/registry.sqlite``."""
+    """Return the registry's path.
+
+    ``$BATLAB_DB``, else ``$XDG_DATA_HOME/batlab/registry.sqlite``, else
+    ``~/.local/share/batlab/registry.sqlite``.
+    """
     env = os.environ if env is None else env
     if env.get("BATLAB_DB"):
         return Path(env["BATLAB_DB"]).expanduser()
@@ -41,6 +45,7 @@ def default_db_path(env: dict | None = None) -> Path:
 
 
 def sha256_bytes(data: bytes) -> str:
+    """Return the hex SHA-256 of ``data``."""
     return hashlib.sha256(data).hexdigest()
 
 
@@ -54,8 +59,10 @@ def now_utc() -> str:
 
 
 def _script(conn: sqlite3.Connection, sql: str) -> None:
-    """Run ``;``-separated statements inside the current transaction (``executescript``
-    would commit it)."""
+    """Run ``;``-separated statements inside the current transaction.
+
+    ``executescript`` would commit it.
+    """
     for stmt in sql.split(";"):
         if stmt.strip():
             conn.execute(stmt)
@@ -86,9 +93,12 @@ def _migrate_1(conn: sqlite3.Connection) -> None:
 
 
 def _migrate_2(conn: sqlite3.Connection) -> None:
-    """Version 2: profile stations in their own table, species column, baseline files stored
+    """Migrate to version 2.
+
+    Profile stations in their own table, species column, baseline files stored
     once by checksum, inspections record the baseline they were judged against, the verdict's
-    decision as a column, the re-test's file name and the report written."""
+    decision as a column, the re-test's file name and the report written.
+    """
     profiles = conn.execute("SELECT serial, profile_json FROM bats").fetchall()
     _script(conn, """
         CREATE TABLE baseline_files (
@@ -147,17 +157,18 @@ def _migrate_2(conn: sqlite3.Connection) -> None:
              for i, (x, d) in enumerate(zip(prof["x_m"], prof["diameter_m"], strict=True))])
 
 
-def _canonical(obj) -> str:
-    """Canonical JSON (sorted keys, no spaces): the bytes a custody record hashes."""
-    return json.dumps(obj, sort_keys=True, separators=(",", ":"), allow_nan=False)
+_canonical = custody.canonical
 
 
 def _migrate_3(conn: sqlite3.Connection) -> None:
-    """Version 3: every judged file kept (``baseline_files`` becomes ``files``: re-tests too),
+    """Migrate to version 3.
+
+    Every judged file kept (``baseline_files`` becomes ``files``: re-tests too),
     inspections name the reference record they were judged against, their report inputs and
     their status, and the hash-chained custody log (``custody``) covering every stored file,
     reference and verdict. Existing content is chained in the order files, bats, inspections;
-    an inspection made before version 3 has no re-test file and no reference record."""
+    an inspection made before version 3 has no re-test file and no reference record.
+    """
     _script(conn, """
         ALTER TABLE baseline_files RENAME TO files;
         ALTER TABLE inspections ADD COLUMN status TEXT;
@@ -177,30 +188,83 @@ def _migrate_3(conn: sqlite3.Connection) -> None:
         CREATE INDEX custody_by_subject ON custody (kind, subject)
     """)
     for sha, name in conn.execute("SELECT sha256, name FROM files ORDER BY rowid").fetchall():
-        _append_record(conn, "file", sha, sha, _canonical({"name": name}))
+        _append_legacy_record(conn, "file", sha, sha, _canonical({"name": name}))
     for (serial,) in conn.execute("SELECT serial FROM bats ORDER BY serial").fetchall():
-        _append_record(conn, "reference", serial, None, _canonical(_bat_payload(conn, serial)))
+        _append_legacy_record(conn, "reference", serial, None,
+                              _canonical(_bat_payload(conn, serial)))
     for row in conn.execute("SELECT id, verdict_json FROM inspections ORDER BY id").fetchall():
         conn.execute("UPDATE inspections SET status = ? WHERE id = ?",
                      (status_of(json.loads(row[1])), row[0]))
-        seq = _append_record(conn, "verdict", str(row[0]), None,
-                             _canonical(_inspection_payload(conn, row[0])))
+        seq = _append_legacy_record(conn, "verdict", str(row[0]), None,
+                                    _canonical(_inspection_payload(conn, row[0])))
         conn.execute("UPDATE inspections SET record_seq = ? WHERE id = ?", (seq, row[0]))
 
 
+def _migrate_4(conn: sqlite3.Connection) -> None:
+    """Migrate to version 4.
+
+    Signed custody records (``signer``, ``signature``; a ``seal`` kind) and no
+    ``inspections.altered`` (written, never read: ``status`` says it). Existing records stay
+    unsigned legacy records; when there are any, a signed seal record naming how many follows
+    them, so they cannot be extended or stripped later without the lab's key.
+    """
+    _script(conn, """
+        CREATE TABLE custody_v4 (
+            seq INTEGER PRIMARY KEY,
+            kind TEXT NOT NULL CHECK (kind IN ('file', 'reference', 'verdict', 'seal')),
+            subject TEXT NOT NULL,
+            payload TEXT,
+            content_sha256 TEXT NOT NULL,
+            prev_sha256 TEXT NOT NULL,
+            record_sha256 TEXT NOT NULL,
+            recorded_at TEXT NOT NULL,
+            signer TEXT,
+            signature TEXT
+        );
+        INSERT INTO custody_v4 (seq, kind, subject, payload, content_sha256, prev_sha256,
+                                record_sha256, recorded_at)
+            SELECT seq, kind, subject, payload, content_sha256, prev_sha256, record_sha256,
+                   recorded_at FROM custody;
+        DROP TABLE custody;
+        ALTER TABLE custody_v4 RENAME TO custody;
+        CREATE INDEX custody_by_subject ON custody (kind, subject);
+        ALTER TABLE inspections DROP COLUMN altered
+    """)
+    n = conn.execute("SELECT count(*) FROM custody").fetchone()[0]
+    if n:
+        _append_record(conn, "seal", "legacy", None, _canonical({"legacy_records": n}))
+
+
 MIGRATIONS: dict[int, Callable[[sqlite3.Connection], None]] = {
-    1: _migrate_1, 2: _migrate_2, 3: _migrate_3}
+    1: _migrate_1, 2: _migrate_2, 3: _migrate_3, 4: _migrate_4}
 SCHEMA_VERSION = max(MIGRATIONS)
 
 
 def schema_version(conn: sqlite3.Connection) -> int:
-    """The database's schema version (0 for an empty database)."""
+    """Return the database's schema version (0 for an empty database)."""
     has = conn.execute(
         "SELECT 1 FROM sqlite_master WHERE type = 'table' AND name = 'schema_version'").fetchone()
     if not has:
         return 0
     row = conn.execute("SELECT max(version) FROM schema_version").fetchone()
     return int(row[0] or 0)
+
+
+def _foreign_tables(conn: sqlite3.Connection) -> list[str]:
+    """Tables of a database without a batlab schema (empty for a new or batlab database)."""
+    if schema_version(conn):
+        return []
+    return [r[0] for r in conn.execute(
+        "SELECT name FROM sqlite_master WHERE type IN ('table', 'view') AND name NOT LIKE "
+        "'sqlite_%' AND name != 'schema_version' ORDER BY name")]
+
+
+def _refuse_foreign(conn: sqlite3.Connection, path: object = "database") -> None:
+    """ValueError when the database holds tables of its own and no batlab schema."""
+    tables = _foreign_tables(conn)
+    if tables:
+        raise ValueError(f"{path}: not a batlab registry (it has tables of its own: "
+                         f"{', '.join(tables[:5])}); left untouched")
 
 
 def migrate(conn: sqlite3.Connection, target: int = SCHEMA_VERSION) -> int:
@@ -220,8 +284,9 @@ def migrate(conn: sqlite3.Connection, target: int = SCHEMA_VERSION) -> int:
             if version >= target:
                 return version
             if version == 0:
-                conn.execute("CREATE TABLE schema_version (version INTEGER NOT NULL, "
-                             "applied_at TEXT NOT NULL)")
+                _refuse_foreign(conn)
+                conn.execute("CREATE TABLE IF NOT EXISTS schema_version (version INTEGER "
+                             "NOT NULL, applied_at TEXT NOT NULL)")
             MIGRATIONS[version + 1](conn)
             conn.execute("INSERT INTO schema_version (version, applied_at) VALUES (?, ?)",
                          (version + 1, now_utc()))
@@ -265,8 +330,9 @@ def connect(
     """Open the registry at ``path`` (creating it if ``create``) and migrate it to ``target``.
 
     ``readonly`` (or a file this process may not write) opens it read-only: nothing is
-    migrated, so an older schema is refused with a message saying what to do. Every failure is
-    a ValueError naming the file.
+    written (an older schema is migrated only when the file is writable, else refused with a
+    message saying what to do). A database with tables of its own and no batlab schema is
+    refused and left untouched. Every failure is a ValueError naming the file.
     """
     path = Path(path)
     if path.exists() and path.is_dir():
@@ -275,8 +341,12 @@ def connect(
         raise ValueError(f"{path}: no registry there (register a bat first, or give --db)")
     if path.exists() and not os.access(path, os.R_OK):
         raise ValueError(f"{path}: registry not readable (permission denied)")
+    if path.exists() and path.stat().st_size:
+        _refuse_foreign_file(path)
     if readonly or (path.exists() and not _writable(path)):
-        return _connect_readonly(path)
+        conn = _connect_readonly(path, migratable=_writable(path))
+        if conn is not None:
+            return conn
     try:
         path.parent.mkdir(parents=True, exist_ok=True)
     except OSError as exc:
@@ -294,31 +364,82 @@ def connect(
     return conn
 
 
-def _connect_readonly(path: Path) -> sqlite3.Connection:
-    """A read-only connection: ``mode=ro``, else (a directory where SQLite cannot create the
-    WAL index) ``immutable=1``; the schema must already be this batlab's."""
-    last = None
-    for flags in ("mode=ro", "mode=ro&immutable=1"):
-        try:
-            conn = sqlite3.connect(f"{path.resolve().as_uri()}?{flags}", uri=True,
-                                   timeout=BUSY_TIMEOUT_S, isolation_level=None)
-            version = schema_version(conn)
-            break
-        except sqlite3.DatabaseError as exc:
-            last = exc
-    else:
-        raise ValueError(f"{path}: not a usable batlab registry ({last})")
-    if version != SCHEMA_VERSION:
-        conn.close()
-        raise ValueError(f"{path}: read-only registry at schema version {version}, this batlab "
-                         f"reads {SCHEMA_VERSION} (open it once with write access to migrate)")
-    return conn
+def _refuse_foreign_file(path: Path) -> None:
+    """Look at an existing file without changing it.
+
+    ValueError if it holds tables of its own and no batlab schema. A file SQLite cannot read
+    here (not a database, or one being created by another process) is left to the normal opening
+    to judge.
+    """
+    try:
+        probe = sqlite3.connect(f"{path.resolve().as_uri()}?mode=ro&immutable=1", uri=True)
+    except sqlite3.DatabaseError:
+        return
+    try:
+        _refuse_foreign(probe, path)
+    except sqlite3.DatabaseError:
+        return
+    finally:
+        probe.close()
+
+
+class _ReadOnlyConnection(sqlite3.Connection):
+    """A read-only connection that removes the ``-wal``/``-shm`` files its opening created.
+
+    Left behind, they are this user's and lock the owner out.
+    """
+
+    created: tuple[Path, ...] = ()
+
+    def close(self) -> None:
+        super().close()
+        for leftover in self.created:
+            if leftover.name.endswith("-shm") or (leftover.exists()
+                                                  and leftover.stat().st_size == 0):
+                leftover.unlink(missing_ok=True)
+
+
+def _connect_readonly(path: Path, migratable: bool = False) -> sqlite3.Connection | None:
+    """Open a read-only connection that leaves nothing behind and never reads stale data.
+
+    With no write-ahead log content the file is opened ``immutable=1`` (no ``-shm`` needed,
+    none created); with WAL content ``mode=ro`` reads it through the ``-shm`` index and the
+    files that created are removed on close; where that index cannot be made the registry is
+    refused rather than read without its log. Returns None for an older schema when
+    ``migratable`` (the caller then opens it for writing and migrates it).
+    """
+    wal, shm = Path(f"{path}-wal"), Path(f"{path}-shm")
+    before = {p for p in (wal, shm) if p.exists()}
+    live_log = wal.exists() and wal.stat().st_size > 0
+    flags = "mode=ro" if live_log else "mode=ro&immutable=1"
+    try:
+        conn = sqlite3.connect(f"{path.resolve().as_uri()}?{flags}", uri=True,
+                               timeout=BUSY_TIMEOUT_S, isolation_level=None,
+                               factory=_ReadOnlyConnection)
+        version = schema_version(conn)
+        conn.created = tuple(p for p in (wal, shm) if p not in before)
+    except sqlite3.DatabaseError as exc:
+        if live_log:
+            raise ValueError(f"{path}: its write-ahead log {wal.name} cannot be read here "
+                             f"without its index ({exc}); open the registry once with write "
+                             "access (reading the file alone would show stale data)") from None
+        raise ValueError(f"{path}: not a usable batlab registry ({exc})") from None
+    if version == SCHEMA_VERSION:
+        return conn
+    conn.close()
+    if 0 < version < SCHEMA_VERSION and migratable:
+        return None
+    raise ValueError(f"{path}: read-only registry at schema version {version}, this batlab "
+                     f"reads {SCHEMA_VERSION} (open it once with write access to migrate)")
 
 
 @contextmanager
 def transaction(conn: sqlite3.Connection) -> Iterator[sqlite3.Connection]:
-    """``BEGIN IMMEDIATE`` ... ``COMMIT``; rolled back on any exception (or never committed
-    if the process dies). A read-only registry is a one-line ValueError."""
+    """Run the block in ``BEGIN IMMEDIATE`` ... ``COMMIT``.
+
+    Rolled back on any exception (or never committed if the process dies). A read-only
+    registry is a one-line ValueError.
+    """
     try:
         conn.execute("BEGIN IMMEDIATE")
         try:
@@ -347,29 +468,34 @@ def open_registry(
 
 
 # ---------------------------------------------------------------------------------------------
-# The custody chain
+# The custody chain (record format, signatures and the chain's own check: batlab/custody.py)
 
-GENESIS_SHA256 = "0" * 64
-
-
-def record_hash(seq: int, kind: str, subject: str, content_sha256: str, prev_sha256: str,
-                recorded_at: str) -> str:
-    """sha256 of ``seq|kind|subject|content_sha256|prev_sha256|recorded_at`` (newline-joined):
-    a record's hash covers its content's hash and the previous record's hash, so changing any
-    record changes every later record's expected hash."""
-    text = "\n".join((str(seq), kind, subject, content_sha256, prev_sha256, recorded_at))
-    return sha256_bytes(text.encode("utf-8"))
+GENESIS_SHA256 = custody.GENESIS_SHA256
+record_hash = custody.legacy_record_hash
+_KEYS: dict[str, object] = {}
 
 
-def _append_record(conn: sqlite3.Connection, kind: str, subject: str,
-                   content_sha256: str | None, payload: str | None) -> int:
-    """Append a custody record (inside the caller's transaction); returns its sequence number.
-    ``content_sha256`` defaults to the hash of ``payload``."""
-    if content_sha256 is None:
-        content_sha256 = sha256_bytes(payload.encode("utf-8"))
+def _lab_key():
+    """Return the lab's signing key (created on first write), loaded once per key file."""
+    path = str(signing.key_path())
+    if path not in _KEYS:
+        _KEYS[path] = signing.signing_key(create=True)
+    return _KEYS[path]
+
+
+def _last_record(conn: sqlite3.Connection) -> tuple[int, str]:
     last = conn.execute("SELECT seq, record_sha256 FROM custody ORDER BY seq DESC LIMIT 1"
                         ).fetchone()
-    seq, prev = (1, GENESIS_SHA256) if last is None else (last[0] + 1, last[1])
+    return (0, GENESIS_SHA256) if last is None else (int(last[0]), last[1])
+
+
+def _append_legacy_record(conn: sqlite3.Connection, kind: str, subject: str,
+                          content_sha256: str | None, payload: str | None) -> int:
+    """Append an unsigned schema-3 record (migration 3 only); returns its sequence number."""
+    if content_sha256 is None:
+        content_sha256 = sha256_bytes(payload.encode("utf-8"))
+    seq, prev = _last_record(conn)
+    seq += 1
     stamp = now_utc()
     conn.execute("INSERT INTO custody (seq, kind, subject, payload, content_sha256, prev_sha256, "
                  "record_sha256, recorded_at) VALUES (?, ?, ?, ?, ?, ?, ?, ?)",
@@ -378,8 +504,30 @@ def _append_record(conn: sqlite3.Connection, kind: str, subject: str,
     return seq
 
 
+def _append_record(conn: sqlite3.Connection, kind: str, subject: str,
+                   content_sha256: str | None, payload: str | None) -> int:
+    """Append a signed custody record (inside the caller's transaction).
+
+    ``content_sha256`` defaults to the hash of ``payload``; returns the record's number.
+    """
+    if content_sha256 is None:
+        content_sha256 = sha256_bytes(payload.encode("utf-8"))
+    key = _lab_key()
+    signer = signing.key_id(key.public_key())
+    seq, prev = _last_record(conn)
+    seq += 1
+    stamp = now_utc()
+    data = custody.record_bytes(seq, kind, subject, content_sha256, prev, stamp, signer)
+    conn.execute("INSERT INTO custody (seq, kind, subject, payload, content_sha256, prev_sha256, "
+                 "record_sha256, recorded_at, signer, signature) "
+                 "VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?)",
+                 (seq, kind, subject, payload, content_sha256, prev, sha256_bytes(data), stamp,
+                  signer, signing.sign(key, data)))
+    return seq
+
+
 def _bat_payload(conn: sqlite3.Connection, serial: str) -> dict:
-    """What a reference record holds: the bat's row and profile as stored now."""
+    """Return what a reference record holds: the bat's row and profile as stored now."""
     row = conn.execute("SELECT serial, species, meta_json, reference_json, modes_json, "
                        "baseline_sha256, registered_at FROM bats WHERE serial = ?",
                        (serial,)).fetchone()
@@ -394,8 +542,11 @@ def _bat_payload(conn: sqlite3.Connection, serial: str) -> dict:
 
 
 def _inspection_payload(conn: sqlite3.Connection, inspection_id: int) -> dict:
-    """What a verdict record holds: the inspection's row as stored now (but ``report_path``,
-    a note of where a copy of the report was written, and ``record_seq``)."""
+    """Return what a verdict record holds: the inspection's row as stored now.
+
+    All but ``report_path`` (a note of where a copy of the report was written) and
+    ``record_seq``.
+    """
     row = conn.execute("SELECT id, serial, status, verdict_json, retest_name, retest_sha256, "
                        "baseline_sha256, reference_seq, inputs_json, inspected_at "
                        "FROM inspections WHERE id = ?", (inspection_id,)).fetchone()
@@ -407,6 +558,8 @@ def _inspection_payload(conn: sqlite3.Connection, inspection_id: int) -> dict:
 
 @dataclass(frozen=True)
 class CustodyRecord:
+    """A custody record's identity: number, kind, subject, hashes, time and signer."""
+
     seq: int
     kind: str
     subject: str
@@ -414,26 +567,44 @@ class CustodyRecord:
     prev_sha256: str
     record_sha256: str
     recorded_at: str
+    signer: str | None = None
 
 
 def custody_record(conn: sqlite3.Connection, seq: int) -> CustodyRecord:
+    """Return custody record ``seq``; ValueError if it is not in the registry."""
     row = conn.execute("SELECT seq, kind, subject, content_sha256, prev_sha256, record_sha256, "
-                       "recorded_at FROM custody WHERE seq = ?", (seq,)).fetchone()
+                       "recorded_at, signer FROM custody WHERE seq = ?", (seq,)).fetchone()
     if row is None:
         raise ValueError(f"custody record #{seq} not in the registry")
     return CustodyRecord(*row)
 
 
 def chain_head(conn: sqlite3.Connection) -> CustodyRecord | None:
-    """The last custody record (its hash seals everything before it)."""
+    """Return the last custody record (its hash seals everything before it)."""
     row = conn.execute("SELECT max(seq) FROM custody").fetchone()
     return None if row[0] is None else custody_record(conn, int(row[0]))
 
 
+def head(conn: sqlite3.Connection) -> str | None:
+    """Return the head of the chain as ``SEQ:SHA256`` (None for an empty registry)."""
+    last = chain_head(conn)
+    return None if last is None else custody.head_text(last.seq, last.record_sha256)
+
+
+def custody_rows(conn: sqlite3.Connection) -> list[custody.Row]:
+    """Return every custody record, in sequence order."""
+    return [custody.Row(*r) for r in conn.execute(
+        "SELECT seq, kind, subject, payload, content_sha256, prev_sha256, record_sha256, "
+        "recorded_at, signer, signature FROM custody ORDER BY seq")]
+
+
 @dataclass(frozen=True)
 class CheckResult:
-    """``registry check``: ``problems`` is empty when the registry is intact; ``first_changed``
-    is the first custody record that no longer verifies (None if none)."""
+    """The result of ``registry check``.
+
+    ``problems`` is empty when the registry is intact; ``first_changed`` is the first custody
+    record that no longer verifies (None if none); ``head`` the chain's head as ``SEQ:SHA256``.
+    """
 
     n_records: int
     n_files: int
@@ -441,20 +612,32 @@ class CheckResult:
     notes: list[str]
     first_changed: int | None
     head_sha256: str | None
+    head: str | None = None
 
     @property
     def ok(self) -> bool:
+        """Whether nothing is wrong."""
         return not self.problems
 
 
-def check(conn: sqlite3.Connection) -> CheckResult:
-    """Verify the registry: SQLite's integrity and foreign keys, every stored file against its
-    SHA-256, every file an inspection or bat names is present, and the custody chain (each
-    record's hash, its link to the previous one, its content hash, and the live bat and
-    inspection rows against their latest records). Names the first changed record; a
-    registry too damaged to read is one problem naming SQLite's complaint."""
+def check(conn: sqlite3.Connection, trusted: set[str] | None = None,
+          head_seen: str | None = None) -> CheckResult:
+    """Verify the registry.
+
+    SQLite's integrity and foreign keys, every stored file against its
+    SHA-256, every file an inspection or bat names is present, the custody chain (each
+    record's hash, link, content hash and signature by a trusted key: ``trusted``, default
+    the lab's own key), coverage (every bat, file and inspection row has its one custody
+    record, every record's row exists) and, with ``head_seen`` (``SEQ:SHA256`` noted
+    earlier), that the chain still holds that record. Names the first changed record; a
+    registry too damaged to read is one problem naming SQLite's complaint.
+    """
+    if trusted is None:
+        trusted = signing.trusted_keys()
+    if head_seen is not None:
+        custody.parse_head(head_seen)
     try:
-        return _check(conn)
+        return _check(conn, trusted, head_seen)
     except sqlite3.DatabaseError as exc:
         try:
             integrity = "; ".join(r[0] for r in conn.execute("PRAGMA integrity_check")
@@ -465,10 +648,8 @@ def check(conn: sqlite3.Connection) -> CheckResult:
                            None, None)
 
 
-def _check(conn: sqlite3.Connection) -> CheckResult:
-    problems: list[str] = []
-    notes: list[str] = []
-    first: int | None = None
+def _check_files(conn: sqlite3.Connection, problems: list[str], notes: list[str]) -> dict:
+    """Check SQLite's integrity, foreign keys and every stored file; returns sha -> name."""
     integrity = conn.execute("PRAGMA integrity_check").fetchall()
     if [r[0] for r in integrity] != ["ok"]:
         problems.append("SQLite integrity check: " + "; ".join(r[0] for r in integrity[:3]))
@@ -492,54 +673,93 @@ def _check(conn: sqlite3.Connection) -> CheckResult:
                 problems.append(f"inspection #{iid}: re-test file {sha[:12]} missing")
         if bsha not in files:
             problems.append(f"inspection #{iid}: baseline file {bsha[:12]} missing")
+    return files
 
-    prev = GENESIS_SHA256
-    latest_ref: dict[str, tuple[int, str]] = {}
-    verdicts: dict[str, tuple[int, str]] = {}
-    rows = conn.execute("SELECT seq, kind, subject, payload, content_sha256, prev_sha256, "
-                        "record_sha256, recorded_at FROM custody ORDER BY seq").fetchall()
-    expect_seq = 1
-    for seq, kind, subject, payload, content, prev_rec, rec, stamp in rows:
-        why = None
-        if seq != expect_seq:
-            why = f"records #{expect_seq}..#{seq - 1} removed"
-        elif prev_rec != prev:
-            why = "its link to the previous record is broken"
-        elif rec != record_hash(seq, kind, subject, content, prev_rec, stamp):
-            why = "its hash does not match its fields"
-        elif kind != "file" and sha256_bytes((payload or "").encode("utf-8")) != content:
-            why = "its content does not match its content hash"
-        elif kind == "file" and subject != content:
-            why = "its file hash was changed"
-        if why and first is None:
-            first = seq
-            problems.append(f"custody record #{seq} ({kind} {subject}) changed: {why}")
-        prev, expect_seq = rec, seq + 1
-        if kind == "reference":
-            latest_ref[subject] = (seq, payload)
-        elif kind == "verdict":
-            verdicts[subject] = (seq, payload)
-        elif kind == "file" and subject not in files:
-            problems.append(f"custody record #{seq}: file {subject[:12]} missing from the "
-                            "registry")
-    for (serial,) in conn.execute("SELECT serial FROM bats ORDER BY serial").fetchall():
-        have = latest_ref.get(serial)
-        if have is None:
+
+def _by_subject(rows: list[custody.Row], kind: str) -> dict[str, list[custody.Row]]:
+    out: dict[str, list[custody.Row]] = {}
+    for r in rows:
+        if r.kind == kind:
+            out.setdefault(r.subject, []).append(r)
+    return out
+
+
+def _check_coverage(conn: sqlite3.Connection, rows: list[custody.Row], files: dict,
+                    problems: list[str]) -> list[int]:
+    """Check that every row has its custody record and every record its row.
+
+    One record per file and verdict, the latest registration for a bat, each matching its row;
+    returns the numbers of the records whose row was changed.
+    """
+    changed = []
+    for sha, recs in _by_subject(rows, "file").items():
+        if sha not in files:
+            problems.append(f"custody record #{recs[0].seq}: file {sha[:12]} missing from the "
+                            "registry (row deleted)")
+        if len(recs) > 1:
+            problems.append(f"file {sha[:12]}: {len(recs)} custody records "
+                            f"(#{', #'.join(str(r.seq) for r in recs)}), expected one")
+    file_recs = {r.subject for r in rows if r.kind == "file"}
+    problems += [f"file {files[sha]} ({sha[:12]}): no custody record" for sha in files
+                 if sha not in file_recs]
+    refs = _by_subject(rows, "reference")
+    bats = {s for (s,) in conn.execute("SELECT serial FROM bats")}
+    for serial in sorted(bats):
+        if serial not in refs:
             problems.append(f"bat {serial!r}: no custody record")
-        elif _canonical(_bat_payload(conn, serial)) != have[1]:
-            problems.append(f"bat {serial!r}: stored bat differs from custody record #{have[0]}")
-            first = have[0] if first is None else min(first, have[0])
-    for (iid,) in conn.execute("SELECT id FROM inspections ORDER BY id").fetchall():
-        have = verdicts.get(str(iid))
-        if have is None:
-            problems.append(f"inspection #{iid}: no custody record")
-        elif _canonical(_inspection_payload(conn, iid)) != have[1]:
-            problems.append(f"inspection #{iid}: stored verdict differs from custody record "
-                            f"#{have[0]}")
-            first = have[0] if first is None else min(first, have[0])
-    return CheckResult(len(rows), len(files), problems, notes, first,
-                       None if not rows else rows[-1][6])
+        elif _canonical(_bat_payload(conn, serial)) != refs[serial][-1].payload:
+            problems.append(f"bat {serial!r}: stored bat differs from custody record "
+                            f"#{refs[serial][-1].seq}")
+            changed.append(refs[serial][-1].seq)
+    problems += [f"custody record #{recs[0].seq}: bat {s!r} is no longer in the registry "
+                 "(row deleted)" for s, recs in refs.items() if s not in bats]
+    changed += _check_verdicts(conn, _by_subject(rows, "verdict"), problems)
+    return changed
 
+
+def _check_verdicts(conn: sqlite3.Connection, verdicts: dict[str, list[custody.Row]],
+                    problems: list[str]) -> list[int]:
+    """Each inspection row against its one verdict record (and its ``record_seq``)."""
+    changed = []
+    rows = dict(conn.execute("SELECT id, record_seq FROM inspections").fetchall())
+    for iid in sorted(rows):
+        recs = verdicts.get(str(iid))
+        if recs is None:
+            problems.append(f"inspection #{iid}: no custody record")
+            continue
+        if len(recs) > 1:
+            problems.append(f"inspection #{iid}: {len(recs)} verdict records "
+                            f"(#{', #'.join(str(r.seq) for r in recs)}), expected one")
+        if rows[iid] != recs[0].seq:
+            problems.append(f"inspection #{iid}: names verdict record #{rows[iid]}, its record "
+                            f"is #{recs[0].seq}")
+        if _canonical(_inspection_payload(conn, iid)) != recs[0].payload:
+            problems.append(f"inspection #{iid}: stored verdict differs from custody record "
+                            f"#{recs[0].seq}")
+            changed.append(recs[0].seq)
+    problems += [f"custody record #{recs[0].seq}: inspection #{s} is no longer in the "
+                 "registry (rows deleted)" for s, recs in verdicts.items()
+                 if not s.isdigit() or int(s) not in rows]
+    return changed
+
+
+def _check(conn: sqlite3.Connection, trusted: set[str], head_seen: str | None) -> CheckResult:
+    problems: list[str] = []
+    notes: list[str] = []
+    files = _check_files(conn, problems, notes)
+    rows = custody_rows(conn)
+    chain = custody.check_chain(rows, trusted)
+    problems += chain.problems
+    notes += chain.notes
+    changed = _check_coverage(conn, rows, files, problems)
+    if head_seen is not None:
+        problems += custody.check_head(rows, head_seen)
+    first = min([s for s in (chain.first_changed, *changed) if s is not None], default=None)
+    last = rows[-1] if rows else None
+    return CheckResult(len(rows), len(files), problems, notes, first,
+                       None if last is None else last.record_sha256,
+                       None if last is None else custody.head_text(last.seq,
+                                                                   last.record_sha256))
 
 # ---------------------------------------------------------------------------------------------
 # Records
@@ -549,7 +769,8 @@ def _check(conn: sqlite3.Connection) -> CheckResult:
 class BatRecord:
     """A registered bat, SI, in plain data (the pipeline turns it into model objects).
 
-    Attributes:
+    Attributes
+    ----------
         serial: the bat's serial number.
         profile_x_m, profile_diameter_m: profile stations from the knob end, m.
         meta: meta.json as read.
@@ -578,6 +799,8 @@ class BatRecord:
 
 @dataclass(frozen=True)
 class BatSummary:
+    """One line of ``batlab bats``: a bat, its inspection count and latest decision."""
+
     serial: str
     species: str
     registered_at: str
@@ -589,9 +812,12 @@ class BatSummary:
 
 @dataclass(frozen=True)
 class Inspection:
-    """A stored inspection. ``altered`` is None when the verdict was inconclusive;
+    """A stored inspection.
+
+    ``altered`` is None when the verdict was inconclusive;
     ``reference_seq`` the custody record of the registration it was judged against (None
-    before schema 3); ``record_seq``/``record_sha256`` its own custody record."""
+    before schema 3); ``record_seq``/``record_sha256`` its own custody record.
+    """
 
     id: int
     serial: str
@@ -610,8 +836,10 @@ class Inspection:
 
 
 def encode_modes(m) -> dict:
-    """Fitted modes (``updating.correlate.measured.MeasuredModes``) as the registry stores them
-    (``modes_json``): plain lists, SI."""
+    """Return fitted modes as the registry stores them (``modes_json``): plain lists, SI.
+
+    ``m`` is an ``updating.correlate.measured.MeasuredModes``.
+    """
     import numpy as np
 
     return {"freq_hz": np.asarray(m.freq_hz).tolist(),
@@ -622,7 +850,7 @@ def encode_modes(m) -> dict:
 
 
 def decode_modes(d: dict):
-    """The stored modes back as ``MeasuredModes`` (shapes points x modes)."""
+    """Return the stored modes as ``MeasuredModes`` (shapes points x modes)."""
     import numpy as np
 
     from updating.correlate.measured import MeasuredModes
@@ -635,16 +863,20 @@ def decode_modes(d: dict):
 
 
 def has_file(conn: sqlite3.Connection, sha256: str) -> bool:
+    """Return whether a file with this SHA-256 is stored."""
     return conn.execute("SELECT 1 FROM files WHERE sha256 = ?", (sha256,)).fetchone() is not None
 
 
 def has_bat(conn: sqlite3.Connection, serial: str) -> bool:
+    """Return whether the serial is registered."""
     return conn.execute("SELECT 1 FROM bats WHERE serial = ?", (serial,)).fetchone() is not None
 
 
 def store_file(conn: sqlite3.Connection, name: str, content: bytes) -> str:
-    """Keep a test file (inside the caller's transaction), once per content: returns its
-    SHA-256. A new file gets a custody record."""
+    """Keep a test file (inside the caller's transaction), once per content.
+
+    A new file gets a custody record; returns its SHA-256.
+    """
     digest = sha256_bytes(content)
     cur = conn.execute("INSERT OR IGNORE INTO files (sha256, name, size, content) "
                        "VALUES (?, ?, ?, ?)", (digest, name, len(content), content))
@@ -657,9 +889,12 @@ def add_bat(
     conn: sqlite3.Connection, bat: BatRecord, baseline_name: str, baseline: bytes,
     replace: bool = False,
 ) -> BatRecord:
-    """Store a bat with a copy of its baseline file; ValueError if the serial exists and not
-    ``replace``. Replacing keeps the bat's inspections, each naming the registration (custody
-    record) it was judged against, and every file ever stored."""
+    """Store a bat with a copy of its baseline file.
+
+    ValueError if the serial exists and not ``replace``. Replacing keeps the bat's inspections,
+    each naming the registration (custody record) it was judged against, and every file ever
+    stored.
+    """
     if not bat.serial.strip():
         raise ValueError("serial number is empty")
     stamp = now_utc()
@@ -698,7 +933,7 @@ def _bat_from_payload(p: dict, seq: int) -> BatRecord:
 
 
 def get_bat(conn: sqlite3.Connection, serial: str) -> BatRecord:
-    """The registered bat as it is now; ValueError naming the serial if it is unknown."""
+    """Return the registered bat as it is now; ValueError naming the serial if unknown."""
     if not has_bat(conn, serial):
         raise ValueError(f"unknown serial {serial!r}: no such bat in the registry")
     seq = conn.execute("SELECT max(seq) FROM custody WHERE kind = 'reference' AND subject = ?",
@@ -707,9 +942,11 @@ def get_bat(conn: sqlite3.Connection, serial: str) -> BatRecord:
 
 
 def bat_as_registered(conn: sqlite3.Connection, reference_seq: int) -> BatRecord:
-    """The bat as registration record ``reference_seq`` stored it (after a ``--replace`` the
-    bat's current row differs; this is what an earlier inspection was judged against). The
-    record's content is checked against its hash."""
+    """Return the bat as registration record ``reference_seq`` stored it.
+
+    After a ``--replace`` the bat's current row differs; this is what an earlier inspection was
+    judged against. The record's content is checked against its hash.
+    """
     row = conn.execute("SELECT payload, content_sha256 FROM custody WHERE seq = ? AND "
                        "kind = 'reference'", (reference_seq,)).fetchone()
     if row is None:
@@ -721,8 +958,10 @@ def bat_as_registered(conn: sqlite3.Connection, reference_seq: int) -> BatRecord
 
 
 def stored_file(conn: sqlite3.Connection, sha256: str, what: str) -> tuple[str, bytes]:
-    """(name, bytes) of a stored file after checking its SHA-256; ValueError naming ``what``
-    when it is missing or changed."""
+    """Return (name, bytes) of a stored file after checking its SHA-256.
+
+    ValueError naming ``what`` when it is missing or changed.
+    """
     row = conn.execute("SELECT name, content FROM files WHERE sha256 = ?", (sha256,)).fetchone()
     if row is None:
         raise ValueError(f"{what}: file {sha256[:12]} missing from the registry")
@@ -734,7 +973,7 @@ def stored_file(conn: sqlite3.Connection, sha256: str, what: str) -> tuple[str, 
 
 
 def baseline_file(conn: sqlite3.Connection, bat: BatRecord) -> bytes:
-    """The stored baseline file of ``bat``, after checking its SHA-256; ValueError on mismatch."""
+    """Return the stored baseline file of ``bat`` after checking its SHA-256."""
     return stored_file(conn, bat.baseline_sha256, f"bat {bat.serial!r} baseline")[1]
 
 
@@ -757,10 +996,12 @@ def add_inspection(
     reference_seq: int | None = None, inputs: dict | None = None,
     report_path: str | None = None,
 ) -> Inspection:
-    """Store one inspection of a registered bat with its re-test file, the registration
-    (custody record ``reference_seq``, default: the bat's current one) it was judged against
-    and the report's other inputs; appends its verdict record to the custody chain.
-    ``verdict`` holds ``status`` or ``altered``."""
+    """Store one inspection of a registered bat.
+
+    With its re-test file, the registration (custody record ``reference_seq``, default: the
+    bat's current one) it was judged against and the report's other inputs; appends its verdict
+    record to the custody chain. ``verdict`` holds ``status`` or ``altered``.
+    """
     stamp = now_utc()
     with transaction(conn):
         if not has_bat(conn, serial):
@@ -773,12 +1014,11 @@ def add_inspection(
                              f"not {serial!r}")
         digest = store_file(conn, retest_name, retest)
         status = status_of(verdict)
-        altered = None if status == "inconclusive" else status == "altered"
         cur = conn.execute(
-            "INSERT INTO inspections (serial, altered, status, verdict_json, retest_name, "
+            "INSERT INTO inspections (serial, status, verdict_json, retest_name, "
             "retest_sha256, baseline_sha256, reference_seq, inputs_json, report_path, "
-            "inspected_at) VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)",
-            (serial, int(bool(altered)), status, json.dumps(verdict), retest_name, digest,
+            "inspected_at) VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?)",
+            (serial, status, json.dumps(verdict), retest_name, digest,
              ref.baseline_sha256, reference_seq, None if inputs is None else json.dumps(inputs),
              report_path, stamp))
         new_id = int(cur.lastrowid)
@@ -808,6 +1048,7 @@ def _inspection(r) -> Inspection:
 
 
 def get_inspection(conn: sqlite3.Connection, inspection_id: int) -> Inspection:
+    """Return stored inspection ``inspection_id``; ValueError if there is none."""
     row = conn.execute(f"SELECT {_INSPECTION_COLUMNS} FROM inspections i LEFT JOIN custody c "
                        "ON c.seq = i.record_seq WHERE i.id = ?", (inspection_id,)).fetchone()
     if row is None:
@@ -816,7 +1057,7 @@ def get_inspection(conn: sqlite3.Connection, inspection_id: int) -> Inspection:
 
 
 def history(conn: sqlite3.Connection, serial: str) -> list[Inspection]:
-    """The bat's inspections, oldest first; ValueError if the serial is unknown."""
+    """Return the bat's inspections, oldest first; ValueError if the serial is unknown."""
     if not has_bat(conn, serial):
         raise ValueError(f"unknown serial {serial!r}: no such bat in the registry")
     rows = conn.execute(

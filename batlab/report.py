@@ -25,6 +25,7 @@ import numpy as np
 from batlab.formatting import chance_words, p_value, status_of
 from batlab.pipeline import ReportInputs, jsonable
 from batlab.registry import now_utc
+from batlab.report_check import seal_page
 from ema.io.atomic_write import atomic_write
 from updating.inspect.details import InspectionDetails, ModePair
 from updating.model.mass_properties import MassProperties, mass_properties
@@ -491,6 +492,8 @@ def _provenance(r: ReportInputs, generated_at: str) -> list[list]:
         if pv.get(key) is not None:
             rows.append([label, _Raw(f"#{pv[key]}<br><code>sha256 "
                                      f"{pv[key + '_sha256']}</code>")])
+    if pv.get("chain_head"):
+        rows.append(["Registry head when written", _Raw(f"<code>{pv['chain_head']}</code>")])
     return rows
 
 
@@ -621,6 +624,8 @@ def write_report(
         plots_dir = check_destination(plots_dir, "plots")
     figures = figures_png(r)
     page = render_html(r, generated_at or now_utc(), figures)
+    if r.provenance.get("verdict_record") is not None:
+        page = seal_page(page)
     path = out_dir / "index.html"
     atomic_write(path, lambda tmp: tmp.write_text(page, encoding="utf-8"))
     if plots_dir is not None:

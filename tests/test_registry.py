@@ -155,9 +155,9 @@ def test_migration_from_v1(tmp_path):
     conn.close()
 
     with reg.open_registry(path) as conn:
-        assert reg.schema_version(conn) == reg.SCHEMA_VERSION == 3
+        assert reg.schema_version(conn) == reg.SCHEMA_VERSION == 4
         versions = [r[0] for r in conn.execute("SELECT version FROM schema_version")]
-        assert versions == [1, 2, 3]
+        assert versions == [1, 2, 3, 4]
         bat = reg.get_bat(conn, "V1")
         assert bat.profile_x_m == prof["x_m"] and bat.profile_diameter_m == prof["diameter_m"]
         assert bat.species == "maple" and bat.reference == {"E_pa": 1e10}
@@ -166,12 +166,17 @@ def test_migration_from_v1(tmp_path):
         assert insp.altered is True and insp.retest_sha256 == "abc"
         assert insp.status == "altered" and insp.reference_seq is None
         assert insp.baseline_sha256 == reg.sha256_bytes(blob)
-        # the migration chained what was there: the file, the bat, the verdict
-        kinds = [r[0] for r in conn.execute("SELECT kind FROM custody ORDER BY seq")]
-        assert kinds == ["file", "reference", "verdict"]
+        # the migration chained what was there: the file, the bat, the verdict (unsigned,
+        # schema 3), then schema 4 sealed them with a signed record naming how many
+        rows = conn.execute("SELECT kind, signer FROM custody ORDER BY seq").fetchall()
+        assert [r[0] for r in rows] == ["file", "reference", "verdict", "seal"]
+        assert [r[1] is None for r in rows] == [True, True, True, False]
+        assert "altered" not in [c[1] for c in conn.execute("PRAGMA table_info(inspections)")]
         res = reg.check(conn)
         assert res.ok and res.notes == [
-            f"inspection #{insp.id}: re-test file not kept (inspected before schema 3)"]
+            f"inspection #{insp.id}: re-test file not kept (inspected before schema 3)",
+            "records #1..#3 are unsigned legacy records (written before schema 4), sealed by "
+            "signed record #4"]
         assert conn.execute("PRAGMA foreign_key_check").fetchall() == []
         assert conn.execute("PRAGMA integrity_check").fetchone()[0] == "ok"
         # the migrated database is fully usable
@@ -232,7 +237,8 @@ def test_concurrent_writers(tmp_path):
         assert len(hist) == 60
         assert sorted(h.retest_sha256 for h in hist) == sorted(
             reg.sha256_bytes(f"{w}-{k}".encode()) for w in range(4) for k in range(15))
-        assert [r[0] for r in conn.execute("SELECT version FROM schema_version")] == [1, 2, 3]
+        assert [r[0] for r in conn.execute("SELECT version FROM schema_version")] == [1, 2, 3,
+                                                                                      4]
         assert reg.check(conn).ok  # one unbroken chain however the writers interleaved
 
 
@@ -345,15 +351,16 @@ def test_chain_names_a_rewritten_record_and_everything_after_stays_linked(tmp_pa
     res = _check(path)
     assert res.first_changed == seq and f"custody record #{seq} " in res.problems[0]
     assert "hash does not match" in res.problems[0]
-    # re-hash the forged record too: now the next record's link breaks
+    # re-hash the forged record too: its signature no longer verifies and the next record's
+    # link breaks
     with reg.open_registry(path) as conn:
-        r = conn.execute("SELECT kind, subject, content_sha256, prev_sha256, recorded_at "
-                         "FROM custody WHERE seq = ?", (seq,)).fetchone()
-    _raw(path, "UPDATE custody SET record_sha256 = ? WHERE seq = ?",
-         (reg.record_hash(seq, *r), seq))
+        (row,) = [r for r in reg.custody_rows(conn) if r.seq == seq]
+    _raw(path, "UPDATE custody SET record_sha256 = ? WHERE seq = ?", (row.expected_hash(), seq))
     res = _check(path)
-    assert f"custody record #{seq + 1} " in res.problems[0]
-    assert "link to the previous record" in res.problems[0]
+    assert f"custody record #{seq} " in res.problems[0]
+    assert "signature does not verify" in res.problems[0]
+    assert f"custody record #{seq + 1} " in res.problems[1]
+    assert "link to the previous record" in res.problems[1]
     assert res.first_changed == seq  # the live inspection no longer matches its record either
 
 
@@ -425,7 +432,8 @@ def test_connect_waits_for_another_process_switching_to_wal(tmp_path):
     path = tmp_path / "held.sqlite"
     holder = sqlite3.connect(path, isolation_level=None, check_same_thread=False)
     holder.execute("BEGIN IMMEDIATE")
-    holder.execute("CREATE TABLE t (x)")
+    holder.execute("CREATE TABLE schema_version (version INTEGER NOT NULL, "
+                   "applied_at TEXT NOT NULL)")
     timer = threading.Timer(0.3, lambda: holder.execute("COMMIT"))
     timer.start()
     try:

@@ -20,7 +20,7 @@ def add_arguments(p) -> None:
 def run(args) -> int:
     from batlab.registry import list_bats, open_registry
 
-    with open_registry(db_path(args), create=False) as conn:
+    with open_registry(db_path(args), create=False, readonly=True) as conn:
         bats = list_bats(conn)
     if args.json:
         print(json.dumps([asdict(b) for b in bats]))

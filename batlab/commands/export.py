@@ -18,7 +18,7 @@ def run(args) -> int:
     from batlab.pipeline import history_table, write_csv
     from batlab.registry import open_registry
 
-    with open_registry(db_path(args), create=False) as conn:
+    with open_registry(db_path(args), create=False, readonly=True) as conn:
         table = history_table(conn, args.serial)
     write_csv(args.output, table)
     print(f"{len(table)} inspection(s) written to {args.output}")

@@ -21,7 +21,7 @@ def add_arguments(p) -> None:
 def run(args) -> int:
     from batlab.registry import get_bat, history, open_registry
 
-    with open_registry(db_path(args), create=False) as conn:
+    with open_registry(db_path(args), create=False, readonly=True) as conn:
         bat = get_bat(conn, args.serial)
         rows = history(conn, args.serial)
     if args.json:

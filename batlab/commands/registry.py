@@ -1,4 +1,4 @@
-"""`batlab registry check`: integrity, stored files and the chain of custody."""
+"""`batlab registry`: check the registry, print the lab's public key or the chain's head."""
 
 from __future__ import annotations
 
@@ -7,72 +7,68 @@ from dataclasses import asdict, replace
 
 from batlab.cli_support import add_db_argument, db_path
 
-HELP = "check the registry: SQLite integrity, every stored file's hash, the custody chain"
-EXAMPLE = "batlab registry check --db lab.sqlite"
+HELP = ("check the registry (SQLite integrity, stored files, the signed custody chain); print "
+        "the lab's public key or the chain's head")
+EXAMPLE = "batlab registry check --db lab.sqlite --head 42:<sha256>"
 
 
 def add_arguments(p) -> None:
-    p.add_argument("action", choices=["check"], help="check: verify everything stored")
+    """Add the ``registry`` arguments to parser ``p``."""
+    p.add_argument("action", choices=["check", "key", "head"],
+                   help="check: verify everything stored; key: print the lab's public key "
+                        "(ed25519:<base64>) for a league to keep; head: print the chain's "
+                        "head, SEQ:SHA256, to note outside the file")
     p.add_argument("--report", default=None, metavar="INDEX.html",
-                   help="also verify a report page against the registry: its verdict and "
-                        "registration records and file hashes must be there, unchanged")
+                   help="check: also verify a report page: its seal, what it says (verdict, "
+                        "reasons, the head it shows) and its records and files")
+    p.add_argument("--trust", default=None, metavar="FILE",
+                   help="check: also trust these lab public keys (one ed25519:<base64> a line)")
+    p.add_argument("--head", default=None, metavar="SEQ:SHA256",
+                   help="check: a head printed earlier; fails if that record is no longer in "
+                        "the chain (rollback, truncation, fork)")
     add_db_argument(p)
-    p.add_argument("--json", action="store_true", help="print the result as JSON on stdout")
+    p.add_argument("--json", action="store_true", help="check: print the result as JSON")
 
 
 def run(args) -> int:
-    from batlab.registry import check, open_registry
+    """Run ``batlab registry ACTION``; returns the exit code (check: 0 only when intact)."""
+    from batlab import signing
+
+    if args.action == "key":
+        print(signing.key_id(signing.signing_key(create=True).public_key()))
+        return 0
+    from batlab.registry import check, head, open_registry
 
     path = db_path(args)
-    with open_registry(path, create=False) as conn:
-        res = check(conn)
+    with open_registry(path, create=False, readonly=True) as conn:
+        if args.action == "head":
+            text = head(conn)
+            if text is None:
+                raise ValueError(f"{path}: the registry holds no custody record yet")
+            print(text)
+            return 0
+        trusted = signing.trusted_keys(args.trust)
+        res = check(conn, trusted, args.head)
         if args.report:
-            res = replace(res, problems=res.problems + _check_report(conn, args.report))
-    if args.json:
-        print(json.dumps({**asdict(res), "ok": res.ok}))
-    else:
-        state = "intact" if res.ok else "DAMAGED OR CHANGED"
-        print(f"{path}: {state}: {res.n_records} custody records, {res.n_files} files")
-        if res.head_sha256:
-            print(f"  chain head sha256 {res.head_sha256}")
-        for line in res.problems:
-            print(f"  problem: {line}")
-        for line in res.notes:
-            print(f"  note: {line}")
-        if res.first_changed is not None:
-            print(f"  first changed record: #{res.first_changed}")
+            from batlab.report_check import check_page
+
+            res = replace(res, problems=res.problems + check_page(conn, args.report, trusted))
+    _print(res, path, args.json)
     return 0 if res.ok else 1
 
 
-def _check_report(conn, page_path: str) -> list[str]:
-    """Problems of a report page against the registry (empty: it matches)."""
-    from pathlib import Path
-
-    from batlab.registry import custody_record, has_file
-    from batlab.report import provenance_hashes
-
-    try:
-        page = Path(page_path).read_text(encoding="utf-8")
-    except (OSError, UnicodeDecodeError) as exc:
-        raise ValueError(f"{page_path}: cannot read the report ({exc})") from None
-    hashes = provenance_hashes(page)
-    if "verdict_record" not in hashes:
-        return [f"{page_path}: carries no verdict record (not a report of a stored inspection)"]
-    problems = []
-    for key in ("verdict_record", "reference_record"):
-        if key not in hashes:
-            continue
-        try:
-            rec = custody_record(conn, hashes[key])
-        except ValueError as exc:
-            problems.append(f"{page_path}: {exc}")
-            continue
-        if rec.record_sha256 != hashes[key + "_sha256"]:
-            problems.append(f"{page_path}: custody record #{rec.seq} has hash "
-                            f"{rec.record_sha256[:12]}, the report says "
-                            f"{hashes[key + '_sha256'][:12]}")
-    for key in ("baseline_sha256", "retest_sha256"):
-        sha = hashes.get(key)
-        if sha and not has_file(conn, sha):
-            problems.append(f"{page_path}: file {sha[:12]} ({key[:-7]}) not in the registry")
-    return problems
+def _print(res, path, as_json: bool) -> None:
+    """Print a check's result: JSON, or a summary line and one line per problem and note."""
+    if as_json:
+        print(json.dumps({**asdict(res), "ok": res.ok}))
+        return
+    state = "intact" if res.ok else "DAMAGED OR CHANGED"
+    print(f"{path}: {state}: {res.n_records} custody records, {res.n_files} files")
+    if res.head:
+        print(f"  chain head {res.head}")
+    for line in res.problems:
+        print(f"  problem: {line}")
+    for line in res.notes:
+        print(f"  note: {line}")
+    if res.first_changed is not None:
+        print(f"  first changed record: #{res.first_changed}")

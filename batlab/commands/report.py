@@ -27,7 +27,7 @@ def run(args) -> int:
     from batlab.report import check_destination, write_report
 
     progress = progress_printer("report")
-    with open_registry(db_path(args), create=False) as conn:
+    with open_registry(db_path(args), create=False, readonly=True) as conn:
         rows = history(conn, args.serial)
         n = args.inspection if args.inspection is not None else (rows[-1].id if rows else 0)
         out = Path(args.out) if args.out else Path(f"report-{args.serial}-{n}")

@@ -544,7 +544,8 @@ def provenance(
                     "retest_sha256": stored.retest_sha256,
                     "verdict_record": stored.record_seq, "verdict_record_sha256":
                     stored.record_sha256,
-                    "verdict_sha256": reg.custody_record(conn, stored.record_seq).content_sha256})
+                    "verdict_sha256": reg.custody_record(conn, stored.record_seq).content_sha256,
+                    "chain_head": reg.head(conn)})
         if stored.reference_seq is not None:
             ref = reg.custody_record(conn, stored.reference_seq)
             out.update({"reference_record": ref.seq, "reference_record_sha256":

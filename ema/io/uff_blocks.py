@@ -187,7 +187,8 @@ def read_nodes(block: UffBlock, path: Path, length_factor: float) -> dict[int, f
     d = _pyuff(_extract15 if block.type == 15 else _extract2411, block, path)
     nums = np.asarray(d["node_nums"], dtype=float)
     x = np.asarray(d["x"], dtype=float)
-    if nums.size != x.size or not np.all(np.isfinite(x)) or np.any(nums != np.round(nums)):
+    if nums.size != x.size or not np.all(np.isfinite(x)) or not np.all(np.abs(nums) < 2**31) \
+            or np.any(nums != np.round(nums)):
         raise ValueError(f"{block.where(path)}: malformed node records")
     return {int(n): float(v) / length_factor for n, v in zip(nums, x, strict=True)}
 

@@ -10,10 +10,10 @@ the file and the key.
 from __future__ import annotations
 
 import datetime as dt
-import math
 from dataclasses import dataclass
 from pathlib import Path
 
+from ema.io.finite import finite_number
 from updating.model.json_input import read_json_object
 from updating.model.units import LB_TO_KG
 
@@ -45,12 +45,9 @@ def _number(path: Path, raw: dict, key: str) -> float | None:
     value = raw.get(key)
     if value is None:
         return None
-    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
         raise ValueError(f"{path}: {key} must be a number, not {value!r}")
-    lo, hi = RANGES[key]
-    if not lo <= value <= hi:
-        raise ValueError(f"{path}: {key} = {value} is outside {lo:g}..{hi:g}")
-    return float(value)
+    return finite_number(value, f"{path}: {key}", *RANGES[key])
 
 
 def read_retest_meta(path: str | Path) -> RetestConditions:

@@ -12,10 +12,18 @@ from pathlib import Path
 
 import numpy as np
 
+from ema.io.finite import finite_number
 from updating.model.json_input import read_json_object
 from updating.model.material import ISOTROPIC_E_OVER_G, Material, material_from_imperial
 from updating.model.sections import Core
 from updating.model.units import IN_TO_M, LB_TO_KG
+
+META_RANGES = {  # key: (lowest, highest) accepted, in the file's units; wider than any bat
+    "nominal_E_psi": (1e4, 1e8),
+    "nominal_weight_density_lbf_in3": (1e-4, 1.0),
+    "weight_lb": (0.05, 50.0),
+    "points_in": (-10.0, 100.0),
+}
 
 
 @dataclass(frozen=True)
@@ -56,19 +64,20 @@ def read_meta(path: str | Path, e_over_g: float = ISOTROPIC_E_OVER_G) -> BatMeta
             raise ValueError(f"{path}: missing key {key!r}")
 
     def scalar(key: str) -> float:
-        try:
-            return float(raw[key])
-        except (TypeError, ValueError):
-            raise ValueError(f"{path}: key {key!r} must be a number, not {raw[key]!r}") from None
+        lo, hi = META_RANGES.get(key, (-np.inf, np.inf))
+        return finite_number(raw[key], f"{path}: key {key!r}", lo, hi)
 
     E = scalar("nominal_E_psi")
     wd = scalar("nominal_weight_density_lbf_in3")
     weight_kg = None if raw.get("weight_lb") is None else scalar("weight_lb") * LB_TO_KG
     try:
-        points = np.asarray(raw.get("points_in", []), dtype=float).reshape(-1) * IN_TO_M
-    except (TypeError, ValueError):
+        points = np.asarray(raw.get("points_in", []), dtype=float).reshape(-1)
+    except (TypeError, ValueError, OverflowError):
         raise ValueError(f"{path}: key 'points_in' must be a list of numbers (inches from the "
                          "knob end)") from None
+    for k, x in enumerate(points):
+        finite_number(x, f"{path}: key 'points_in'[{k}]", *META_RANGES["points_in"])
+    points = points * IN_TO_M
     if E <= 0 or wd <= 0 or (weight_kg is not None and weight_kg <= 0):
         raise ValueError(f"{path}: modulus, density and weight must be positive")
     sensor_kg = None

@@ -14,6 +14,7 @@ from pathlib import Path
 import numpy as np
 
 from ema.io.atomic_write import atomic_write
+from ema.io.finite import finite_number
 from updating.model.units import IN_TO_M
 
 
@@ -91,6 +92,9 @@ def read_profile_csv(path: str | Path) -> Profile:
         d = [float(r[idia]) for r in rows]
     except (ValueError, IndexError):
         raise ValueError(f"{path}: a row is not two numbers") from None
+    for n, (xi, di) in enumerate(zip(x, d, strict=True), 2):
+        finite_number(xi, f"{path}: row {n} x_in", -100.0, 200.0)
+        finite_number(di, f"{path}: row {n} diameter_in", -np.inf, 20.0)
     return make_profile(np.array(x) * IN_TO_M, np.array(d) * IN_TO_M, str(path))
 
 

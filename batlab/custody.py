@@ -1,0 +1,194 @@
+"""The custody chain's records: canonical bytes, hashes, signatures, the head, their check.
+
+A record (schema 4) is the canonical JSON (sorted keys, no spaces, UTF-8) of
+
+    {"seq", "kind", "subject", "content_sha256", "prev_sha256", "recorded_at", "signer"}
+
+``record_sha256`` is the SHA-256 of those bytes and ``signature`` the signer's Ed25519
+signature of them, so the chain is plain text and numbers that any SQL dialect stores as is.
+``prev_sha256`` is the previous record's ``record_sha256`` (64 zeros for the first). The head
+of the chain is written ``SEQ:SHA256`` (RFC 9162's signed tree head, reduced to a hash chain).
+
+Records written before schema 4 are unsigned and hashed the old way (newline-joined fields,
+``legacy_record_hash``); they are accepted only as the chain's first records and only when the
+signed ``seal`` record right after them says how many there are.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+from dataclasses import dataclass
+
+from batlab import signing
+
+GENESIS_SHA256 = "0" * 64
+KINDS = ("file", "reference", "verdict", "seal")
+
+
+def canonical(obj) -> str:
+    """Return canonical JSON (sorted keys, no spaces, no NaN): the text a record hashes."""
+    return json.dumps(obj, sort_keys=True, separators=(",", ":"), allow_nan=False)
+
+
+def sha256_text(text: str) -> str:
+    """Return the hex SHA-256 of ``text`` encoded as UTF-8."""
+    return hashlib.sha256(text.encode("utf-8")).hexdigest()
+
+
+def legacy_record_hash(seq: int, kind: str, subject: str, content_sha256: str,
+                       prev_sha256: str, recorded_at: str) -> str:
+    """Return a schema-3 record's hash: SHA-256 of its fields joined by newlines."""
+    return sha256_text("\n".join((str(seq), kind, subject, content_sha256, prev_sha256,
+                                  recorded_at)))
+
+
+def record_bytes(seq: int, kind: str, subject: str, content_sha256: str, prev_sha256: str,
+                 recorded_at: str, signer: str) -> bytes:
+    """Return the canonical bytes of a schema-4 record: what is hashed and signed."""
+    return canonical({"seq": seq, "kind": kind, "subject": subject,
+                      "content_sha256": content_sha256, "prev_sha256": prev_sha256,
+                      "recorded_at": recorded_at, "signer": signer}).encode("utf-8")
+
+
+@dataclass(frozen=True)
+class Row:
+    """One stored custody record as read from the table (``signer`` None: legacy)."""
+
+    seq: int
+    kind: str
+    subject: str
+    payload: str | None
+    content_sha256: str
+    prev_sha256: str
+    record_sha256: str
+    recorded_at: str
+    signer: str | None
+    signature: str | None
+
+    def expected_hash(self) -> str:
+        """Return the hash the record's fields give (legacy rule when unsigned)."""
+        if self.signer is None:
+            return legacy_record_hash(self.seq, self.kind, self.subject, self.content_sha256,
+                                      self.prev_sha256, self.recorded_at)
+        return hashlib.sha256(self._bytes()).hexdigest()
+
+    def _bytes(self) -> bytes:
+        return record_bytes(self.seq, self.kind, self.subject, self.content_sha256,
+                            self.prev_sha256, self.recorded_at, self.signer or "")
+
+    def signature_ok(self) -> bool:
+        """Return whether the signature is the named signer's over the record's bytes."""
+        return bool(self.signer and self.signature
+                    and signing.verify(self.signer, self._bytes(), self.signature))
+
+
+def head_text(seq: int, record_sha256: str) -> str:
+    """Return the head of the chain as ``SEQ:SHA256``."""
+    return f"{seq}:{record_sha256}"
+
+
+def parse_head(text: str) -> tuple[int, str]:
+    """Return (seq, sha256) of a head written ``SEQ:SHA256``; ValueError if malformed."""
+    seq, _, sha = text.strip().partition(":")
+    if not seq.isdigit() or len(sha) != 64 or any(c not in "0123456789abcdef" for c in sha):
+        raise ValueError(f"--head {text!r}: expected SEQ:SHA256 as `batlab registry head` "
+                         "prints it")
+    return int(seq), sha
+
+
+def legacy_prefix(rows: list[Row]) -> int:
+    """Return how many leading unsigned records a valid seal record vouches for (0 if none).
+
+    The seal is the first signed record; its payload ``{"legacy_records": N}`` must name
+    exactly the unsigned records before it.
+    """
+    first_signed = next((r for r in rows if r.signer is not None), None)
+    if first_signed is None or first_signed.kind != "seal":
+        return 0
+    try:
+        n = int(json.loads(first_signed.payload or "{}").get("legacy_records", 0))
+    except (ValueError, TypeError, AttributeError):
+        return 0
+    return n if n == first_signed.seq - 1 else 0
+
+
+def _why_changed(r: Row, prev: str, expect_seq: int) -> str | None:
+    """Return why a record fails its own hash, link or content (None when it holds)."""
+    if r.seq != expect_seq:
+        return f"records #{expect_seq}..#{r.seq - 1} removed or renumbered"
+    if r.kind not in KINDS:
+        return f"unknown kind {r.kind!r}"
+    if r.prev_sha256 != prev:
+        return "its link to the previous record is broken"
+    if r.record_sha256 != r.expected_hash():
+        return "its hash does not match its fields"
+    if r.kind != "file" and sha256_text(r.payload or "") != r.content_sha256:
+        return "its content does not match its content hash"
+    if r.kind == "file" and r.subject != r.content_sha256:
+        return "its file hash was changed"
+    return None
+
+
+def _why_unsigned(r: Row, n_legacy: int, trusted: set[str]) -> str | None:
+    """Return what is wrong with a record's signature (None when a trusted key signed it)."""
+    if r.signer is None:
+        return None if r.seq <= n_legacy else "unsigned"
+    if not r.signature_ok():
+        return f"its signature does not verify for key {r.signer}"
+    if r.signer not in trusted:
+        return f"signed by a key not trusted here ({r.signer})"
+    return None
+
+
+@dataclass(frozen=True)
+class ChainCheck:
+    """The chain's own verdict: problems (one line each), notes, first changed record."""
+
+    problems: list[str]
+    notes: list[str]
+    first_changed: int | None
+
+
+def check_chain(rows: list[Row], trusted: set[str]) -> ChainCheck:
+    """Verify every record's sequence, link, hash, content hash and signature.
+
+    Parameters
+    ----------
+    rows : list of Row
+        The custody table ordered by ``seq``.
+    trusted : set of str
+        Key ids (``ed25519:<base64>``) whose signatures are accepted.
+
+    Returns
+    -------
+    ChainCheck
+        One problem per failing record, naming its number, kind and subject.
+    """
+    problems, notes, first = [], [], None
+    n_legacy = legacy_prefix(rows)
+    if n_legacy:
+        notes.append(f"records #1..#{n_legacy} are unsigned legacy records (written before "
+                     f"schema 4), sealed by signed record #{n_legacy + 1}")
+    prev, expect = GENESIS_SHA256, 1
+    for r in rows:
+        why = _why_changed(r, prev, expect) or _why_unsigned(r, n_legacy, trusted)
+        if why:
+            first = r.seq if first is None else first
+            problems.append(f"custody record #{r.seq} ({r.kind} {r.subject[:16]}): {why}")
+        prev, expect = r.record_sha256, r.seq + 1
+    return ChainCheck(problems, notes, first)
+
+
+def check_head(rows: list[Row], head: str) -> list[str]:
+    """Return the problem (if any) with a head noted earlier: it must still be in the chain."""
+    seq, sha = parse_head(head)
+    by_seq = {r.seq: r for r in rows}
+    if seq not in by_seq:
+        last = rows[-1].seq if rows else 0
+        return [f"head {seq}:{sha[:12]}: record #{seq} is gone (chain ends at #{last}: "
+                "rolled back or truncated)"]
+    if by_seq[seq].record_sha256 != sha:
+        return [f"head {seq}:{sha[:12]}: record #{seq} is now {by_seq[seq].record_sha256[:12]} "
+                "(rolled back, rewritten or forked)"]
+    return []
