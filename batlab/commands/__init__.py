@@ -1,1 +1,1 @@
-"""One module per `batlab` sub-command: HELP, add_arguments(parser), run(args)."""
+"""One module per `batlab` sub-command: EXAMPLE, add_arguments(parser), run(args) (help: batlab.cli)."""

@@ -14,7 +14,6 @@ import sys
 from dataclasses import asdict
 from pathlib import Path
 
-HELP = "run a roving-hammer impact test over a serial port (or replay a recorded stream)"
 EXAMPLE = ("batlab acquire --port /dev/ttyACM0 --points 1,3,5,7,9,11,13,15,16 "
            "--driving-point 16 --hits 3 --meta meta.json -o test.uff")
 

@@ -8,7 +8,6 @@ from dataclasses import asdict
 from batlab.cli_support import add_db_argument, db_path
 from batlab.formatting import STATUS_WORDS
 
-HELP = "list the registered bats with their latest inspection"
 EXAMPLE = "batlab bats --db lab.sqlite"
 
 

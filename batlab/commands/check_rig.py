@@ -5,8 +5,6 @@ from __future__ import annotations
 import json
 import sys
 
-HELP = ("check the test rig on a reference bar: measured modes, damping and mass line "
-        "against the bar's model")
 EXAMPLE = "batlab check-rig --bar steel_bar.json --frf bar_test.uff --json"
 
 

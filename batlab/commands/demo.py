@@ -16,7 +16,6 @@ from pathlib import Path
 
 from batlab.cli_support import add_db_argument, progress_printer
 
-HELP = "simulate a baseline and a corked re-test of a built-in bat, register and inspect them"
 EXAMPLE = "batlab demo --out demo/"
 
 

@@ -5,7 +5,6 @@ from __future__ import annotations
 import json
 import sys
 
-HELP = "compare a baseline test with the nominal model, rank the causes, calibrate the reference"
 EXAMPLE = "batlab diagnose --profile profile.csv --meta meta.json --frf baseline.uff --plot plots/"
 
 

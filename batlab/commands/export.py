@@ -4,7 +4,6 @@ from __future__ import annotations
 
 from batlab.cli_support import add_db_argument, db_path
 
-HELP = "write the inspection history (one bat or all) as a CSV file"
 EXAMPLE = "batlab export HX-1004 -o HX-1004.csv"
 
 

@@ -7,7 +7,6 @@ import sys
 
 from batlab.pipeline import IN_TO_M, KG_M2_TO_LB_IN2, LB_TO_KG, MIN_SNR
 
-HELP = "fit natural frequencies, damping and mass-normalised mode shapes to a test's FRFs"
 EXAMPLE = "batlab fit baseline.uff --json"
 
 

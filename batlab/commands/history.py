@@ -8,7 +8,6 @@ from dataclasses import asdict
 from batlab.cli_support import add_db_argument, db_path
 from batlab.formatting import STATUS_WORDS
 
-HELP = "list the inspections of a registered bat, oldest first"
 EXAMPLE = "batlab history HX-1004 --json"
 
 

@@ -13,7 +13,6 @@ import json
 
 from batlab.cli_support import add_db_argument, db_path, progress_printer
 
-HELP = "inspect a re-test of a bat for alteration (stateless, or against the registry)"
 EXAMPLE = ("batlab inspect --serial HX-1004 retest.uff --report report/   (or: --profile "
            "profile.csv --meta meta.json --baseline baseline.uff --retest retest.uff --json)")
 

@@ -5,7 +5,6 @@ from __future__ import annotations
 import json
 import sys
 
-HELP = "build a bat's FE model from its profile: mass properties, free-free modes, test points"
 EXAMPLE = "batlab model --profile profile.csv --meta meta.json --beam timoshenko --json"
 
 

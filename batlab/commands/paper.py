@@ -5,7 +5,6 @@ from __future__ import annotations
 import json
 import sys
 
-HELP = "rerun the paper's corked-bat case: SEREP + MSSO as published, then batlab's refinement"
 EXAMPLE = "batlab paper --json"
 
 

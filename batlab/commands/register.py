@@ -6,7 +6,6 @@ import json
 
 from batlab.cli_support import add_db_argument, db_path, progress_printer
 
-HELP = "register a bat: fit its baseline test, calibrate its reference, store it by serial"
 EXAMPLE = "batlab register --profile profile.csv --meta meta.json --baseline baseline.uff"
 
 

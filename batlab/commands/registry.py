@@ -7,7 +7,6 @@ from dataclasses import asdict, replace
 
 from batlab.cli_support import add_db_argument, db_path
 
-HELP = "check the registry: SQLite integrity, every stored file's hash, the custody chain"
 EXAMPLE = "batlab registry check --db lab.sqlite"
 
 

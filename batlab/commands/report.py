@@ -4,7 +4,6 @@ from __future__ import annotations
 
 from batlab.cli_support import add_db_argument, db_path, progress_printer
 
-HELP = "regenerate the report of a stored inspection from the registry (files kept there)"
 EXAMPLE = "batlab report HX-1004 --inspection 3 --out report-HX-1004-3"
 
 

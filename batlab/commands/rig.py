@@ -16,7 +16,6 @@ import time
 
 import numpy as np
 
-HELP = "run the virtual acquisition box (a simulated bat test) on a pseudo-terminal"
 EXAMPLE = "batlab rig serve --profile profile.csv --meta meta.json --alter cork:depth=10,d=1.0"
 
 

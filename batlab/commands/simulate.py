@@ -5,7 +5,6 @@ from __future__ import annotations
 import json
 import sys
 
-HELP = "simulate an impact test of a bat on the virtual rig and write it (UFF, CSV or NPZ)"
 EXAMPLE = ("batlab simulate --profile profile.csv --meta meta.json --alter "
            "cork:depth=10,d=1.0 --seed 1 --out retest.uff")
 
