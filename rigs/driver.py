@@ -17,11 +17,13 @@ import threading
 import time
 from dataclasses import dataclass, replace
 from pathlib import Path
-
-import serial
+from typing import TYPE_CHECKING
 
 from rigs import protocol as p
 from rigs.stream import CsvTracker, Item, StreamTracker
+
+if TYPE_CHECKING:  # pyserial is imported where a port is opened (a fast ``batlab --help``)
+    import serial
 
 
 class DeviceError(OSError):
@@ -44,6 +46,8 @@ def open_port(url: str, baudrate: int = 921600, timeout_s: float = 0.05) -> seri
     auto-reset) are not reset by pyserial; the OS may still raise DTR briefly on open, which
     the handshake tolerates by retrying GET_INFO for longer than a boot takes.
     """
+    import serial
+
     kwargs = {"exclusive": True} if os.name == "posix" and "://" not in url else {}
     try:
         port = serial.serial_for_url(url, baudrate=baudrate, timeout=timeout_s,
@@ -102,7 +106,7 @@ class SerialDevice:
         while not self._stop.is_set():
             try:
                 data = self.port.read(max(1, self.port.in_waiting))
-            except (serial.SerialException, OSError, TypeError, AttributeError) as exc:
+            except (OSError, TypeError, AttributeError) as exc:  # SerialException is an OSError
                 if not self._stop.is_set():
                     self._put(_Disconnected(" ".join(str(exc).split()) or type(exc).__name__))
                 return
@@ -161,7 +165,7 @@ class SerialDevice:
             with self._write_lock:
                 self.port.write(frame)
                 self.port.flush()
-        except (serial.SerialException, OSError) as exc:
+        except OSError as exc:  # SerialException included
             raise DeviceError(f"{self.name}: write failed ({exc})") from None
         return self._cmd_counter
 
@@ -229,12 +233,12 @@ class SerialDevice:
         self._stop.set()
         try:
             self.port.cancel_read()
-        except (AttributeError, NotImplementedError, OSError, serial.SerialException):
+        except (AttributeError, NotImplementedError, OSError):
             pass
         self._thread.join(timeout=2.0)
         try:
             self.port.close()
-        except (OSError, serial.SerialException):
+        except OSError:
             pass
         if self._raw:
             self._raw.close()

@@ -14,8 +14,6 @@ import signal
 import sys
 import time
 
-import numpy as np
-
 EXAMPLE = "batlab rig serve --profile profile.csv --meta meta.json --alter cork:depth=10,d=1.0"
 
 
@@ -46,6 +44,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    import numpy as np
+
     from batlab import pipeline
     from batlab.cli_support import note_printer
     from batlab.pipeline import (

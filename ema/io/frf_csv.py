@@ -17,7 +17,6 @@ import os
 from pathlib import Path
 
 import numpy as np
-import pandas as pd
 
 from ema.io.atomic_write import atomic_write
 from ema.io.frf_assembly import assemble, even_axis, require_finite, same_axis
@@ -51,6 +50,8 @@ def write_frf_csv(path: str | os.PathLike, test: FrfTest) -> None:
     comments = "".join(f"# {k}={v}\n" for k, v in head.items())
 
     def write(tmp: Path) -> None:
+        import pandas as pd  # here, not at the top: a UFF or NPZ test never loads pandas
+
         with open(tmp, "w", newline="") as fh:
             fh.write(comments)
             pd.DataFrame(table).to_csv(fh, index=False, float_format="%.17g")
@@ -60,6 +61,8 @@ def write_frf_csv(path: str | os.PathLike, test: FrfTest) -> None:
 
 def read_frf_csv(path: str | os.PathLike) -> FrfTest:
     """Read the long CSV layout; ValueError naming the file and the problem."""
+    import pandas as pd  # here, not at the top: a UFF or NPZ test never loads pandas
+
     path = Path(path)
     head: dict[str, str] = {}
     with open(path, encoding="utf-8", errors="replace") as fh:

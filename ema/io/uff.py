@@ -27,7 +27,6 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
-import pandas as pd
 import pyuff
 from pyuff.datasets.dataset_58 import _extract58
 
@@ -104,6 +103,8 @@ def _ascii_numbers(data: bytes, count: int) -> np.ndarray | None:
     padded with NaN); a table that is not ``count`` numbers in full rows falls back to a
     plain split of the block (which also covers NaN written into the data).
     """
+    import pandas as pd  # here, not at the top: binary files (batlab's own) never need it
+
     try:
         a = pd.read_csv(io.BytesIO(data), sep=r"\s+", header=None, dtype=float).to_numpy()
     except (ValueError, pd.errors.ParserError, pd.errors.EmptyDataError):
