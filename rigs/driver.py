@@ -63,12 +63,18 @@ def open_port(url: str, baudrate: int = 921600, timeout_s: float = 0.05) -> seri
 class SerialDevice:
     """Live acquisition box on an open pyserial port.
 
-    Args:
-        port: open port (see :func:`open_port`; ``serial_for_url("loop://")`` in tests).
-        raw_path: file receiving every byte read, flushed as it is read; None for none.
-        csv_info: if given, the port speaks the ASCII line mode with this channel layout.
-        queue_size: bound of the item queue (items are frames, ~5 ms of samples each).
-        silence_s: no byte at all for this long is reported as a dead device.
+    Parameters
+    ----------
+    port : serial.SerialBase
+        open port (see :func:`open_port`; ``serial_for_url("loop://")`` in tests).
+    raw_path : str | Path | None, optional
+        file receiving every byte read, flushed as it is read; None for none.
+    csv_info : p.DeviceInfo | None, optional
+        if given, the port speaks the ASCII line mode with this channel layout.
+    queue_size : int, optional
+        bound of the item queue (items are frames, ~5 ms of samples each).
+    silence_s : float, optional
+        no byte at all for this long is reported as a dead device.
     """
 
     def __init__(self, port: serial.SerialBase, raw_path: str | Path | None = None,
@@ -171,8 +177,11 @@ class SerialDevice:
 
     def request(self, opcode: int, args: bytes = b"", timeout_s: float = 1.0,
                 retries: int = 3) -> p.Ack | None:
-        """Send a command and wait for its ACK; other items are kept, in order, for
-        :meth:`next_item`. None in CSV mode (no commands)."""
+        """Send a command and wait for its ACK.
+
+        Other items are kept, in order, for :meth:`next_item`. None in CSV mode (no
+        commands).
+        """
         if self.csv:
             return None
         for _ in range(retries):
@@ -189,9 +198,11 @@ class SerialDevice:
 
     def handshake(self, sample_rate_hz: float | None = None, samples_per_frame: int | None = None,
                   timeout_s: float = 1.0, retries: int = 4) -> p.DeviceInfo:
-        """GET_INFO, CONFIGURE, START (docs/protocol.md, 'Host handshake'); returns the info.
+        """Run GET_INFO, CONFIGURE, START (docs/protocol.md, 'Host handshake').
+
         A device still streaming (its last host was killed) answers CONFIGURE with BAD_STATE:
-        it is sent STOP and configured again."""
+        it is sent STOP and configured again. Returns the device's info.
+        """
         if self.csv:
             return self.info
         ack = self.request(p.GET_INFO, timeout_s=timeout_s, retries=retries)
@@ -221,9 +232,12 @@ class SerialDevice:
             os.fsync(self._raw.fileno())
 
     def stop(self) -> p.Ack | None:
-        """STOP streaming; the device sends its last frames before the ACK (whose index is
-        the next sample index), so nothing sent is lost: those frames stay readable through
-        :meth:`next_item`."""
+        """Stop streaming.
+
+        The device sends its last frames before the ACK (whose index is the next sample
+        index), so nothing sent is lost: those frames stay readable through
+        :meth:`next_item`.
+        """
         if self.csv or self._error is not None:
             return None
         return self.request(p.STOP)
@@ -252,8 +266,11 @@ class SerialDevice:
 
 
 class ReplaySource:
-    """A recorded raw stream (as written by :class:`SerialDevice`) played through the same
-    decoder and tracker; commands are not sent, their recorded ACKs are looked up instead."""
+    """A recorded raw stream (as written by :class:`SerialDevice`), played back.
+
+    The stream goes through the same decoder and tracker; commands are not sent, their
+    recorded ACKs are looked up instead.
+    """
 
     def __init__(self, path: str | Path, csv_info: p.DeviceInfo | None = None,
                  chunk: int = 65536) -> None:
@@ -283,6 +300,7 @@ class ReplaySource:
                     self._items.extend(self.tracker.push(frame))
 
     def next_item(self, timeout_s: float = 0.0) -> Item:
+        """Return the next recorded item; EndOfStream when there is none (no waiting)."""
         self._fill()
         item = self._items.popleft()
         if isinstance(item, p.DeviceInfo):
@@ -290,7 +308,7 @@ class ReplaySource:
         return item
 
     def request(self, opcode: int, args: bytes = b"", **_: object) -> p.Ack | None:
-        """The next recorded ACK of this opcode (items before it stay queued in order)."""
+        """Find the next recorded ACK of this opcode (items before it stay queued in order)."""
         if self.csv:
             return None
         held = []
@@ -305,6 +323,7 @@ class ReplaySource:
             self._items.extendleft(reversed(held))
 
     def handshake(self, *_: object, **__: object) -> p.DeviceInfo:
+        """Replay the handshake: the recorded START and the device info."""
         if not self.csv:
             self.request(p.START)
         if self.info is None:
@@ -312,12 +331,13 @@ class ReplaySource:
         return self.info
 
     def flush_raw(self) -> None:
-        pass
+        """Do nothing: a replay writes no raw stream."""
 
     def stop(self) -> None:
-        return None
+        """Do nothing: a recording cannot be stopped."""
 
     def close(self) -> None:
+        """Close the recorded file."""
         self._f.close()
 
     def __enter__(self) -> ReplaySource:

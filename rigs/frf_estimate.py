@@ -52,8 +52,11 @@ def exponential_window(n: int, sample_rate_hz: float, tau_s: float | None) -> np
 
 def force_window(force_n: np.ndarray, sample_rate_hz: float, margin_s: float = 0.002,
                  taper_s: float = 0.001, threshold_fraction: float = 0.02) -> np.ndarray:
-    """(k, n) windows: 1 up to the end of the pulse (last sample above threshold_fraction of
-    the peak) plus ``margin_s``, then a half-cosine taper of ``taper_s`` to zero."""
+    """Build (k, n) force windows that keep the pulse and cut the noise after it.
+
+    Each window is 1 up to the end of the pulse (last sample above threshold_fraction of the
+    peak) plus ``margin_s``, then a half-cosine taper of ``taper_s`` to zero.
+    """
     f = np.atleast_2d(force_n)
     k, n = f.shape
     above = f > threshold_fraction * f.max(axis=1, keepdims=True)

@@ -48,7 +48,8 @@ def modal_acceleration(t_s: np.ndarray, pulse: Pulse, freq_hz: np.ndarray,
                        damping_ratio: np.ndarray) -> np.ndarray:
     """q_r''(t) (m/s^2 per unit modal force gain), shape (len(t), n_modes), exact.
 
-    Underdamped modes with w_r > 0 only (module docstring)."""
+    Underdamped modes with w_r > 0 only (module docstring).
+    """
     t = np.asarray(t_s, dtype=float)[:, None] - pulse.t0_s
     w = 2 * np.pi * np.asarray(freq_hz, dtype=float)[None, :]
     z = np.asarray(damping_ratio, dtype=float)[None, :]
@@ -86,7 +87,8 @@ def quantise(si: np.ndarray, info: DeviceInfo, noise_v: float,
     """SI signals (n, ch) -> ADC codes (n, ch) int32 and per-sample overload flags (n,).
 
     volts = si / UNIT_TO_SI * sensitivity + noise; codes = round(volts / V_per_code) clipped to
-    +-(2**(bits-1) - 1); overload where a code reaches full scale."""
+    +-(2**(bits-1) - 1); overload where a code reaches full scale.
+    """
     scale = info.scale_si()
     volts_per_code = info.adc_full_scale_v / 2 ** (info.bits - 1)
     noise = rng.normal(0.0, noise_v / volts_per_code, si.shape) if noise_v > 0 else 0.0
@@ -103,7 +105,8 @@ def simulate_hit(model: ModalModel, resp: int, ref: int, info: DeviceInfo, durat
     """Codes (n, ch) and overload flags of a record of ``duration_s`` from ``t_start_s``.
 
     Channel layout from ``info``: the first 'force' channel gets the hammer force, the first
-    'acceleration' channel the response; any other channel is noise only."""
+    'acceleration' channel the response; any other channel is noise only.
+    """
     rng = rng or np.random.default_rng(0)
     n = int(round(duration_s * info.sample_rate_hz))
     t = t_start_s + np.arange(n) / info.sample_rate_hz

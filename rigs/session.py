@@ -41,12 +41,24 @@ class HitLog:
 class SessionResult:
     """FRFs of a roving-hammer test, one fixed response.
 
-    Attributes:
-        freq_hz: (F,) lines; h1, h2, coherence: (F, 1, n_points), accelerance (m/s^2)/N.
-        points: (n_points,) impact point numbers in the order of the last axis.
-        exp_window_tau_s: exponential window time constant (None: no window).
-        hits: every triggered record with its verdict.
-        info: the device's description.
+    Attributes
+    ----------
+    freq_hz : np.ndarray
+        (F,) frequency lines, Hz.
+    h1, h2 : np.ndarray
+        (F, 1, n_points) H1 and H2 estimates of the accelerance, (m/s^2)/N.
+    coherence : np.ndarray
+        (F, 1, n_points) ordinary coherence, 0..1.
+    points : np.ndarray
+        (n_points,) impact point numbers in the order of the last axis.
+    exp_window_tau_s : float | None
+        exponential window time constant (None: no window).
+    hits : list[HitLog]
+        every triggered record with its verdict.
+    info : p.DeviceInfo
+        the device's description.
+    n_averages : np.ndarray
+        (n_points,) accepted hits averaged at each point.
     """
 
     freq_hz: np.ndarray
@@ -60,6 +72,7 @@ class SessionResult:
     n_averages: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=int))
 
     def hits_as_dicts(self) -> list[dict]:
+        """Return the hit log as plain dicts (for JSON)."""
         return [asdict(h) for h in self.hits]
 
 
@@ -154,7 +167,7 @@ def run_session(source, points: list[int], hits_per_point: int,
 
 def combine(points: list[int], estimates: dict[int, FrfEstimate],
             exp_window_tau_s: float | None, log: list[HitLog], info) -> SessionResult:
-    """The session's FRFs from per-point estimates, in ``points`` order."""
+    """Assemble the session's FRFs from per-point estimates, in ``points`` order."""
     ests = [estimates[n] for n in points]
     stack = {name: np.stack([getattr(e, name) for e in ests], axis=-1)[:, None, :]
              for name in ("h1", "h2", "coherence")}
@@ -166,8 +179,15 @@ def combine(points: list[int], estimates: dict[int, FrfEstimate],
 class SessionInterrupted(OSError):
     """The stream ended (device lost, recording cut) before every point was measured.
 
-    Attributes: ``completed`` {point: FrfEstimate} measured so far, ``log`` the hit log,
-    ``info`` the device description."""
+    Attributes
+    ----------
+    completed : dict[int, FrfEstimate]
+        The points measured so far and their FRF estimates.
+    log : list[HitLog]
+        The hit log.
+    info : p.DeviceInfo
+        The device's description.
+    """
 
     def __init__(self, message: str, completed: dict, log: list[HitLog], info) -> None:
         super().__init__(message)

@@ -300,4 +300,5 @@ class VirtualBox:
         self.master = self._slave = -1
 
     def close(self) -> None:
+        """Unplug the box (close the pseudo-terminal)."""
         self.unplug()
