@@ -32,16 +32,24 @@ UNIT_SYSTEMS = {1: "SI", 2: "BG", 3: "MG", 4: "BA", 5: "MM", 6: "CM", 7: "IN", 8
 class UffBlock:
     """One dataset of a UFF file.
 
-    Attributes:
-        index: 1-based position of the dataset in the file.
-        type: dataset number (15, 58, 164, ...).
-        binary: True for a binary 58 (``58b``).
-        text: the dataset from its opening marker line up to (not including) its end marker,
-            as pyuff's extractors expect it.
-        header: for 58, its 11 header records after the type line (ID lines 1-5, records
-            6-11); empty for other datasets.
-        data: for 58, the data part (ASCII text or raw bytes); empty for other datasets.
-        type_line: the dataset number record (carries the binary format of a 58b).
+    Attributes
+    ----------
+    index : int
+        1-based position of the dataset in the file.
+    type : int
+        dataset number (15, 58, 164, ...).
+    binary : bool
+        True for a binary 58 (``58b``).
+    text : bytes
+        the dataset from its opening marker line up to (not including) its end marker,
+        as pyuff's extractors expect it.
+    header : tuple[bytes, ...]
+        for 58, its 11 header records after the type line (ID lines 1-5, records
+        6-11); empty for other datasets.
+    data : bytes
+        for 58, the data part (ASCII text or raw bytes); empty for other datasets.
+    type_line : bytes
+        the dataset number record (carries the binary format of a 58b).
     """
 
     index: int
@@ -83,7 +91,7 @@ def data_count_58(header: tuple[bytes, ...], where: str) -> tuple[int, int, bool
 
 
 def _line_at(raw: bytes, pos: int) -> tuple[bytes, int]:
-    """The line starting at ``pos`` (without its newline) and the offset after its newline."""
+    """Return the line starting at ``pos`` (without its newline) and the offset after it."""
     end = raw.find(b"\n", pos)
     end = len(raw) if end < 0 else end
     return raw[pos:end].rstrip(b"\r"), min(end + 1, len(raw))
@@ -193,13 +201,13 @@ def read_nodes(block: UffBlock, path: Path, length_factor: float) -> dict[int, f
 
 
 def si_units_dset() -> dict:
-    """pyuff dict of a dataset 164 declaring SI units (factors 1; kelvin offset 273.15)."""
+    """Build the pyuff dict of a dataset 164 declaring SI (factors 1; kelvin offset 273.15)."""
     return {"type": 164, "units_code": 1, "units_description": "SI", "temp_mode": 2,
             "length": 1.0, "force": 1.0, "temp": 1.0, "temp_offset": 273.15}
 
 
 def nodes_dset(node_x_m: dict[int, float]) -> dict:
-    """pyuff dict of a dataset 15: the nodes on the bat axis, x in m, y = z = 0."""
+    """Build the pyuff dict of a dataset 15: the nodes on the bat axis, x in m, y = z = 0."""
     nums = np.array(sorted(node_x_m), dtype=int)
     x = np.array([node_x_m[n] for n in nums], dtype=float)
     if not np.all(np.isfinite(x)):

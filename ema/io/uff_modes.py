@@ -27,12 +27,18 @@ from ema.io.uff_blocks import nodes_dset, read_nodes, read_units, si_units_dset,
 class ModeSet:
     """Modes at measured nodes.
 
-    Attributes:
-        freq_hz: (m,) natural frequencies, Hz.
-        damping_ratio: (m,) viscous damping ratios.
-        shapes: (n_nodes, m) real or complex mode shapes (transverse, +Z).
-        nodes: (n_nodes,) node numbers.
-        node_x_m: (n_nodes,) node positions along the bat axis from the knob end, m.
+    Attributes
+    ----------
+    freq_hz : np.ndarray
+        (m,) natural frequencies, Hz.
+    damping_ratio : np.ndarray
+        (m,) viscous damping ratios.
+    shapes : np.ndarray
+        (n_nodes, m) real or complex mode shapes (transverse, +Z).
+    nodes : np.ndarray
+        (n_nodes,) node numbers.
+    node_x_m : np.ndarray
+        (n_nodes,) node positions along the bat axis from the knob end, m.
     """
 
     freq_hz: np.ndarray
