@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import argparse
 import json
 from dataclasses import asdict, replace
 
@@ -10,7 +11,8 @@ from batlab.cli_support import add_db_argument, db_path
 EXAMPLE = "batlab registry check --db lab.sqlite"
 
 
-def add_arguments(p) -> None:
+def add_arguments(p: argparse.ArgumentParser) -> None:
+    """Add the options of ``batlab registry`` to its sub-parser."""
     p.add_argument("action", choices=["check"], help="check: verify everything stored")
     p.add_argument("--report", default=None, metavar="INDEX.html",
                    help="also verify a report page against the registry: its verdict and "
@@ -19,7 +21,20 @@ def add_arguments(p) -> None:
     p.add_argument("--json", action="store_true", help="print the result as JSON on stdout")
 
 
-def run(args) -> int:
+def run(args: argparse.Namespace) -> int:
+    """Check the registry (integrity, stored files' hashes, custody chain).
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The options ``add_arguments`` defines.
+
+    Returns
+    -------
+    int
+        Exit code: 0 when everything verifies, 1 otherwise (bad input raises ValueError or OSError;
+        ``batlab.cli`` prints it in one line and exits 2).
+    """
     from batlab.registry import check, open_registry
 
     path = db_path(args)
