@@ -258,7 +258,7 @@ class HitCapture:
 
 
 def pulses(force_n: np.ndarray, threshold_n: float, min_gap: int) -> np.ndarray:
-    """(k, 2) [start, stop) sample ranges where force > threshold, merging gaps < min_gap."""
+    """Find the (k, 2) [start, stop) ranges where force > threshold (gaps < min_gap merged)."""
     above = np.r_[False, force_n > threshold_n, False]
     edges = np.flatnonzero(np.diff(above.astype(np.int8)))
     runs = edges.reshape(-1, 2)

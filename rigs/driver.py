@@ -45,6 +45,25 @@ def open_port(url: str, baudrate: int = 921600, timeout_s: float = 0.05) -> seri
     DTR and RTS are set low before opening so that boards which reset on DTR (Arduino-style
     auto-reset) are not reset by pyserial; the OS may still raise DTR briefly on open, which
     the handshake tolerates by retrying GET_INFO for longer than a boot takes.
+
+    Parameters
+    ----------
+    url : str
+        A device path (``/dev/ttyACM0``) or a pyserial URL (``loop://``, ``socket://...``).
+    baudrate : int, optional
+        Line speed, baud (ignored by USB CDC devices).
+    timeout_s : float, optional
+        Read timeout, s.
+
+    Returns
+    -------
+    serial.SerialBase
+        The open port.
+
+    Raises
+    ------
+    DeviceError
+        The port cannot be opened (one line naming it).
     """
     import serial
 

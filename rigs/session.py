@@ -84,7 +84,16 @@ def acquire_point(source, capture: HitCapture, point: int, hits_per_point: int,
                   settings: CaptureSettings, log: list[HitLog], label: str,
                   progress: Callable[[str], None], max_rejects: int = 20,
                   read_timeout_s: float = 0.2) -> list[HitRecord]:
-    """Collect ``hits_per_point`` accepted records at one point (see module docstring)."""
+    """Collect ``hits_per_point`` accepted records at one point (see module docstring).
+
+    Every hit, accepted or not, is appended to ``log``; ``max_rejects`` rejections in a row
+    raise ValueError naming the point and the last reason.
+
+    Returns
+    -------
+    list of HitRecord
+        The accepted records, in the order they were hit.
+    """
     ack = source.request(p.POINT, struct.pack("<H", point))
     capture.arm(ack.index if ack is not None else capture.next_index)
     progress(f"{label}: tap point {point}")
@@ -138,6 +147,34 @@ def run_session(source, points: list[int], hits_per_point: int,
     ``on_point(point, estimate, log)`` is called as each point completes with the hit log so
     far (the caller saves them, so a killed session keeps its completed points and their log).
     A stream that ends raises :class:`SessionInterrupted` carrying the completed points.
+
+    Parameters
+    ----------
+    source : SerialDevice or ReplaySource
+        The item source (``next_item``, ``request``, ``info``, ``flush_raw``), handshaken.
+    points : list of int
+        Impact point numbers, in the order they are tapped.
+    hits_per_point : int
+        Accepted hits averaged at each point.
+    settings : CaptureSettings, optional
+        Trigger and hit checks (default ``CaptureSettings()``).
+    exp_window_tau_s : float or None, optional
+        Time constant of an exponential window on the response, s; None for none.
+    fmax_hz : float or None, optional
+        Highest frequency line kept, Hz; None keeps up to Nyquist.
+    progress : callable, optional
+        ``progress(message)`` for one line per point and per hit.
+    max_rejects : int, optional
+        Hits rejected in a row at one point before the session gives up (ValueError).
+    done : dict of int to FrfEstimate, optional
+        Points already measured (a resumed session).
+    on_point : callable, optional
+        ``on_point(point, estimate, log)``, called as each point completes.
+
+    Returns
+    -------
+    SessionResult
+        The FRFs (H1, H2, coherence) of every point, and the hit log.
     """
     if hits_per_point < 1 or not points:
         raise ValueError("need at least one point and one hit per point")

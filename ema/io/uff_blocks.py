@@ -66,7 +66,7 @@ class UffBlock:
 
 
 def fields(line: bytes, widths: list[int]) -> list[str]:
-    """Fixed-width fields of an 80-column record, stripped."""
+    """Split an 80-column record into its fixed-width fields, stripped."""
     s = line.decode("latin-1").rstrip("\r\n").ljust(sum(widths))
     out, i = [], 0
     for w in widths:
@@ -76,7 +76,7 @@ def fields(line: bytes, widths: list[int]) -> list[str]:
 
 
 def data_count_58(header: tuple[bytes, ...], where: str) -> tuple[int, int, bool, int]:
-    """(ord_data_type, num_pts, even, number of stored values) from record 7 of a 58."""
+    """Return (ord_data_type, num_pts, even, number of stored values) from record 7 of a 58."""
     rec = fields(header[6], [10, 10, 10])
     try:
         ord_type, num_pts, even = int(rec[0]), int(rec[1]), int(rec[2])
@@ -98,7 +98,26 @@ def _line_at(raw: bytes, pos: int) -> tuple[bytes, int]:
 
 
 def split_uff(raw: bytes, path: Path) -> list[UffBlock]:
-    """Split a whole UFF file into datasets; ValueError naming the file and dataset on damage."""
+    """Split a whole UFF file into datasets, in one sequential pass.
+
+    Parameters
+    ----------
+    raw : bytes
+        The file's content.
+    path : Path
+        The file, for messages.
+
+    Returns
+    -------
+    list of UffBlock
+        The datasets in file order.
+
+    Raises
+    ------
+    ValueError
+        Not UFF, or damaged (truncated, a missing marker, a binary count that disagrees with
+        the file), naming the file and the dataset.
+    """
     blocks: list[UffBlock] = []
     pos = 0
     while True:
@@ -181,7 +200,7 @@ def _pyuff(extract, block: UffBlock, path: Path) -> dict:
 
 
 def read_units(block: UffBlock, path: Path) -> tuple[float, float, str]:
-    """(length factor, force factor, unit system name) of a dataset 164."""
+    """Return (length factor, force factor, unit system name) of a dataset 164."""
     d = _pyuff(_extract164, block, path)
     lf, ff = d["length"], d["force"]
     if not (np.isfinite(lf) and np.isfinite(ff) and lf > 0 and ff > 0):
@@ -191,7 +210,7 @@ def read_units(block: UffBlock, path: Path) -> tuple[float, float, str]:
 
 
 def read_nodes(block: UffBlock, path: Path, length_factor: float) -> dict[int, float]:
-    """Node number -> x position in metres, from a dataset 15 or 2411."""
+    """Return node number -> x position in metres, from a dataset 15 or 2411."""
     d = _pyuff(_extract15 if block.type == 15 else _extract2411, block, path)
     nums = np.asarray(d["node_nums"], dtype=float)
     x = np.asarray(d["x"], dtype=float)
