@@ -40,8 +40,8 @@ class Command:
     help: str
 
 
-def _command(name: str, help: str) -> Command:
-    return Command(f"batlab.commands.{name.replace('-', '_')}", help)
+def _command(name: str, one_line: str) -> Command:
+    return Command(f"batlab.commands.{name.replace('-', '_')}", one_line)
 
 
 COMMANDS: dict[str, Command] = {
