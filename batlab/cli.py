@@ -1,11 +1,11 @@
 """The `batlab` command line: one sub-command per module `batlab/commands/<name>.py`.
 
-Each command module defines ``HELP`` (one line), ``EXAMPLE`` (one command line, shown
-under its ``--help``), ``add_arguments(parser)`` and
-``run(args) -> int``. Modules import heavy dependencies inside ``run`` so that
-``batlab --help`` stays fast. Bad input raises ``ValueError`` or ``OSError`` with a
-message that names the file and the problem; it is printed as one line on stderr and
-the exit code is 2.
+``COMMANDS`` maps each command's name to its module and one-line help, so ``batlab --help``
+lists the commands without importing any of them, and ``batlab CMD ...`` imports CMD's module
+alone. A command module defines ``EXAMPLE`` (one command line, shown under its ``--help``),
+``add_arguments(parser)`` and ``run(args) -> int``, and imports heavy dependencies inside
+``run``. Bad input raises ``ValueError`` or ``OSError`` with a message that names the file
+and the problem; it is printed as one line on stderr and the exit code is 2.
 """
 
 from __future__ import annotations
@@ -15,35 +15,89 @@ import importlib
 import os
 import sqlite3
 import sys
+from collections.abc import Iterable, Sequence
+from dataclasses import dataclass
 
 # batlab's matrices are small (tens to hundreds of DOFs): BLAS threads cost more than they
 # save, and under load they slow an eigen-solution several times. Set before numpy loads.
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 os.environ.setdefault("OMP_NUM_THREADS", "1")
 
-COMMANDS: tuple[str, ...] = (
-    "model",
-    "simulate",
-    "register",
-    "bats",
-    "history",
-    "inspect",
-    "report",
-    "export",
-    "registry",
-    "demo",
-    "diagnose",
-    "rig",
-    "acquire",
-    "paper",
-    "fit",
-    "check-rig",
-)
+
+@dataclass(frozen=True)
+class Command:
+    """Where a sub-command lives and what it does, known without importing it.
+
+    Parameters
+    ----------
+    module : str
+        Dotted name of the module defining ``EXAMPLE``, ``add_arguments`` and ``run``.
+    help : str
+        One line, shown by ``batlab --help`` and at the top of ``batlab CMD --help``.
+    """
+
+    module: str
+    help: str
 
 
-def build_parser() -> argparse.ArgumentParser:
+def _command(name: str, one_line: str) -> Command:
+    return Command(f"batlab.commands.{name.replace('-', '_')}", one_line)
+
+
+COMMANDS: dict[str, Command] = {
+    "model": _command("model", "build a bat's FE model from its profile: mass properties, "
+                               "free-free modes, test points"),
+    "simulate": _command("simulate", "simulate an impact test of a bat on the virtual rig and "
+                                     "write it (UFF, CSV or NPZ)"),
+    "register": _command("register", "register a bat: fit its baseline test, calibrate its "
+                                     "reference, store it by serial"),
+    "bats": _command("bats", "list the registered bats with their latest inspection"),
+    "history": _command("history", "list the inspections of a registered bat, oldest first"),
+    "inspect": _command("inspect", "inspect a re-test of a bat for alteration (stateless, or "
+                                   "against the registry)"),
+    "report": _command("report", "regenerate the report of a stored inspection from the "
+                                 "registry (files kept there)"),
+    "export": _command("export", "write the inspection history (one bat or all) as a CSV file"),
+    "registry": _command("registry", "check the registry (SQLite integrity, stored files, "
+                                     "the signed custody chain); print the lab's public key "
+                                     "or the chain's head"),
+    "demo": _command("demo", "simulate a baseline and a corked re-test of a built-in bat, "
+                             "register and inspect them"),
+    "diagnose": _command("diagnose", "compare a baseline test with the nominal model, rank the "
+                                     "causes, calibrate the reference"),
+    "rig": _command("rig", "run the virtual acquisition box (a simulated bat test) on a "
+                           "pseudo-terminal"),
+    "acquire": _command("acquire", "run a roving-hammer impact test over a serial port (or "
+                                   "replay a recorded stream)"),
+    "paper": _command("paper", "rerun the paper's corked-bat case: SEREP + MSSO as published, "
+                               "then batlab's refinement"),
+    "fit": _command("fit", "fit natural frequencies, damping and mass-normalised mode shapes "
+                           "to a test's FRFs"),
+    "check-rig": _command("check-rig", "check the test rig on a reference bar: measured modes, "
+                                       "damping and mass line against the bar's model"),
+}
+"""Every sub-command, in the order ``batlab --help`` lists them."""
+
+
+def build_parser(wired: Iterable[str] | None = None) -> argparse.ArgumentParser:
+    """Build the ``batlab`` parser, importing only the commands that are wired.
+
+    Every command is listed (name and help, from ``COMMANDS``); a wired command also gets
+    its options, its example and its ``run`` (its module is imported).
+
+    Parameters
+    ----------
+    wired : iterable of str, optional
+        Names of the commands to wire; None (the default) wires every command.
+
+    Returns
+    -------
+    argparse.ArgumentParser
+        The parser; ``parse_args`` puts the chosen command's ``run`` in ``args._run``.
+    """
     from batlab import __version__
 
+    wired = set(COMMANDS if wired is None else wired)
     parser = argparse.ArgumentParser(
         prog="batlab",
         description="Detect altered wooden baseball bats from impact-hammer vibration tests.",
@@ -51,19 +105,59 @@ def build_parser() -> argparse.ArgumentParser:
     )
     parser.add_argument("--version", action="version", version=f"batlab {__version__}")
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
-    for name in COMMANDS:
-        module = importlib.import_module(f"batlab.commands.{name.replace('-', '_')}")
-        example = getattr(module, "EXAMPLE", None)  # (tests/test_cli_consistency.py: required)
-        p = sub.add_parser(name, help=module.HELP, description=module.HELP,
-                           epilog=f"example:\n  {example}" if example else None,
+    for name, command in COMMANDS.items():
+        p = sub.add_parser(name, help=command.help, description=command.help,
                            formatter_class=argparse.RawDescriptionHelpFormatter)
-        module.add_arguments(p)
-        p.set_defaults(_run=module.run)
+        if name in wired:
+            _wire(p, command)
     return parser
 
 
-def main(argv: list[str] | None = None) -> int:
-    args = build_parser().parse_args(argv)
+def _wire(p: argparse.ArgumentParser, command: Command) -> None:
+    """Import a command's module and give its sub-parser the options, example and ``run``."""
+    module = importlib.import_module(command.module)
+    p.epilog = f"example:\n  {module.EXAMPLE}"  # (tests/test_cli_consistency.py: required)
+    module.add_arguments(p)
+    p.set_defaults(_run=module.run)
+
+
+def chosen_command(argv: Sequence[str]) -> str | None:
+    """Return the command an argument list chooses, or None when it chooses none.
+
+    The top-level options (``-h``, ``--help``, ``--version``) take no value, so the first
+    argument that is not an option names the command.
+
+    Parameters
+    ----------
+    argv : sequence of str
+        The arguments after the program name.
+
+    Returns
+    -------
+    str or None
+        A key of ``COMMANDS``, or None (no command, or an unknown one: argparse says so).
+    """
+    first = next((a for a in argv if not a.startswith("-")), None)
+    return first if first in COMMANDS else None
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Run the ``batlab`` command line.
+
+    Parameters
+    ----------
+    argv : sequence of str, optional
+        The arguments after the program name (default ``sys.argv[1:]``).
+
+    Returns
+    -------
+    int
+        The exit code: 0 done, 2 bad input (one line on stderr naming the file and the
+        problem), 130 interrupted; 1 when ``check-rig`` or ``registry check`` finds a fault.
+    """
+    argv = sys.argv[1:] if argv is None else list(argv)
+    chosen = chosen_command(argv)
+    args = build_parser(wired=() if chosen is None else (chosen,)).parse_args(argv)
     try:
         return int(args._run(args) or 0)
     except (ValueError, OSError) as exc:

@@ -42,8 +42,10 @@ class CaptureSettings:
 class HitRecord:
     """One triggered record in SI units, with what the stream said about it.
 
-    Attributes:
-        index0: device sample index of the first sample; trigger_index: of the trigger sample.
+    Attributes
+    ----------
+    index0 : int
+        device sample index of the first sample; trigger_index: of the trigger sample.
         force_n, accel_ms2: (n,) force (N) and response acceleration (m/s^2).
         full_scale_fraction: (2,) largest |code| / full-scale code on (force, response).
         overload, fault: device overload / sensor-fault flags seen within the record.
@@ -74,7 +76,8 @@ class HitCapture:
     """Stateful trigger over the item stream. ``push(item)`` returns completed records.
 
     Triggers before ``arm(index)`` has been called, or before the armed index, are ignored
-    (samples before a point was announced belong to the previous point)."""
+    (samples before a point was announced belong to the previous point).
+    """
 
     def __init__(self, info: p.DeviceInfo, settings: CaptureSettings,
                  response_channel: int | None = None) -> None:
@@ -107,6 +110,7 @@ class HitCapture:
 
     @property
     def recording(self) -> bool:
+        """Whether a record is being captured (triggered, not yet complete)."""
         return self._trigger is not None
 
     def arm(self, from_index: int) -> None:
@@ -118,10 +122,23 @@ class HitCapture:
             self._trigger = None
 
     def disarm(self) -> None:
+        """Ignore triggers until the next ``arm`` and drop a record in progress."""
         self._armed = None
         self._trigger = None
 
     def push(self, item: Item) -> list[HitRecord]:
+        """Take one stream item; return the records it completes (usually none).
+
+        Parameters
+        ----------
+        item : Item
+            A data block, gap, status, ACK or device info from the stream tracker.
+
+        Returns
+        -------
+        list of HitRecord
+            The records completed by this item, oldest first.
+        """
         if isinstance(item, Gap):
             self._gaps.append(item)
         elif isinstance(item, p.Status):
@@ -241,7 +258,7 @@ class HitCapture:
 
 
 def pulses(force_n: np.ndarray, threshold_n: float, min_gap: int) -> np.ndarray:
-    """(k, 2) [start, stop) sample ranges where force > threshold, merging gaps < min_gap."""
+    """Find the (k, 2) [start, stop) ranges where force > threshold (gaps < min_gap merged)."""
     above = np.r_[False, force_n > threshold_n, False]
     edges = np.flatnonzero(np.diff(above.astype(np.int8)))
     runs = edges.reshape(-1, 2)

@@ -17,11 +17,13 @@ import threading
 import time
 from dataclasses import dataclass, replace
 from pathlib import Path
-
-import serial
+from typing import TYPE_CHECKING
 
 from rigs import protocol as p
 from rigs.stream import CsvTracker, Item, StreamTracker
+
+if TYPE_CHECKING:  # pyserial is imported where a port is opened (a fast ``batlab --help``)
+    import serial
 
 
 class DeviceError(OSError):
@@ -43,7 +45,28 @@ def open_port(url: str, baudrate: int = 921600, timeout_s: float = 0.05) -> seri
     DTR and RTS are set low before opening so that boards which reset on DTR (Arduino-style
     auto-reset) are not reset by pyserial; the OS may still raise DTR briefly on open, which
     the handshake tolerates by retrying GET_INFO for longer than a boot takes.
+
+    Parameters
+    ----------
+    url : str
+        A device path (``/dev/ttyACM0``) or a pyserial URL (``loop://``, ``socket://...``).
+    baudrate : int, optional
+        Line speed, baud (ignored by USB CDC devices).
+    timeout_s : float, optional
+        Read timeout, s.
+
+    Returns
+    -------
+    serial.SerialBase
+        The open port.
+
+    Raises
+    ------
+    DeviceError
+        The port cannot be opened (one line naming it).
     """
+    import serial
+
     kwargs = {"exclusive": True} if os.name == "posix" and "://" not in url else {}
     try:
         port = serial.serial_for_url(url, baudrate=baudrate, timeout=timeout_s,
@@ -59,12 +82,18 @@ def open_port(url: str, baudrate: int = 921600, timeout_s: float = 0.05) -> seri
 class SerialDevice:
     """Live acquisition box on an open pyserial port.
 
-    Args:
-        port: open port (see :func:`open_port`; ``serial_for_url("loop://")`` in tests).
-        raw_path: file receiving every byte read, flushed as it is read; None for none.
-        csv_info: if given, the port speaks the ASCII line mode with this channel layout.
-        queue_size: bound of the item queue (items are frames, ~5 ms of samples each).
-        silence_s: no byte at all for this long is reported as a dead device.
+    Parameters
+    ----------
+    port : serial.SerialBase
+        open port (see :func:`open_port`; ``serial_for_url("loop://")`` in tests).
+    raw_path : str | Path | None, optional
+        file receiving every byte read, flushed as it is read; None for none.
+    csv_info : p.DeviceInfo | None, optional
+        if given, the port speaks the ASCII line mode with this channel layout.
+    queue_size : int, optional
+        bound of the item queue (items are frames, ~5 ms of samples each).
+    silence_s : float, optional
+        no byte at all for this long is reported as a dead device.
     """
 
     def __init__(self, port: serial.SerialBase, raw_path: str | Path | None = None,
@@ -102,7 +131,7 @@ class SerialDevice:
         while not self._stop.is_set():
             try:
                 data = self.port.read(max(1, self.port.in_waiting))
-            except (serial.SerialException, OSError, TypeError, AttributeError) as exc:
+            except (OSError, TypeError, AttributeError) as exc:  # SerialException is an OSError
                 if not self._stop.is_set():
                     self._put(_Disconnected(" ".join(str(exc).split()) or type(exc).__name__))
                 return
@@ -161,14 +190,17 @@ class SerialDevice:
             with self._write_lock:
                 self.port.write(frame)
                 self.port.flush()
-        except (serial.SerialException, OSError) as exc:
+        except OSError as exc:  # SerialException included
             raise DeviceError(f"{self.name}: write failed ({exc})") from None
         return self._cmd_counter
 
     def request(self, opcode: int, args: bytes = b"", timeout_s: float = 1.0,
                 retries: int = 3) -> p.Ack | None:
-        """Send a command and wait for its ACK; other items are kept, in order, for
-        :meth:`next_item`. None in CSV mode (no commands)."""
+        """Send a command and wait for its ACK.
+
+        Other items are kept, in order, for :meth:`next_item`. None in CSV mode (no
+        commands).
+        """
         if self.csv:
             return None
         for _ in range(retries):
@@ -185,9 +217,11 @@ class SerialDevice:
 
     def handshake(self, sample_rate_hz: float | None = None, samples_per_frame: int | None = None,
                   timeout_s: float = 1.0, retries: int = 4) -> p.DeviceInfo:
-        """GET_INFO, CONFIGURE, START (docs/protocol.md, 'Host handshake'); returns the info.
+        """Run GET_INFO, CONFIGURE, START (docs/protocol.md, 'Host handshake').
+
         A device still streaming (its last host was killed) answers CONFIGURE with BAD_STATE:
-        it is sent STOP and configured again."""
+        it is sent STOP and configured again. Returns the device's info.
+        """
         if self.csv:
             return self.info
         ack = self.request(p.GET_INFO, timeout_s=timeout_s, retries=retries)
@@ -217,9 +251,12 @@ class SerialDevice:
             os.fsync(self._raw.fileno())
 
     def stop(self) -> p.Ack | None:
-        """STOP streaming; the device sends its last frames before the ACK (whose index is
-        the next sample index), so nothing sent is lost: those frames stay readable through
-        :meth:`next_item`."""
+        """Stop streaming.
+
+        The device sends its last frames before the ACK (whose index is the next sample
+        index), so nothing sent is lost: those frames stay readable through
+        :meth:`next_item`.
+        """
         if self.csv or self._error is not None:
             return None
         return self.request(p.STOP)
@@ -229,12 +266,12 @@ class SerialDevice:
         self._stop.set()
         try:
             self.port.cancel_read()
-        except (AttributeError, NotImplementedError, OSError, serial.SerialException):
+        except (AttributeError, NotImplementedError, OSError):
             pass
         self._thread.join(timeout=2.0)
         try:
             self.port.close()
-        except (OSError, serial.SerialException):
+        except OSError:
             pass
         if self._raw:
             self._raw.close()
@@ -248,8 +285,11 @@ class SerialDevice:
 
 
 class ReplaySource:
-    """A recorded raw stream (as written by :class:`SerialDevice`) played through the same
-    decoder and tracker; commands are not sent, their recorded ACKs are looked up instead."""
+    """A recorded raw stream (as written by :class:`SerialDevice`), played back.
+
+    The stream goes through the same decoder and tracker; commands are not sent, their
+    recorded ACKs are looked up instead.
+    """
 
     def __init__(self, path: str | Path, csv_info: p.DeviceInfo | None = None,
                  chunk: int = 65536) -> None:
@@ -279,6 +319,7 @@ class ReplaySource:
                     self._items.extend(self.tracker.push(frame))
 
     def next_item(self, timeout_s: float = 0.0) -> Item:
+        """Return the next recorded item; EndOfStream when there is none (no waiting)."""
         self._fill()
         item = self._items.popleft()
         if isinstance(item, p.DeviceInfo):
@@ -286,7 +327,7 @@ class ReplaySource:
         return item
 
     def request(self, opcode: int, args: bytes = b"", **_: object) -> p.Ack | None:
-        """The next recorded ACK of this opcode (items before it stay queued in order)."""
+        """Find the next recorded ACK of this opcode (items before it stay queued in order)."""
         if self.csv:
             return None
         held = []
@@ -301,6 +342,7 @@ class ReplaySource:
             self._items.extendleft(reversed(held))
 
     def handshake(self, *_: object, **__: object) -> p.DeviceInfo:
+        """Replay the handshake: the recorded START and the device info."""
         if not self.csv:
             self.request(p.START)
         if self.info is None:
@@ -308,12 +350,13 @@ class ReplaySource:
         return self.info
 
     def flush_raw(self) -> None:
-        pass
+        """Do nothing: a replay writes no raw stream."""
 
     def stop(self) -> None:
-        return None
+        """Do nothing: a recording cannot be stopped."""
 
     def close(self) -> None:
+        """Close the recorded file."""
         self._f.close()
 
     def __enter__(self) -> ReplaySource:

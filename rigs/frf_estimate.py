@@ -36,7 +36,7 @@ class FrfEstimate:
 
 
 def added_damping_ratio(freq_hz: np.ndarray, tau_s: float | None) -> np.ndarray:
-    """Damping ratio added by an exponential window of time constant tau: 1 / (tau 2 pi f)."""
+    """Return the damping ratio an exponential window (time constant tau) adds: 1/(tau 2 pi f)."""
     f = np.asarray(freq_hz, dtype=float)
     if tau_s is None:
         return np.zeros_like(f)
@@ -44,7 +44,7 @@ def added_damping_ratio(freq_hz: np.ndarray, tau_s: float | None) -> np.ndarray:
 
 
 def exponential_window(n: int, sample_rate_hz: float, tau_s: float | None) -> np.ndarray:
-    """exp(-t / tau) at t = k / fs; ones when tau is None."""
+    """Return the window exp(-t / tau) at t = k / fs (n samples); ones when tau is None."""
     if tau_s is None:
         return np.ones(n)
     return np.exp(-np.arange(n) / (sample_rate_hz * tau_s))
@@ -52,8 +52,11 @@ def exponential_window(n: int, sample_rate_hz: float, tau_s: float | None) -> np
 
 def force_window(force_n: np.ndarray, sample_rate_hz: float, margin_s: float = 0.002,
                  taper_s: float = 0.001, threshold_fraction: float = 0.02) -> np.ndarray:
-    """(k, n) windows: 1 up to the end of the pulse (last sample above threshold_fraction of
-    the peak) plus ``margin_s``, then a half-cosine taper of ``taper_s`` to zero."""
+    """Build (k, n) force windows that keep the pulse and cut the noise after it.
+
+    Each window is 1 up to the end of the pulse (last sample above threshold_fraction of the
+    peak) plus ``margin_s``, then a half-cosine taper of ``taper_s`` to zero.
+    """
     f = np.atleast_2d(force_n)
     k, n = f.shape
     above = f > threshold_fraction * f.max(axis=1, keepdims=True)
@@ -68,7 +71,31 @@ def force_window(force_n: np.ndarray, sample_rate_hz: float, margin_s: float = 0
 def estimate_frf(force_n: np.ndarray, response: np.ndarray, sample_rate_hz: float,
                  exp_window_tau_s: float | None = None, use_force_window: bool = True,
                  fmax_hz: float | None = None) -> FrfEstimate:
-    """H1, H2, coherence from (k, n) force and response records (module docstring)."""
+    """Estimate H1, H2 and coherence from (k, n) force and response records.
+
+    H1 = G_fy / G_ff, H2 = G_yy / G_yf, coherence = |G_fy|^2 / (G_ff G_yy), the spectra summed
+    over the k records (module docstring).
+
+    Parameters
+    ----------
+    force_n : np.ndarray
+        (k, n) force records, N.
+    response : np.ndarray
+        (k, n) response records (acceleration, m/s^2), sample for sample with the force.
+    sample_rate_hz : float
+        Sampling rate, Hz.
+    exp_window_tau_s : float or None, optional
+        Time constant of an exponential window on both records, s; None for none.
+    use_force_window : bool, optional
+        Cut the force record after the pulse (``force_window``); default True.
+    fmax_hz : float or None, optional
+        Highest frequency line kept, Hz; None keeps up to Nyquist.
+
+    Returns
+    -------
+    FrfEstimate
+        The estimates on the rfft lines, (m/s^2)/N, with the window used and k.
+    """
     f = np.atleast_2d(np.asarray(force_n, dtype=float))
     y = np.atleast_2d(np.asarray(response, dtype=float))
     if f.shape != y.shape or f.shape[0] == 0:

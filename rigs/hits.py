@@ -35,7 +35,7 @@ class Pulse:
 
 
 def hammer_force(t_s: np.ndarray, pulses: list[Pulse]) -> np.ndarray:
-    """Force (N) of the half-sine pulses at times ``t_s``."""
+    """Return the force (N) of the half-sine pulses at times ``t_s`` (s)."""
     f = np.zeros_like(np.asarray(t_s, dtype=float))
     for pl in pulses:
         tau = t_s - pl.t0_s
@@ -46,9 +46,10 @@ def hammer_force(t_s: np.ndarray, pulses: list[Pulse]) -> np.ndarray:
 
 def modal_acceleration(t_s: np.ndarray, pulse: Pulse, freq_hz: np.ndarray,
                        damping_ratio: np.ndarray) -> np.ndarray:
-    """q_r''(t) (m/s^2 per unit modal force gain), shape (len(t), n_modes), exact.
+    """Return q_r''(t) (m/s^2 per unit modal force gain), shape (len(t), n_modes), exact.
 
-    Underdamped modes with w_r > 0 only (module docstring)."""
+    Underdamped modes with w_r > 0 only (module docstring).
+    """
     t = np.asarray(t_s, dtype=float)[:, None] - pulse.t0_s
     w = 2 * np.pi * np.asarray(freq_hz, dtype=float)[None, :]
     z = np.asarray(damping_ratio, dtype=float)[None, :]
@@ -72,7 +73,7 @@ def modal_acceleration(t_s: np.ndarray, pulse: Pulse, freq_hz: np.ndarray,
 
 def response_acceleration(model: ModalModel, resp: int, ref: int, t_s: np.ndarray,
                           pulses: list[Pulse], fmax_hz: float = np.inf) -> np.ndarray:
-    """Acceleration (m/s^2) at point ``resp`` for hits at point ``ref`` (indices)."""
+    """Return the acceleration (m/s^2) at point ``resp`` for hits at point ``ref`` (indices)."""
     keep = model.freq_hz < fmax_hz
     gain = model.shapes[resp, keep] * model.shapes[ref, keep]
     a = np.zeros(np.asarray(t_s).shape)
@@ -83,10 +84,11 @@ def response_acceleration(model: ModalModel, resp: int, ref: int, t_s: np.ndarra
 
 def quantise(si: np.ndarray, info: DeviceInfo, noise_v: float,
              rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:
-    """SI signals (n, ch) -> ADC codes (n, ch) int32 and per-sample overload flags (n,).
+    """Quantise SI signals (n, ch) to ADC codes (n, ch) int32 and overload flags (n,).
 
     volts = si / UNIT_TO_SI * sensitivity + noise; codes = round(volts / V_per_code) clipped to
-    +-(2**(bits-1) - 1); overload where a code reaches full scale."""
+    +-(2**(bits-1) - 1); overload where a code reaches full scale.
+    """
     scale = info.scale_si()
     volts_per_code = info.adc_full_scale_v / 2 ** (info.bits - 1)
     noise = rng.normal(0.0, noise_v / volts_per_code, si.shape) if noise_v > 0 else 0.0
@@ -100,10 +102,37 @@ def simulate_hit(model: ModalModel, resp: int, ref: int, info: DeviceInfo, durat
                  pulses: list[Pulse], noise_v: float = 0.0,
                  rng: np.random.Generator | None = None, t_start_s: float = 0.0
                  ) -> tuple[np.ndarray, np.ndarray]:
-    """Codes (n, ch) and overload flags of a record of ``duration_s`` from ``t_start_s``.
+    """Simulate the ADC record of one or more hammer hits on the modal model.
 
     Channel layout from ``info``: the first 'force' channel gets the hammer force, the first
-    'acceleration' channel the response; any other channel is noise only."""
+    'acceleration' channel the response; any other channel is noise only.
+
+    Parameters
+    ----------
+    model : ModalModel
+        Mass-normalised modes at the test points.
+    resp, ref : int
+        Indices of the response (accelerometer) and impact points.
+    info : DeviceInfo
+        The device: sampling rate, ADC, channels and sensitivities.
+    duration_s : float
+        Record length, s.
+    pulses : list of Pulse
+        The hammer's half-sine pulses.
+    noise_v : float, optional
+        RMS electrical noise at the ADC input, V.
+    rng : np.random.Generator, optional
+        Noise generator (default seeded 0).
+    t_start_s : float, optional
+        Time of the record's first sample, s.
+
+    Returns
+    -------
+    codes : np.ndarray
+        (n, n_channels) int32 ADC codes.
+    overload : np.ndarray
+        (n,) bool, a code at full scale.
+    """
     rng = rng or np.random.default_rng(0)
     n = int(round(duration_s * info.sample_rate_hz))
     t = t_start_s + np.arange(n) / info.sample_rate_hz

@@ -19,11 +19,16 @@ import numpy as np
 class ModalModel:
     """Modes of a structure sampled at its test points.
 
-    Attributes:
-        freq_hz: (m,) undamped natural frequencies, Hz (rigid-body/suspension modes included).
-        damping_ratio: (m,) viscous modal damping ratios.
-        shapes: (n_points, m) real mass-normalised mode shapes at the points, 1/sqrt(kg).
-        x_m: (n_points,) positions of the points along the bat axis from the knob end, m.
+    Attributes
+    ----------
+    freq_hz : np.ndarray
+        (m,) undamped natural frequencies, Hz (rigid-body/suspension modes included).
+    damping_ratio : np.ndarray
+        (m,) viscous modal damping ratios.
+    shapes : np.ndarray
+        (n_points, m) real mass-normalised mode shapes at the points, 1/sqrt(kg).
+    x_m : np.ndarray
+        (n_points,) positions of the points along the bat axis from the knob end, m.
     """
 
     freq_hz: np.ndarray
@@ -83,11 +88,36 @@ BETA_L = np.array([4.730040745, 7.853204624, 10.995607838, 14.137165491, 17.2787
 def uniform_beam_modes(length_m: float, mass_kg: float, f1_hz: float, x_m: np.ndarray,
                        zeta1: float = 0.005, suspension_hz: tuple[float, float] = (2.0, 3.5),
                        n_bending: int = 8):
-    """ModalModel of a free-free uniform beam at ``x_m``: two suspension (rigid) modes and
-    ``n_bending`` bending modes, f_n = f1 (b_n L / b_1 L)^2, shapes
+    """Build the ModalModel of a free-free uniform beam on a soft suspension.
+
+    Two suspension (rigid) modes and ``n_bending`` bending modes at ``x_m``,
+    f_n = f1 (b_n L / b_1 L)^2, shapes
     phi_n(x) = [cosh bx + cos bx - s_n (sinh bx + sin bx)] / sqrt(m) with
     s_n = (cosh bL - cos bL) / (sinh bL - sin bL) (int_0^L phi^2 rho A dx = 1).
-    Damping: 3 % on the suspension modes, zeta1 (f / f1)^0.3 on bending."""
+    Damping: 3 % on the suspension modes, zeta1 (f / f1)^0.3 on bending.
+
+    Parameters
+    ----------
+    length_m : float
+        Beam length L, m.
+    mass_kg : float
+        Beam mass m, kg.
+    f1_hz : float
+        First bending frequency, Hz.
+    x_m : np.ndarray
+        (n,) points along the beam, m from one end.
+    zeta1 : float, optional
+        Damping ratio of the first bending mode.
+    suspension_hz : tuple of float, optional
+        Frequencies of the two suspension modes, Hz.
+    n_bending : int, optional
+        Number of bending modes (at most 8).
+
+    Returns
+    -------
+    ModalModel
+        Mass-normalised modes at ``x_m``, rigid ones first.
+    """
     x = np.asarray(x_m, dtype=float)[:, None]
     bl = BETA_L[:n_bending][None, :]
     b = bl / length_m

@@ -77,7 +77,7 @@ class Frame:
 def encode_frame(
     msg_type: int, counter: int, first_index: int, payload: bytes = b"", flags: int = 0
 ) -> bytes:
-    """The bytes of one frame (see module docstring)."""
+    """Encode one frame to bytes (see module docstring)."""
     if len(payload) > MAX_PAYLOAD:
         raise ValueError(f"payload of {len(payload)} bytes exceeds {MAX_PAYLOAD}")
     head = HEADER.pack(SYNC, msg_type, flags, counter & 0xFFFFFFFF, first_index, len(payload))
@@ -113,6 +113,7 @@ class DeviceInfo:
 
     @property
     def n_channels(self) -> int:
+        """Number of channels."""
         return len(self.channels)
 
     @property
@@ -137,9 +138,11 @@ class DeviceInfo:
 
 
 def device_info_from_dict(d: dict, where: str = "device description") -> DeviceInfo:
-    """DeviceInfo from a JSON-style dict (CSV line mode has no INFO message):
-    {"sample_rate_hz", "bits", "adc_full_scale_v", "channels": [{"kind", "unit",
-    "sensitivity_mv_per_unit"}, ...]}."""
+    """Build a DeviceInfo from a JSON-style dict (CSV line mode has no INFO message).
+
+    The dict: {"sample_rate_hz", "bits", "adc_full_scale_v", "channels": [{"kind", "unit",
+    "sensitivity_mv_per_unit"}, ...]}.
+    """
     try:
         chans = tuple(Channel(str(c["kind"]), str(c["unit"]), float(c["sensitivity_mv_per_unit"]))
                       for c in d["channels"])
@@ -185,7 +188,7 @@ def decode_info(payload: bytes) -> DeviceInfo:
 
 
 def data_flags(n_channels: int, bits: int, overload: bool = False, fault: bool = False) -> int:
-    """Flags byte of a DATA frame."""
+    """Encode the flags byte of a DATA frame (channel count, sample width)."""
     if not 1 <= n_channels <= 8 or bits not in (16, 24):
         raise ValueError(f"unsupported sample format: {n_channels} channels, {bits} bits")
     return ((n_channels - 1) | (FLAG_24BIT if bits == 24 else 0)
@@ -218,16 +221,19 @@ def decode_data_format(flags: int) -> tuple[int, int]:
 
 
 def encode_command(opcode: int, args: bytes = b"") -> bytes:
+    """Encode a COMMAND payload: the opcode byte, then its arguments."""
     return bytes([opcode]) + args
 
 
 def encode_configure(sample_rate_hz: float, n_channels: int, bits: int, samples_per_frame: int
                      ) -> bytes:
+    """Encode a CONFIGURE command with its sampling arguments."""
     return encode_command(CONFIGURE, _CONFIGURE.pack(sample_rate_hz, n_channels, bits,
                                                      samples_per_frame))
 
 
 def decode_configure(args: bytes) -> tuple[float, int, int, int]:
+    """Decode CONFIGURE arguments: (sample rate Hz, channels, bits, samples per frame)."""
     if len(args) != _CONFIGURE.size:
         raise ValueError("CONFIGURE arguments have the wrong length")
     return _CONFIGURE.unpack(args)
@@ -245,10 +251,12 @@ class Ack:
 
 
 def encode_ack(command_counter: int, opcode: int, result: int, arg: int = 0) -> bytes:
+    """Encode an ACK payload answering command ``command_counter``."""
     return _ACK.pack(command_counter & 0xFFFFFFFF, opcode, result, arg & 0xFFFF)
 
 
 def decode_ack(frame: Frame) -> Ack:
+    """Decode an ACK frame; ValueError when its payload has the wrong length."""
     if len(frame.payload) != _ACK.size:
         raise ValueError("ACK payload has the wrong length")
     return Ack(frame.first_index, *_ACK.unpack(frame.payload))
@@ -266,22 +274,27 @@ class Status:
 
     @property
     def overload(self) -> bool:
+        """Whether a channel is at full scale."""
         return bool(self.bits & STATUS_OVERLOAD)
 
     @property
     def overrun(self) -> bool:
+        """Whether the device dropped samples (its buffer overran)."""
         return bool(self.bits & STATUS_OVERRUN)
 
     @property
     def fault(self) -> bool:
+        """Whether the device reports a channel fault."""
         return bool(self.bits & STATUS_FAULT)
 
 
 def encode_status(bits: int, overload_mask: int = 0, fault_mask: int = 0, lost: int = 0) -> bytes:
+    """Encode a STATUS payload: status bits, per-channel masks, samples lost."""
     return _STATUS.pack(bits, overload_mask, fault_mask, 0, lost)
 
 
 def decode_status(frame: Frame) -> Status:
+    """Decode a STATUS frame; ValueError when its payload has the wrong length."""
     if len(frame.payload) != _STATUS.size:
         raise ValueError("STATUS payload has the wrong length")
     bits, om, fm, _, lost = _STATUS.unpack(frame.payload)
@@ -289,6 +302,7 @@ def decode_status(frame: Frame) -> Status:
 
 
 def encode_heartbeat(uptime_ms: int, streaming: bool) -> bytes:
+    """Encode a HEARTBEAT payload: uptime, ms, and whether the device streams."""
     return _HEARTBEAT.pack(uptime_ms & 0xFFFFFFFF, int(streaming))
 
 
@@ -324,6 +338,7 @@ class FrameDecoder:
         return len(self._buf)
 
     def feed(self, data: bytes) -> list[Frame]:
+        """Take received bytes; return the complete frames with a valid CRC, in order."""
         buf = self._buf
         buf += data
         out: list[Frame] = []

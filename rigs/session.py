@@ -41,12 +41,24 @@ class HitLog:
 class SessionResult:
     """FRFs of a roving-hammer test, one fixed response.
 
-    Attributes:
-        freq_hz: (F,) lines; h1, h2, coherence: (F, 1, n_points), accelerance (m/s^2)/N.
-        points: (n_points,) impact point numbers in the order of the last axis.
-        exp_window_tau_s: exponential window time constant (None: no window).
-        hits: every triggered record with its verdict.
-        info: the device's description.
+    Attributes
+    ----------
+    freq_hz : np.ndarray
+        (F,) frequency lines, Hz.
+    h1, h2 : np.ndarray
+        (F, 1, n_points) H1 and H2 estimates of the accelerance, (m/s^2)/N.
+    coherence : np.ndarray
+        (F, 1, n_points) ordinary coherence, 0..1.
+    points : np.ndarray
+        (n_points,) impact point numbers in the order of the last axis.
+    exp_window_tau_s : float | None
+        exponential window time constant (None: no window).
+    hits : list[HitLog]
+        every triggered record with its verdict.
+    info : p.DeviceInfo
+        the device's description.
+    n_averages : np.ndarray
+        (n_points,) accepted hits averaged at each point.
     """
 
     freq_hz: np.ndarray
@@ -60,6 +72,7 @@ class SessionResult:
     n_averages: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=int))
 
     def hits_as_dicts(self) -> list[dict]:
+        """Return the hit log as plain dicts (for JSON)."""
         return [asdict(h) for h in self.hits]
 
 
@@ -71,7 +84,16 @@ def acquire_point(source, capture: HitCapture, point: int, hits_per_point: int,
                   settings: CaptureSettings, log: list[HitLog], label: str,
                   progress: Callable[[str], None], max_rejects: int = 20,
                   read_timeout_s: float = 0.2) -> list[HitRecord]:
-    """Collect ``hits_per_point`` accepted records at one point (see module docstring)."""
+    """Collect ``hits_per_point`` accepted records at one point (see module docstring).
+
+    Every hit, accepted or not, is appended to ``log``; ``max_rejects`` rejections in a row
+    raise ValueError naming the point and the last reason.
+
+    Returns
+    -------
+    list of HitRecord
+        The accepted records, in the order they were hit.
+    """
     ack = source.request(p.POINT, struct.pack("<H", point))
     capture.arm(ack.index if ack is not None else capture.next_index)
     progress(f"{label}: tap point {point}")
@@ -125,6 +147,34 @@ def run_session(source, points: list[int], hits_per_point: int,
     ``on_point(point, estimate, log)`` is called as each point completes with the hit log so
     far (the caller saves them, so a killed session keeps its completed points and their log).
     A stream that ends raises :class:`SessionInterrupted` carrying the completed points.
+
+    Parameters
+    ----------
+    source : SerialDevice or ReplaySource
+        The item source (``next_item``, ``request``, ``info``, ``flush_raw``), handshaken.
+    points : list of int
+        Impact point numbers, in the order they are tapped.
+    hits_per_point : int
+        Accepted hits averaged at each point.
+    settings : CaptureSettings, optional
+        Trigger and hit checks (default ``CaptureSettings()``).
+    exp_window_tau_s : float or None, optional
+        Time constant of an exponential window on the response, s; None for none.
+    fmax_hz : float or None, optional
+        Highest frequency line kept, Hz; None keeps up to Nyquist.
+    progress : callable, optional
+        ``progress(message)`` for one line per point and per hit.
+    max_rejects : int, optional
+        Hits rejected in a row at one point before the session gives up (ValueError).
+    done : dict of int to FrfEstimate, optional
+        Points already measured (a resumed session).
+    on_point : callable, optional
+        ``on_point(point, estimate, log)``, called as each point completes.
+
+    Returns
+    -------
+    SessionResult
+        The FRFs (H1, H2, coherence) of every point, and the hit log.
     """
     if hits_per_point < 1 or not points:
         raise ValueError("need at least one point and one hit per point")
@@ -154,7 +204,7 @@ def run_session(source, points: list[int], hits_per_point: int,
 
 def combine(points: list[int], estimates: dict[int, FrfEstimate],
             exp_window_tau_s: float | None, log: list[HitLog], info) -> SessionResult:
-    """The session's FRFs from per-point estimates, in ``points`` order."""
+    """Assemble the session's FRFs from per-point estimates, in ``points`` order."""
     ests = [estimates[n] for n in points]
     stack = {name: np.stack([getattr(e, name) for e in ests], axis=-1)[:, None, :]
              for name in ("h1", "h2", "coherence")}
@@ -166,8 +216,15 @@ def combine(points: list[int], estimates: dict[int, FrfEstimate],
 class SessionInterrupted(OSError):
     """The stream ended (device lost, recording cut) before every point was measured.
 
-    Attributes: ``completed`` {point: FrfEstimate} measured so far, ``log`` the hit log,
-    ``info`` the device description."""
+    Attributes
+    ----------
+    completed : dict[int, FrfEstimate]
+        The points measured so far and their FRF estimates.
+    log : list[HitLog]
+        The hit log.
+    info : p.DeviceInfo
+        The device's description.
+    """
 
     def __init__(self, message: str, completed: dict, log: list[HitLog], info) -> None:
         super().__init__(message)

@@ -28,8 +28,10 @@ class DataBlock:
 
 @dataclass(frozen=True)
 class Gap:
-    """Samples ``start .. stop - 1`` are missing or unverifiable (stop == start: a lost
-    non-data frame between samples start - 1 and start)."""
+    """Samples ``start .. stop - 1`` are missing or unverifiable.
+
+    stop == start: a lost non-data frame between samples start - 1 and start.
+    """
 
     start: int
     stop: int
@@ -40,10 +42,12 @@ Item = DataBlock | Gap | p.Status | p.Ack | p.DeviceInfo
 
 
 class StreamTracker:
-    """Turns frames into items, checking frame counters and sample indices.
+    """Turn frames into items, checking frame counters and sample indices.
 
-    Attributes:
-        expected_index: index of the next sample expected (None before streaming starts).
+    Attributes
+    ----------
+    expected_index : int or None
+        Index of the next sample expected (None before streaming starts).
     """
 
     def __init__(self) -> None:
@@ -53,6 +57,7 @@ class StreamTracker:
         self.samples_lost = 0
 
     def push(self, frame: p.Frame) -> list[Item]:
+        """Take one decoded frame; return the items it yields (gaps before data)."""
         if frame.type not in p.DEVICE_TYPES:
             return []  # host->device frames (e.g. a loop-back port) carry the host's counter
         out: list[Item] = []
@@ -108,6 +113,7 @@ class CsvTracker:
         self.expected_index = 0
 
     def feed(self, data: bytes) -> list[Item]:
+        """Take received bytes; return data blocks, and 1-sample gaps for bad lines."""
         values, bad = self._dec.feed(data)
         if not values.shape[0]:
             return []

@@ -32,7 +32,7 @@ FAULTS = ("double", "overload", "weak", "garbage", "drop", "bitflip", "truncate"
 
 
 def default_info(sample_rate_hz: float = 12800.0) -> p.DeviceInfo:
-    """Hammer 2.25 mV/N (PCB 086C03 class), accelerometer 1 mV/g, +-5 V 24-bit ADC."""
+    """Describe the virtual box: hammer 2.25 mV/N (PCB 086C03 class), 1 mV/g, +-5 V 24 bit."""
     return p.DeviceInfo((p.Channel("force", "N", 2.25), p.Channel("acceleration", "g", 1.0)),
                         sample_rate_hz, 24, 5.0, 64, (1, 0, 0), "virtualbox")
 
@@ -300,4 +300,5 @@ class VirtualBox:
         self.master = self._slave = -1
 
     def close(self) -> None:
+        """Unplug the box (close the pseudo-terminal)."""
         self.unplug()

@@ -13,7 +13,7 @@ from rigs.modal_model import ModalModel
 
 
 def complex_noise(rng: np.random.Generator, shape: tuple[int, ...]) -> np.ndarray:
-    """Circular complex Gaussian samples with unit variance."""
+    """Draw circular complex Gaussian samples with unit variance."""
     return (rng.standard_normal(shape) + 1j * rng.standard_normal(shape)) / np.sqrt(2)
 
 
@@ -22,17 +22,30 @@ def simulate_frf(
     rel_noise: float = 0.005, floor_noise: float = 1e-3, seed: int | None = None,
     resp_shapes: np.ndarray | None = None,
 ) -> np.ndarray:
-    """Noisy accelerance H[f, i, j] between response rows ``resp`` and reference rows ``ref``.
+    """Simulate a noisy accelerance H[f, i, j] between response and reference rows.
 
-    Args:
-        model: modal model at the test points.
-        freq_hz: (F,) frequency lines.
-        resp, ref: indices into the model's points.
-        rel_noise: multiplicative noise (0.005 = 0.5 %).
-        floor_noise: additive noise floor as a fraction of each FRF's RMS magnitude.
-        seed: seed of the noise generator (reproducible).
-        resp_shapes: optional (n_resp, m) shapes to use for the responses instead of the model's
-            rows (a sensor sitting off the labelled point).
+    Parameters
+    ----------
+    model : ModalModel
+        Modal model at the test points.
+    freq_hz : np.ndarray
+        (F,) frequency lines, Hz.
+    resp, ref : np.ndarray
+        Indices into the model's points of the responses and the references.
+    rel_noise : float, optional
+        Multiplicative noise (0.005 = 0.5 %).
+    floor_noise : float, optional
+        Additive noise floor as a fraction of each FRF's RMS magnitude.
+    seed : int or None, optional
+        Seed of the noise generator (reproducible).
+    resp_shapes : np.ndarray or None, optional
+        (n_resp, m) shapes to use for the responses instead of the model's rows (a sensor
+        sitting off the labelled point).
+
+    Returns
+    -------
+    np.ndarray
+        (F, n_resp, n_ref) complex accelerance, (m/s^2)/N, with noise (``add_noise``).
     """
     if resp_shapes is not None:
         shapes = np.vstack([model.shapes, resp_shapes])
@@ -45,7 +58,24 @@ def simulate_frf(
 def add_noise(
     h: np.ndarray, rel_noise: float, floor_noise: float, seed: int | None = None,
 ) -> np.ndarray:
-    """H (1 + e_rel n_1) + e_floor s n_2 for FRFs h[f, ...], s the RMS of each FRF over f."""
+    """Add multiplicative and floor noise to FRFs: H (1 + e_rel n_1) + e_floor s n_2.
+
+    Parameters
+    ----------
+    h : np.ndarray
+        (F, ...) FRFs, frequency on the first axis.
+    rel_noise : float
+        e_rel, the multiplicative noise (0.005 = 0.5 %).
+    floor_noise : float
+        e_floor, the floor as a fraction of s, the RMS of each FRF over f.
+    seed : int or None, optional
+        Seed of the noise generator; n_1, n_2 are unit circular complex Gaussians.
+
+    Returns
+    -------
+    np.ndarray
+        The noisy FRFs, complex, the shape of ``h``.
+    """
     h = np.asarray(h, dtype=complex)
     rng = np.random.default_rng(seed)
     rms = np.sqrt(np.mean(np.abs(h) ** 2, axis=0, keepdims=True))

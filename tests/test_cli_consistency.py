@@ -24,7 +24,7 @@ def test_version(capsys):
     assert exc.value.code == 0 and capsys.readouterr().out.strip() == f"batlab {__version__}"
 
 
-@pytest.mark.parametrize("name", COMMANDS)
+@pytest.mark.parametrize("name", tuple(COMMANDS))
 def test_every_command_has_an_example_in_its_help(name):
     sub = build_parser()._subparsers._group_actions[0].choices[name]
     text = sub.format_help()

@@ -348,3 +348,48 @@ def test_failed_write_leaves_old_file_and_no_temporaries(tmp_path):
         write_uff(p, bad)
     assert p.read_bytes() == before
     assert [q.name for q in tmp_path.iterdir()] == ["keep.uff"]
+
+
+# pyuff's private extractors ema/io relies on: function, its parameters and the keys read.
+PYUFF_PRIVATE = {
+    15: ("dataset_15", "_extract15", ("block_data",), {"node_nums", "x"}),
+    55: ("dataset_55", "_extract55", ("block_data",),
+         {"analysis_type", "freq", "modal_damp_vis", "node_nums", "r3"}),
+    58: ("dataset_58", "_extract58", ("block_data", "header_only"), {"data", "x"}),
+    164: ("dataset_164", "_extract164", ("block_data",), {"length", "force", "units_code"}),
+    2411: ("dataset_2411", "_extract2411", ("block_data",), {"node_nums", "x"}),
+}
+
+
+def _version(text: str) -> tuple[int, ...]:
+    return tuple(int(v) for v in re.findall(r"\d+", text)[:3])
+
+
+def test_pyuff_is_in_the_pinned_range_whose_private_extractors_ema_io_uses(tmp_path):
+    """pyproject.toml pins pyuff>=LO,<HI (docs/files.md says why); in that range the private
+    ``_extract*`` functions exist with the parameters and return the keys ema/io uses."""
+    import importlib
+    import inspect
+    from pathlib import Path
+
+    from ema.io.uff_blocks import split_uff
+
+    pyproject = (Path(__file__).resolve().parents[1] / "pyproject.toml").read_text()
+    lo, hi = re.search(r'"pyuff>=([\d.]+),<([\d.]+)"', pyproject).groups()
+    assert _version(lo) <= _version(pyuff.__version__) < _version(hi), pyuff.__version__
+    extract = {}
+    for dtype, (module, name, params, _) in PYUFF_PRIVATE.items():
+        fn = getattr(importlib.import_module(f"pyuff.datasets.{module}"), name)
+        assert tuple(inspect.signature(fn).parameters) == params, (name, params)
+        extract[dtype] = fn
+    write_uff(tmp_path / "t.uff", bat_test(n_points=3, n_lines=11), binary=False)
+    write_modes_uff(tmp_path / "m.uff", np.array([150.0]), np.array([0.01]),
+                    np.ones((3, 1)), np.arange(1, 4), np.array([0.1, 0.4, 0.8]))
+    seen = set()
+    for path in (tmp_path / "t.uff", tmp_path / "m.uff"):
+        for b in split_uff(path.read_bytes(), path):
+            keys = PYUFF_PRIVATE[b.type][3]
+            assert keys <= set(extract[b.type](b.text.decode("latin-1") if b.type != 58
+                                               else b.text)), b.type
+            seen.add(b.type)
+    assert seen == {15, 55, 58, 164}

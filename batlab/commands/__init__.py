@@ -1,1 +1,4 @@
-"""One module per `batlab` sub-command: HELP, add_arguments(parser), run(args)."""
+"""One module per `batlab` sub-command: EXAMPLE, add_arguments(parser), run(args).
+
+Each command's one-line help is in ``batlab.cli.COMMANDS`` (listed without importing it).
+"""

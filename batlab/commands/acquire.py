@@ -18,7 +18,6 @@ from typing import TYPE_CHECKING
 if TYPE_CHECKING:
     from batlab.pipeline import CaptureSettings
 
-HELP = "run a roving-hammer impact test over a serial port (or replay a recorded stream)"
 EXAMPLE = ("batlab acquire --port /dev/ttyACM0 --points 1,3,5,7,9,11,13,15,16 "
            "--driving-point 16 --hits 3 --meta meta.json -o test.uff")
 

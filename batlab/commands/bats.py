@@ -2,22 +2,36 @@
 
 from __future__ import annotations
 
+import argparse
 import json
 from dataclasses import asdict
 
 from batlab.cli_support import add_db_argument, db_path
 from batlab.formatting import STATUS_WORDS
 
-HELP = "list the registered bats with their latest inspection"
 EXAMPLE = "batlab bats --db lab.sqlite"
 
 
-def add_arguments(p) -> None:
+def add_arguments(p: argparse.ArgumentParser) -> None:
+    """Add the options of ``batlab bats`` to its sub-parser."""
     add_db_argument(p)
     p.add_argument("--json", action="store_true", help="print JSON on stdout")
 
 
-def run(args) -> int:
+def run(args: argparse.Namespace) -> int:
+    """List the registered bats with their latest inspection.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The options ``add_arguments`` defines.
+
+    Returns
+    -------
+    int
+        Exit code: 0 (bad input raises ValueError or OSError; ``batlab.cli`` prints
+        it in one line and exits 2).
+    """
     from batlab.registry import list_bats, open_registry
 
     with open_registry(db_path(args), create=False, readonly=True) as conn:

@@ -1,16 +1,19 @@
-"""`batlab check-rig`: does a test of a reference bar match the bar (modes, damping, scaling)?"""
+"""`batlab check-rig`: does a test of a reference bar match the bar (modes, damping, scaling).
+
+The rig passes when the bar's measured modes, damping and mass line agree with its model.
+"""
 
 from __future__ import annotations
 
+import argparse
 import json
 import sys
 
-HELP = ("check the test rig on a reference bar: measured modes, damping and mass line "
-        "against the bar's model")
 EXAMPLE = "batlab check-rig --bar steel_bar.json --frf bar_test.uff --json"
 
 
-def add_arguments(p) -> None:
+def add_arguments(p: argparse.ArgumentParser) -> None:
+    """Add the options of ``batlab check-rig`` to its sub-parser."""
     p.add_argument("--bar", required=True,
                    help="bar description (JSON: material E, density, length and section in "
                         "mm or m; docs/rig_check.md)")
@@ -26,7 +29,20 @@ def add_arguments(p) -> None:
                    help="modal estimation method of the ema fitter")
 
 
-def run(args) -> int:
+def run(args: argparse.Namespace) -> int:
+    """Check a test of a reference bar against the bar's model.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The options ``add_arguments`` defines.
+
+    Returns
+    -------
+    int
+        Exit code: 0 when the rig passes, 1 when a check fails (bad input raises
+        ValueError or OSError; ``batlab.cli`` prints it in one line and exits 2).
+    """
     from batlab import pipeline
 
     def progress(message: str) -> None:

@@ -10,17 +10,18 @@ was re-mounted 0.05 in away, and someone corked it (1 in core, 10 in deep, 1 in 
 
 from __future__ import annotations
 
+import argparse
 import json
 import tempfile
 from pathlib import Path
 
 from batlab.cli_support import add_db_argument, progress_printer
 
-HELP = "simulate a baseline and a corked re-test of a built-in bat, register and inspect them"
 EXAMPLE = "batlab demo --out demo/"
 
 
-def add_arguments(p) -> None:
+def add_arguments(p: argparse.ArgumentParser) -> None:
+    """Add the options of ``batlab demo`` to its sub-parser."""
     p.add_argument("--out", default=None,
                    help="work directory for the test files, registry and report (default: a "
                         "new temporary directory)")
@@ -29,7 +30,20 @@ def add_arguments(p) -> None:
     p.add_argument("--json", action="store_true", help="print the verdict JSON on stdout")
 
 
-def run(args) -> int:
+def run(args: argparse.Namespace) -> int:
+    """Simulate, register and inspect the built-in bat on the virtual rig.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The options ``add_arguments`` defines.
+
+    Returns
+    -------
+    int
+        Exit code: 0 (bad input raises ValueError or OSError; ``batlab.cli`` prints
+        it in one line and exits 2).
+    """
     from batlab import pipeline
     from batlab.formatting import readable
     from batlab.registry import open_registry

@@ -2,14 +2,15 @@
 
 from __future__ import annotations
 
+import argparse
 import json
 import sys
 
-HELP = "compare a baseline test with the nominal model, rank the causes, calibrate the reference"
 EXAMPLE = "batlab diagnose --profile profile.csv --meta meta.json --frf baseline.uff --plot plots/"
 
 
-def add_arguments(p) -> None:
+def add_arguments(p: argparse.ArgumentParser) -> None:
+    """Add the options of ``batlab diagnose`` to its sub-parser."""
     p.add_argument("--profile", required=True, help="profile.csv (x_in,diameter_in)")
     p.add_argument("--meta", required=True, help="meta.json (handbook wood, weight_lb)")
     p.add_argument("--frf", required=True, help="baseline test (.uff, .csv or .npz)")
@@ -25,7 +26,20 @@ def add_arguments(p) -> None:
                         "bat (about a minute; names beam_theory with its gain)")
 
 
-def run(args) -> int:
+def run(args: argparse.Namespace) -> int:
+    """Compare a baseline test with the nominal model and calibrate the reference.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The options ``add_arguments`` defines.
+
+    Returns
+    -------
+    int
+        Exit code: 0 (bad input raises ValueError or OSError; ``batlab.cli`` prints
+        it in one line and exits 2).
+    """
     from pathlib import Path
 
     from batlab import pipeline

@@ -2,19 +2,34 @@
 
 from __future__ import annotations
 
+import argparse
+
 from batlab.cli_support import add_db_argument, db_path
 
-HELP = "write the inspection history (one bat or all) as a CSV file"
 EXAMPLE = "batlab export HX-1004 -o HX-1004.csv"
 
 
-def add_arguments(p) -> None:
+def add_arguments(p: argparse.ArgumentParser) -> None:
+    """Add the options of ``batlab export`` to its sub-parser."""
     p.add_argument("serial", nargs="?", default=None, help="one bat (default: every bat)")
     p.add_argument("-o", "--output", required=True, metavar="FILE.csv", help="CSV file to write")
     add_db_argument(p)
 
 
-def run(args) -> int:
+def run(args: argparse.Namespace) -> int:
+    """Write the inspection history (one bat or all) as a CSV file.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The options ``add_arguments`` defines.
+
+    Returns
+    -------
+    int
+        Exit code: 0 (bad input raises ValueError or OSError; ``batlab.cli`` prints
+        it in one line and exits 2).
+    """
     from batlab.pipeline import history_table, write_csv
     from batlab.registry import open_registry
 

@@ -2,16 +2,17 @@
 
 from __future__ import annotations
 
+import argparse
 import json
 import sys
 
 from batlab.pipeline import IN_TO_M, KG_M2_TO_LB_IN2, LB_TO_KG, MIN_SNR
 
-HELP = "fit natural frequencies, damping and mass-normalised mode shapes to a test's FRFs"
 EXAMPLE = "batlab fit baseline.uff --json"
 
 
-def add_arguments(p) -> None:
+def add_arguments(p: argparse.ArgumentParser) -> None:
+    """Add the options of ``batlab fit`` to its sub-parser."""
     p.add_argument("test", help="FRF test file (.uff/.unv, .csv or .npz)")
     p.add_argument("--band", nargs=2, type=float, metavar=("LO_HZ", "HI_HZ"), default=None,
                    help="frequency band fitted, Hz (default: 20 Hz to the last line)")
@@ -64,7 +65,7 @@ def _num(v: float) -> float | None:
 
 
 def summary(fit) -> dict:
-    """The JSON document of a fit (see docs/ema.md)."""
+    """Build the JSON document of a fit (see docs/ema.md)."""
     rb = fit.rigid_body
     return {
         "method": fit.method,
@@ -134,7 +135,7 @@ def _table(fit) -> str:
 
 
 def explain(fit) -> list[str]:
-    """The short stderr summary: notes, rejections by reason, warned modes, close pairs."""
+    """Word the short stderr summary: notes, rejections by reason, warned modes, close pairs."""
     lines = [f"batlab fit: note: {n}" for n in fit.notes]
     counts: dict[str, list[float]] = {}
     for r in fit.rejected:
@@ -157,7 +158,20 @@ def explain(fit) -> list[str]:
     return lines
 
 
-def run(args) -> int:
+def run(args: argparse.Namespace) -> int:
+    """Fit the modes of one FRF test file and print (or write) them.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The options ``add_arguments`` defines.
+
+    Returns
+    -------
+    int
+        Exit code: 0 (bad input raises ValueError or OSError; ``batlab.cli`` prints
+        it in one line and exits 2).
+    """
     from batlab import pipeline
 
     print(f"batlab fit: reading {args.test}", file=sys.stderr)

@@ -2,23 +2,37 @@
 
 from __future__ import annotations
 
+import argparse
 import json
 from dataclasses import asdict
 
 from batlab.cli_support import add_db_argument, db_path
 from batlab.formatting import STATUS_WORDS
 
-HELP = "list the inspections of a registered bat, oldest first"
 EXAMPLE = "batlab history HX-1004 --json"
 
 
-def add_arguments(p) -> None:
+def add_arguments(p: argparse.ArgumentParser) -> None:
+    """Add the options of ``batlab history`` to its sub-parser."""
     p.add_argument("serial", help="the bat's serial number")
     add_db_argument(p)
     p.add_argument("--json", action="store_true", help="print JSON on stdout")
 
 
-def run(args) -> int:
+def run(args: argparse.Namespace) -> int:
+    """List the inspections of a registered bat, oldest first.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The options ``add_arguments`` defines.
+
+    Returns
+    -------
+    int
+        Exit code: 0 (bad input raises ValueError or OSError; ``batlab.cli`` prints
+        it in one line and exits 2).
+    """
     from batlab.registry import get_bat, history, open_registry
 
     with open_registry(db_path(args), create=False, readonly=True) as conn:

@@ -9,16 +9,17 @@ Two forms, the same verdict:
 
 from __future__ import annotations
 
+import argparse
 import json
 
 from batlab.cli_support import add_db_argument, db_path, progress_printer
 
-HELP = "inspect a re-test of a bat for alteration (stateless, or against the registry)"
 EXAMPLE = ("batlab inspect --serial HX-1004 retest.uff --report report/   (or: --profile "
            "profile.csv --meta meta.json --baseline baseline.uff --retest retest.uff --json)")
 
 
-def add_arguments(p) -> None:
+def add_arguments(p: argparse.ArgumentParser) -> None:
+    """Add the options of ``batlab inspect`` to its sub-parser."""
     p.add_argument("retest_file", nargs="?", default=None,
                    help="re-test file (the registry form: --serial S R.uff)")
     p.add_argument("--serial", default=None, help="a registered bat's serial number")
@@ -50,7 +51,20 @@ def _retest_path(args) -> str:
     return path
 
 
-def run(args) -> int:
+def run(args: argparse.Namespace) -> int:
+    """Inspect a re-test for alteration, stateless or against the registry.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The options ``add_arguments`` defines.
+
+    Returns
+    -------
+    int
+        Exit code: 0 (bad input raises ValueError or OSError; ``batlab.cli`` prints
+        it in one line and exits 2).
+    """
     from batlab import pipeline
     from batlab.formatting import readable
     from batlab.registry import open_registry
@@ -105,7 +119,7 @@ def run(args) -> int:
 
 
 def _print(args, out: dict, readable) -> None:
-    """The verdict on stdout, before anything optional (report, plots) can fail."""
+    """Print the verdict on stdout, before anything optional (report, plots) can fail."""
     print(json.dumps(out) if args.json else readable(out), flush=True)
 
 

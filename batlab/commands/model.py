@@ -2,14 +2,15 @@
 
 from __future__ import annotations
 
+import argparse
 import json
 import sys
 
-HELP = "build a bat's FE model from its profile: mass properties, free-free modes, test points"
 EXAMPLE = "batlab model --profile profile.csv --meta meta.json --beam timoshenko --json"
 
 
-def add_arguments(p) -> None:
+def add_arguments(p: argparse.ArgumentParser) -> None:
+    """Add the options of ``batlab model`` to its sub-parser."""
     p.add_argument("--profile", help="profile.csv (x_in,diameter_in); default: the paper's bat")
     p.add_argument("--meta", help="meta.json for the wood (default: the paper's white birch, "
                                   "said on stderr)")
@@ -29,7 +30,20 @@ def add_arguments(p) -> None:
     p.add_argument("--json", action="store_true", help="print JSON on stdout")
 
 
-def run(args) -> int:
+def run(args: argparse.Namespace) -> int:
+    """Build a bat's FE model and print its mass properties, modes and test points.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The options ``add_arguments`` defines.
+
+    Returns
+    -------
+    int
+        Exit code: 0 (bad input raises ValueError or OSError; ``batlab.cli`` prints
+        it in one line and exits 2).
+    """
     from batlab import pipeline
     from batlab.cli_support import note_printer
 

@@ -2,14 +2,15 @@
 
 from __future__ import annotations
 
+import argparse
 import json
 import sys
 
-HELP = "rerun the paper's corked-bat case: SEREP + MSSO as published, then batlab's refinement"
 EXAMPLE = "batlab paper --json"
 
 
-def add_arguments(p) -> None:
+def add_arguments(p: argparse.ArgumentParser) -> None:
+    """Add the options of ``batlab paper`` to its sub-parser."""
     p.add_argument("--noise", type=float, default=0.0, metavar="PCT",
                    help="noise on shape entries, %% of each mode's RMS (frequencies 0.05 %%)")
     p.add_argument("--seed", type=int, default=0, help="noise seed")
@@ -19,7 +20,20 @@ def add_arguments(p) -> None:
                    help="write Figures 2 and 3 as PNG into DIR (default DIR: paper_figures)")
 
 
-def run(args) -> int:
+def run(args: argparse.Namespace) -> int:
+    """Rerun the paper's corked-bat case, then batlab's refinement.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The options ``add_arguments`` defines.
+
+    Returns
+    -------
+    int
+        Exit code: 0 (bad input raises ValueError or OSError; ``batlab.cli`` prints
+        it in one line and exits 2).
+    """
     from batlab.pipeline import PAPER, TRUE, element_rows, plot_figures, run_paper_case
 
     if args.noise < 0 or not 2 <= args.modes <= 10:

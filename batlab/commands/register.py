@@ -2,15 +2,16 @@
 
 from __future__ import annotations
 
+import argparse
 import json
 
 from batlab.cli_support import add_db_argument, db_path, progress_printer
 
-HELP = "register a bat: fit its baseline test, calibrate its reference, store it by serial"
 EXAMPLE = "batlab register --profile profile.csv --meta meta.json --baseline baseline.uff"
 
 
-def add_arguments(p) -> None:
+def add_arguments(p: argparse.ArgumentParser) -> None:
+    """Add the options of ``batlab register`` to its sub-parser."""
     p.add_argument("--serial", default=None, help="serial number (default: meta.json's; must "
                                                   "agree with it)")
     p.add_argument("--profile", required=True, help="profile.csv (x_in,diameter_in)")
@@ -22,7 +23,20 @@ def add_arguments(p) -> None:
     p.add_argument("--json", action="store_true", help="print JSON on stdout")
 
 
-def run(args) -> int:
+def run(args: argparse.Namespace) -> int:
+    """Register a bat: fit its baseline, calibrate its reference, store it.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The options ``add_arguments`` defines.
+
+    Returns
+    -------
+    int
+        Exit code: 0 (bad input raises ValueError or OSError; ``batlab.cli`` prints
+        it in one line and exits 2).
+    """
     from batlab.pipeline import LBF_IN3_TO_KG_M3, PSI_TO_PA, register_files
     from batlab.registry import open_registry
 

@@ -2,17 +2,16 @@
 
 from __future__ import annotations
 
+import argparse
 import json
 from dataclasses import asdict, replace
 
 from batlab.cli_support import add_db_argument, db_path
 
-HELP = ("check the registry (SQLite integrity, stored files, the signed custody chain); print "
-        "the lab's public key or the chain's head")
 EXAMPLE = "batlab registry check --db lab.sqlite --head 42:<sha256>"
 
 
-def add_arguments(p) -> None:
+def add_arguments(p: argparse.ArgumentParser) -> None:
     """Add the ``registry`` arguments to parser ``p``."""
     p.add_argument("action", choices=["check", "key", "head"],
                    help="check: verify everything stored; key: print the lab's public key "
@@ -30,8 +29,20 @@ def add_arguments(p) -> None:
     p.add_argument("--json", action="store_true", help="check: print the result as JSON")
 
 
-def run(args) -> int:
-    """Run ``batlab registry ACTION``; returns the exit code (check: 0 only when intact)."""
+def run(args: argparse.Namespace) -> int:
+    """Run ``batlab registry ACTION`` (check, key, head).
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The options ``add_arguments`` defines.
+
+    Returns
+    -------
+    int
+        Exit code: for ``check`` 0 only when everything verifies, else 1 (bad input raises
+        ValueError or OSError; ``batlab.cli`` prints it in one line and exits 2).
+    """
     from batlab import signing
 
     if args.action == "key":

@@ -2,13 +2,15 @@
 
 from __future__ import annotations
 
+import argparse
+
 from batlab.cli_support import add_db_argument, db_path, progress_printer
 
-HELP = "regenerate the report of a stored inspection from the registry (files kept there)"
 EXAMPLE = "batlab report HX-1004 --inspection 3 --out report-HX-1004-3"
 
 
-def add_arguments(p) -> None:
+def add_arguments(p: argparse.ArgumentParser) -> None:
+    """Add the options of ``batlab report`` to its sub-parser."""
     p.add_argument("serial", help="the bat's serial number")
     p.add_argument("--inspection", type=int, default=None, metavar="N",
                    help="inspection number (see `batlab history S`; default the latest)")
@@ -19,7 +21,20 @@ def add_arguments(p) -> None:
     add_db_argument(p)
 
 
-def run(args) -> int:
+def run(args: argparse.Namespace) -> int:
+    """Regenerate the report of a stored inspection from the registry.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The options ``add_arguments`` defines.
+
+    Returns
+    -------
+    int
+        Exit code: 0 (bad input raises ValueError or OSError; ``batlab.cli`` prints
+        it in one line and exits 2).
+    """
     from pathlib import Path
 
     from batlab import pipeline

@@ -14,13 +14,11 @@ import signal
 import sys
 import time
 
-import numpy as np
-
-HELP = "run the virtual acquisition box (a simulated bat test) on a pseudo-terminal"
 EXAMPLE = "batlab rig serve --profile profile.csv --meta meta.json --alter cork:depth=10,d=1.0"
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
+    """Add the options of ``batlab rig`` to its sub-parser."""
     parser.add_argument("action", choices=["serve"], help="serve: run the box")
     parser.add_argument("--profile", help="bat profile.csv (x_in,diameter_in) for the FE model "
                         "(default: a uniform beam)")
@@ -47,6 +45,21 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    """Serve the virtual acquisition box on a pseudo-terminal until stopped.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The options ``add_arguments`` defines.
+
+    Returns
+    -------
+    int
+        Exit code: 0 (bad input raises ValueError or OSError; ``batlab.cli`` prints
+        it in one line and exits 2).
+    """
+    import numpy as np
+
     from batlab import pipeline
     from batlab.cli_support import note_printer
     from batlab.pipeline import (

@@ -2,15 +2,16 @@
 
 from __future__ import annotations
 
+import argparse
 import json
 import sys
 
-HELP = "simulate an impact test of a bat on the virtual rig and write it (UFF, CSV or NPZ)"
 EXAMPLE = ("batlab simulate --profile profile.csv --meta meta.json --alter "
            "cork:depth=10,d=1.0 --seed 1 --out retest.uff")
 
 
-def add_arguments(p) -> None:
+def add_arguments(p: argparse.ArgumentParser) -> None:
+    """Add the options of ``batlab simulate`` to its sub-parser."""
     p.add_argument("--profile", help="profile.csv (default: the paper's bat)")
     p.add_argument("--meta", help="meta.json: wood and test points (default: the paper's white "
                                   "birch, said on stderr)")
@@ -80,7 +81,20 @@ def run_case(args) -> int:
     return 0
 
 
-def run(args) -> int:
+def run(args: argparse.Namespace) -> int:
+    """Simulate an impact test of a bat on the virtual rig and write it.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The options ``add_arguments`` defines.
+
+    Returns
+    -------
+    int
+        Exit code: 0 (bad input raises ValueError or OSError; ``batlab.cli`` prints
+        it in one line and exits 2).
+    """
     if args.case:
         if args.out:
             raise ValueError("give --out (one test) or --case DIR (a bat's files), not both")

@@ -1,5 +1,7 @@
-"""Checks and assembly shared by the FRF file readers (UFF, CSV): one frequency axis, an even
-spacing, finite values, and a full response x reference matrix of FRFs.
+"""Checks and assembly shared by the FRF file readers (UFF, CSV).
+
+One frequency axis, an even spacing, finite values, and a full response x reference matrix
+of FRFs.
 """
 
 from __future__ import annotations
@@ -14,7 +16,7 @@ catch a missing or extra line."""
 
 
 def even_axis(freq_hz: np.ndarray, where: str) -> tuple[float, float]:
-    """(f0, df) of an evenly spaced, increasing axis; ValueError naming ``where`` otherwise.
+    """Return (f0, df) of an evenly spaced, increasing axis; ValueError naming ``where`` if not.
 
     The grid is f_k = f0 + k df with f0 = f[0] and df = (f[-1] - f[0]) / (n - 1) or f[1] - f[0],
     whichever fits better (so that axes built as f0 + arange(n) * df come back bit for bit);
@@ -44,14 +46,14 @@ def even_axis(freq_hz: np.ndarray, where: str) -> tuple[float, float]:
 
 
 def same_axis(a: tuple[int, float, float], b: tuple[int, float, float]) -> bool:
-    """True when two axes (n, f0, df) agree: same line count, f0 and df within 1e-6 df."""
+    """Tell whether two axes (n, f0, df) agree: same line count, f0 and df within 1e-6 df."""
     (na, f0a, dfa), (nb, f0b, dfb) = a, b
     tol = 1e-6 * max(dfa, dfb)
     return na == nb and abs(f0a - f0b) <= tol and abs(dfa - dfb) <= tol / max(na, 1)
 
 
 def require_finite(values: np.ndarray, where: str) -> None:
-    """ValueError naming ``where`` and the first bad line when ``values`` holds NaN or inf."""
+    """Raise ValueError naming ``where`` and the first bad line if ``values`` holds NaN/inf."""
     bad = ~np.isfinite(values)
     if bad.any():
         k = int(np.flatnonzero(bad.reshape(bad.shape[0], -1).any(axis=1))[0])

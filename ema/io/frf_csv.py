@@ -17,7 +17,6 @@ import os
 from pathlib import Path
 
 import numpy as np
-import pandas as pd
 
 from ema.io.atomic_write import atomic_write
 from ema.io.frf_assembly import assemble, even_axis, require_finite, same_axis
@@ -28,7 +27,15 @@ COLUMNS = ["freq_hz", "response_node", "response_x_m", "reference_node", "refere
 
 
 def write_frf_csv(path: str | os.PathLike, test: FrfTest) -> None:
-    """Write ``test`` in the long CSV layout, atomically."""
+    """Write ``test`` in the long CSV layout, atomically.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The .csv file, replaced atomically.
+    test : FrfTest
+        The test, SI units (17 significant digits: the round trip is exact).
+    """
     path = Path(path)
     f, nr, nf = test.frf.shape
     ii, jj = np.meshgrid(np.arange(nr), np.arange(nf), indexing="ij")
@@ -51,6 +58,8 @@ def write_frf_csv(path: str | os.PathLike, test: FrfTest) -> None:
     comments = "".join(f"# {k}={v}\n" for k, v in head.items())
 
     def write(tmp: Path) -> None:
+        import pandas as pd  # here, not at the top: a UFF or NPZ test never loads pandas
+
         with open(tmp, "w", newline="") as fh:
             fh.write(comments)
             pd.DataFrame(table).to_csv(fh, index=False, float_format="%.17g")
@@ -59,7 +68,25 @@ def write_frf_csv(path: str | os.PathLike, test: FrfTest) -> None:
 
 
 def read_frf_csv(path: str | os.PathLike) -> FrfTest:
-    """Read the long CSV layout; ValueError naming the file and the problem."""
+    """Read an FRF test in the long CSV layout.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The .csv file.
+
+    Returns
+    -------
+    FrfTest
+        The test, SI units.
+
+    Raises
+    ------
+    ValueError
+        The file is not an FRF CSV file (one line naming it and the problem).
+    """
+    import pandas as pd  # here, not at the top: a UFF or NPZ test never loads pandas
+
     path = Path(path)
     head: dict[str, str] = {}
     with open(path, encoding="utf-8", errors="replace") as fh:

@@ -19,17 +19,27 @@ QUANTITIES = ("accelerance", "mobility", "receptance")
 class FrfTest:
     """One test: an evenly spaced frequency axis and an FRF matrix by response/reference node.
 
-    Attributes:
-        freq_hz: (F,) frequency lines, Hz, evenly spaced.
-        frf: (F, n_resp, n_ref) complex FRFs in SI units of ``quantity``.
-        response_nodes: (n_resp,) node numbers of the responses (accelerometers).
-        reference_nodes: (n_ref,) node numbers of the references (hammer impacts).
-        node_x_m: node number -> position along the bat axis from the knob end, m.
-        quantity: "accelerance", "mobility" or "receptance".
-        coherence: optional (F, n_resp, n_ref) ordinary coherence, 0..1.
-        exp_window_tau_s: time constant of an exponential window applied to the response
-            (and force) before the FRF was estimated, s; None when no window was used.
-        meta: free-form descriptive information (serial, date, source file, ...).
+    Attributes
+    ----------
+    freq_hz : np.ndarray
+        (F,) frequency lines, Hz, evenly spaced.
+    frf : np.ndarray
+        (F, n_resp, n_ref) complex FRFs in SI units of ``quantity``.
+    response_nodes : np.ndarray
+        (n_resp,) node numbers of the responses (accelerometers).
+    reference_nodes : np.ndarray
+        (n_ref,) node numbers of the references (hammer impacts).
+    node_x_m : dict[int, float]
+        node number -> position along the bat axis from the knob end, m.
+    quantity : str
+        "accelerance", "mobility" or "receptance".
+    coherence : np.ndarray | None
+        optional (F, n_resp, n_ref) ordinary coherence, 0..1.
+    exp_window_tau_s : float | None
+        time constant of an exponential window applied to the response
+        (and force) before the FRF was estimated, s; None when no window was used.
+    meta : dict
+        free-form descriptive information (serial, date, source file, ...).
     """
 
     freq_hz: np.ndarray

@@ -27,7 +27,7 @@ def _suffix(path: Path, table: dict) -> str:
 
 
 def require_driving_point(test: FrfTest, path: str | os.PathLike) -> FrfTest:
-    """``test`` unchanged if it has a driving-point FRF; ValueError naming ``path`` if not."""
+    """Return ``test`` unchanged if it has a driving-point FRF; ValueError naming ``path``."""
     try:
         _ = test.driving_point
     except ValueError:
@@ -39,14 +39,44 @@ def require_driving_point(test: FrfTest, path: str | os.PathLike) -> FrfTest:
 
 
 def read_test(path: str | os.PathLike, require_driving: bool = True) -> FrfTest:
-    """Read an FRF test file of any supported type and (by default) check it has a driving
-    point; ``batlab fit`` reads without the check (it then gives unscaled shapes)."""
+    """Read an FRF test file of any supported type (.uff/.unv, .csv, .npz).
+
+    By default the test must have a driving point; ``batlab fit`` reads without the check (it
+    then gives unscaled shapes).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The file; its extension chooses the reader.
+    require_driving : bool, optional
+        Refuse a test without a driving-point FRF (default True).
+
+    Returns
+    -------
+    FrfTest
+        The test in SI units.
+
+    Raises
+    ------
+    OSError
+        The file cannot be read.
+    ValueError
+        Its content is not a usable FRF test (one line naming the file and the problem).
+    """
     path = Path(path)
     test = READERS[_suffix(path, READERS)](path)
     return require_driving_point(test, path) if require_driving else test
 
 
 def write_test(path: str | os.PathLike, test: FrfTest) -> None:
-    """Write an FRF test file, its type chosen by extension (UFF written binary)."""
+    """Write an FRF test file, its type chosen by extension (UFF written binary).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The file (.uff/.unv, .csv or .npz), replaced atomically.
+    test : FrfTest
+        The test, SI units.
+    """
     path = Path(path)
     WRITERS[_suffix(path, WRITERS)](path, test)

@@ -24,7 +24,15 @@ REQUIRED = ("freq_hz", "frf", "response_nodes", "reference_nodes", "node_numbers
 
 
 def write_frf_npz(path: str | os.PathLike, test: FrfTest) -> None:
-    """Write ``test`` as an .npz archive, atomically."""
+    """Write ``test`` as an .npz archive, atomically.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The .npz file, replaced atomically.
+    test : FrfTest
+        The test, SI units.
+    """
     nums = np.array(sorted(test.node_x_m), dtype=int)
     arrays = {
         "freq_hz": test.freq_hz, "frf": test.frf,
@@ -46,7 +54,23 @@ def write_frf_npz(path: str | os.PathLike, test: FrfTest) -> None:
 
 
 def read_frf_npz(path: str | os.PathLike) -> FrfTest:
-    """Read an .npz FRF archive; ValueError naming the file and the problem."""
+    """Read an .npz FRF archive.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The .npz file.
+
+    Returns
+    -------
+    FrfTest
+        The test, SI units.
+
+    Raises
+    ------
+    ValueError
+        The archive is not an FRF test (one line naming the file and the problem).
+    """
     path = Path(path)
     try:
         with np.load(path, allow_pickle=False) as z:

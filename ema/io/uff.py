@@ -27,7 +27,6 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
-import pandas as pd
 import pyuff
 from pyuff.datasets.dataset_58 import _extract58
 
@@ -98,12 +97,14 @@ def _float_token(toks: dict[str, str], key: str, where: str) -> float | None:
 
 
 def _ascii_numbers(data: bytes, count: int) -> np.ndarray | None:
-    """The ``count`` numbers of an ASCII 58 data block, or None when the fast paths fail.
+    """Parse the ``count`` numbers of an ASCII 58 data block; None when the fast paths fail.
 
     pandas' C tokenizer reads the block as a table (one row per record, the last one
     padded with NaN); a table that is not ``count`` numbers in full rows falls back to a
     plain split of the block (which also covers NaN written into the data).
     """
+    import pandas as pd  # here, not at the top: binary files (batlab's own) never need it
+
     try:
         a = pd.read_csv(io.BytesIO(data), sep=r"\s+", header=None, dtype=float).to_numpy()
     except (ValueError, pd.errors.ParserError, pd.errors.EmptyDataError):
@@ -228,8 +229,22 @@ def _decode_58(
 def read_uff(path: str | os.PathLike) -> FrfTest:
     """Read an FRF test from a UFF file (164 + 15 + 58s, ASCII or binary) into SI units.
 
-    Raises OSError when the file cannot be read and ValueError, naming the file, the dataset
-    and the problem, when its content is not a usable FRF test.
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The UFF file.
+
+    Returns
+    -------
+    FrfTest
+        FRFs (and coherences, if stored) in SI units of their quantity, node positions in m.
+
+    Raises
+    ------
+    OSError
+        The file cannot be read.
+    ValueError
+        Its content is not a usable FRF test (naming the file, the dataset and the problem).
     """
     path = Path(path)
     blocks = split_uff(path.read_bytes(), path)
@@ -304,8 +319,22 @@ def _coherence(
 def write_uff(path: str | os.PathLike, test: FrfTest, binary: bool = True) -> None:
     """Write ``test`` as a UFF file (SI, double precision) through pyuff, atomically.
 
-    Coherence pairs that are all NaN are skipped. ValueError for data UFF cannot carry
-    faithfully (NaN/inf FRFs, uneven axis, nodes without positions).
+    Coherence pairs that are all NaN are skipped.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The file, replaced atomically.
+    test : FrfTest
+        The test, SI units.
+    binary : bool, optional
+        Write binary 58b datasets (default) rather than ASCII 58.
+
+    Raises
+    ------
+    ValueError
+        For data UFF cannot carry faithfully (NaN/inf FRFs, uneven axis, nodes without
+        positions).
     """
     path = Path(path)
     where = f"{path} (writing)"
@@ -355,7 +384,7 @@ def _dset58(
     func: int, rsp: int, ref: int, values: np.ndarray, f0: float, df: float, quantity: str,
     ids: list[str], binary: bool, func_id: int,
 ) -> dict:
-    """pyuff dict of one dataset 58: FRF (4, complex, quantity over force) or coherence (6)."""
+    """Build the pyuff dict of one dataset 58: FRF (4, complex, per force) or coherence (6)."""
     frf = func == 4
     num = {v: k for k, v in NUMERATOR_TYPES.items()}[quantity] if frf else 0
     return {

@@ -32,16 +32,24 @@ UNIT_SYSTEMS = {1: "SI", 2: "BG", 3: "MG", 4: "BA", 5: "MM", 6: "CM", 7: "IN", 8
 class UffBlock:
     """One dataset of a UFF file.
 
-    Attributes:
-        index: 1-based position of the dataset in the file.
-        type: dataset number (15, 58, 164, ...).
-        binary: True for a binary 58 (``58b``).
-        text: the dataset from its opening marker line up to (not including) its end marker,
-            as pyuff's extractors expect it.
-        header: for 58, its 11 header records after the type line (ID lines 1-5, records
-            6-11); empty for other datasets.
-        data: for 58, the data part (ASCII text or raw bytes); empty for other datasets.
-        type_line: the dataset number record (carries the binary format of a 58b).
+    Attributes
+    ----------
+    index : int
+        1-based position of the dataset in the file.
+    type : int
+        dataset number (15, 58, 164, ...).
+    binary : bool
+        True for a binary 58 (``58b``).
+    text : bytes
+        the dataset from its opening marker line up to (not including) its end marker,
+        as pyuff's extractors expect it.
+    header : tuple[bytes, ...]
+        for 58, its 11 header records after the type line (ID lines 1-5, records
+        6-11); empty for other datasets.
+    data : bytes
+        for 58, the data part (ASCII text or raw bytes); empty for other datasets.
+    type_line : bytes
+        the dataset number record (carries the binary format of a 58b).
     """
 
     index: int
@@ -58,7 +66,7 @@ class UffBlock:
 
 
 def fields(line: bytes, widths: list[int]) -> list[str]:
-    """Fixed-width fields of an 80-column record, stripped."""
+    """Split an 80-column record into its fixed-width fields, stripped."""
     s = line.decode("latin-1").rstrip("\r\n").ljust(sum(widths))
     out, i = [], 0
     for w in widths:
@@ -68,7 +76,7 @@ def fields(line: bytes, widths: list[int]) -> list[str]:
 
 
 def data_count_58(header: tuple[bytes, ...], where: str) -> tuple[int, int, bool, int]:
-    """(ord_data_type, num_pts, even, number of stored values) from record 7 of a 58."""
+    """Return (ord_data_type, num_pts, even, number of stored values) from record 7 of a 58."""
     rec = fields(header[6], [10, 10, 10])
     try:
         ord_type, num_pts, even = int(rec[0]), int(rec[1]), int(rec[2])
@@ -83,14 +91,33 @@ def data_count_58(header: tuple[bytes, ...], where: str) -> tuple[int, int, bool
 
 
 def _line_at(raw: bytes, pos: int) -> tuple[bytes, int]:
-    """The line starting at ``pos`` (without its newline) and the offset after its newline."""
+    """Return the line starting at ``pos`` (without its newline) and the offset after it."""
     end = raw.find(b"\n", pos)
     end = len(raw) if end < 0 else end
     return raw[pos:end].rstrip(b"\r"), min(end + 1, len(raw))
 
 
 def split_uff(raw: bytes, path: Path) -> list[UffBlock]:
-    """Split a whole UFF file into datasets; ValueError naming the file and dataset on damage."""
+    """Split a whole UFF file into datasets, in one sequential pass.
+
+    Parameters
+    ----------
+    raw : bytes
+        The file's content.
+    path : Path
+        The file, for messages.
+
+    Returns
+    -------
+    list of UffBlock
+        The datasets in file order.
+
+    Raises
+    ------
+    ValueError
+        Not UFF, or damaged (truncated, a missing marker, a binary count that disagrees with
+        the file), naming the file and the dataset.
+    """
     blocks: list[UffBlock] = []
     pos = 0
     while True:
@@ -173,7 +200,7 @@ def _pyuff(extract, block: UffBlock, path: Path) -> dict:
 
 
 def read_units(block: UffBlock, path: Path) -> tuple[float, float, str]:
-    """(length factor, force factor, unit system name) of a dataset 164."""
+    """Return (length factor, force factor, unit system name) of a dataset 164."""
     d = _pyuff(_extract164, block, path)
     lf, ff = d["length"], d["force"]
     if not (np.isfinite(lf) and np.isfinite(ff) and lf > 0 and ff > 0):
@@ -183,7 +210,7 @@ def read_units(block: UffBlock, path: Path) -> tuple[float, float, str]:
 
 
 def read_nodes(block: UffBlock, path: Path, length_factor: float) -> dict[int, float]:
-    """Node number -> x position in metres, from a dataset 15 or 2411."""
+    """Return node number -> x position in metres, from a dataset 15 or 2411."""
     d = _pyuff(_extract15 if block.type == 15 else _extract2411, block, path)
     nums = np.asarray(d["node_nums"], dtype=float)
     x = np.asarray(d["x"], dtype=float)
@@ -194,13 +221,13 @@ def read_nodes(block: UffBlock, path: Path, length_factor: float) -> dict[int, f
 
 
 def si_units_dset() -> dict:
-    """pyuff dict of a dataset 164 declaring SI units (factors 1; kelvin offset 273.15)."""
+    """Build the pyuff dict of a dataset 164 declaring SI (factors 1; kelvin offset 273.15)."""
     return {"type": 164, "units_code": 1, "units_description": "SI", "temp_mode": 2,
             "length": 1.0, "force": 1.0, "temp": 1.0, "temp_offset": 273.15}
 
 
 def nodes_dset(node_x_m: dict[int, float]) -> dict:
-    """pyuff dict of a dataset 15: the nodes on the bat axis, x in m, y = z = 0."""
+    """Build the pyuff dict of a dataset 15: the nodes on the bat axis, x in m, y = z = 0."""
     nums = np.array(sorted(node_x_m), dtype=int)
     x = np.array([node_x_m[n] for n in nums], dtype=float)
     if not np.all(np.isfinite(x)):

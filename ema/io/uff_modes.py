@@ -27,12 +27,18 @@ from ema.io.uff_blocks import nodes_dset, read_nodes, read_units, si_units_dset,
 class ModeSet:
     """Modes at measured nodes.
 
-    Attributes:
-        freq_hz: (m,) natural frequencies, Hz.
-        damping_ratio: (m,) viscous damping ratios.
-        shapes: (n_nodes, m) real or complex mode shapes (transverse, +Z).
-        nodes: (n_nodes,) node numbers.
-        node_x_m: (n_nodes,) node positions along the bat axis from the knob end, m.
+    Attributes
+    ----------
+    freq_hz : np.ndarray
+        (m,) natural frequencies, Hz.
+    damping_ratio : np.ndarray
+        (m,) viscous damping ratios.
+    shapes : np.ndarray
+        (n_nodes, m) real or complex mode shapes (transverse, +Z).
+    nodes : np.ndarray
+        (n_nodes,) node numbers.
+    node_x_m : np.ndarray
+        (n_nodes,) node positions along the bat axis from the knob end, m.
     """
 
     freq_hz: np.ndarray
@@ -50,7 +56,28 @@ def write_modes_uff(
     nodes: np.ndarray,
     node_x_m: np.ndarray,
 ) -> None:
-    """Write modes as 164 + 15 + one 55 per mode (real shapes: type 2, complex: type 3)."""
+    """Write modes as 164 + 15 + one 55 per mode (real shapes: type 2, complex: type 3).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The UFF file, replaced atomically.
+    freq_hz : np.ndarray
+        (m,) natural frequencies, Hz.
+    damping_ratio : np.ndarray
+        (m,) viscous damping ratios (or one for all modes).
+    shapes : np.ndarray
+        (n_nodes, m) real or complex mode shapes.
+    nodes : np.ndarray
+        (n_nodes,) node numbers.
+    node_x_m : np.ndarray
+        (n_nodes,) node positions along the bat axis, m.
+
+    Raises
+    ------
+    ValueError
+        Sizes that do not match, or NaN/inf in the modal parameters.
+    """
     path = Path(path)
     f = np.atleast_1d(np.asarray(freq_hz, dtype=float))
     z = np.broadcast_to(np.asarray(damping_ratio, dtype=float), f.shape)
@@ -79,7 +106,24 @@ def write_modes_uff(
 
 
 def read_modes_uff(path: str | os.PathLike) -> ModeSet:
-    """Read the 55 modes (analysis type 2 or 3) of a UFF file, with node positions from 15."""
+    """Read the 55 modes (analysis type 2 or 3) of a UFF file, with node positions from 15.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The UFF file.
+
+    Returns
+    -------
+    ModeSet
+        Frequencies (Hz), damping ratios, shapes and the nodes with their positions (m).
+
+    Raises
+    ------
+    ValueError
+        No modes, unknown nodes, node sets that differ between modes, or NaN/inf (one line
+        naming the file and, where there is one, the dataset).
+    """
     path = Path(path)
     lf = 1.0
     positions: dict[int, float] = {}
