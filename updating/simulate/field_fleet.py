@@ -34,6 +34,7 @@ from updating.simulate import nuisances as nz
 from updating.simulate.alterations import KINDS, Alteration, AlterationKind, draw_alteration
 from updating.simulate.fleet import SPECIES, pro_profile
 from updating.simulate.integrity import INTEGRITY, Integrity, corrupt
+from updating.simulate.rulebook import RULEBOOK_KINDS, RulebookKind, draw_change
 from updating.simulate.virtual_bat import VirtualBat, simulate_test
 
 FieldKind = Literal["none", AlterationKind]
@@ -137,7 +138,7 @@ def no_barrel_points_in(length_in: float) -> np.ndarray:
 
 
 def draw_case(
-    rng: np.random.Generator, kind: FieldKind = "none", nuisances=nz.NUISANCES,
+    rng: np.random.Generator, kind: FieldKind | RulebookKind = "none", nuisances=nz.NUISANCES,
     integrity: Integrity | None = None, serial: str = "SIM-0001",
 ) -> FieldCase:
     """A random bat with the ``nuisances`` given, altered by ``kind`` ("none" or one of
@@ -146,8 +147,9 @@ def draw_case(
     unknown = set(nuis) - set(nz.NUISANCES) - set(nz.OPTIONAL_NUISANCES)
     if unknown:
         raise ValueError(f"unknown nuisance(s) {sorted(unknown)}")
-    if kind != "none" and kind not in KINDS:
-        raise ValueError(f"unknown alteration kind {kind!r} (none, {', '.join(KINDS)})")
+    if kind != "none" and kind not in KINDS + RULEBOOK_KINDS:
+        raise ValueError(f"unknown alteration kind {kind!r} "
+                         f"(none, {', '.join(KINDS + RULEBOOK_KINDS)})")
     if integrity is not None and integrity not in INTEGRITY:
         raise ValueError(f"unknown integrity case {integrity!r} ({', '.join(INTEGRITY)})")
     on = set(nuis)
@@ -220,7 +222,11 @@ def draw_case(
              "expected": "inconclusive" if integrity else
              ("altered" if kind != "none" else "not_altered"),
              "nuisances": list(nuis), "drawn": rec, "serial": serial}
-    if kind != "none":
+    if kind in RULEBOOK_KINDS:  # the rulebook's changes: all in updating.simulate.rulebook
+        change = draw_change(rng, kind, truth_profile, wood.rho_kg_m3, cup_depth_in + 0.25)
+        retest = replace(retest, local_changes=change.changes)
+        truth.update(change.truth(integrity))
+    elif kind != "none":
         alt = draw_alteration(rng, kind, L_in, min_plug_in=cup_depth_in + 0.25)
         retest = replace(retest, core=alt.core, cavities=retest.cavities + alt.cavities)
         truth.update(alt.truth())
