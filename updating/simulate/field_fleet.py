@@ -34,6 +34,7 @@ from updating.simulate import nuisances as nz
 from updating.simulate.alterations import KINDS, Alteration, AlterationKind, draw_alteration
 from updating.simulate.fleet import SPECIES, pro_profile, random_wood
 from updating.simulate.integrity import INTEGRITY, Integrity, corrupt
+from updating.simulate.rulebook import RULEBOOK_KINDS, RulebookKind, draw_change
 from updating.simulate.virtual_bat import VirtualBat, simulate_test
 
 FieldKind = Literal["none", AlterationKind]
@@ -141,13 +142,15 @@ def no_barrel_points_in(length_in: float) -> np.ndarray:
     return np.append(np.arange(1.0, NO_BARREL[0], 2.0), np.floor(100 * length_in) / 100)
 
 
-def _check_request(kind: FieldKind, nuisances: tuple, integrity: Integrity | None) -> None:
+def _check_request(kind: FieldKind | RulebookKind, nuisances: tuple,
+                   integrity: Integrity | None) -> None:
     """Raise ValueError for an unknown nuisance, alteration kind or integrity case."""
     unknown = set(nuisances) - set(nz.NUISANCES) - set(nz.OPTIONAL_NUISANCES)
     if unknown:
         raise ValueError(f"unknown nuisance(s) {sorted(unknown)}")
-    if kind != "none" and kind not in KINDS:
-        raise ValueError(f"unknown alteration kind {kind!r} (none, {', '.join(KINDS)})")
+    if kind != "none" and kind not in KINDS + RULEBOOK_KINDS:
+        raise ValueError(f"unknown alteration kind {kind!r} "
+                         f"(none, {', '.join(KINDS + RULEBOOK_KINDS)})")
     if integrity is not None and integrity not in INTEGRITY:
         raise ValueError(f"unknown integrity case {integrity!r} ({', '.join(INTEGRITY)})")
 
@@ -308,7 +311,7 @@ def _expected_answer(kind: FieldKind, integrity: Integrity | None) -> str:
 
 
 def draw_case(
-    rng: np.random.Generator, kind: FieldKind = "none", nuisances=nz.NUISANCES,
+    rng: np.random.Generator, kind: FieldKind | RulebookKind = "none", nuisances=nz.NUISANCES,
     integrity: Integrity | None = None, serial: str = "SIM-0001",
 ) -> FieldCase:
     """Draw a random bat with its lab files and its hidden truth.
@@ -321,7 +324,8 @@ def draw_case(
     rng : numpy.random.Generator
         The source of every random draw.
     kind : {"none", "cork", ...}
-        "none" (unaltered) or one of ``alterations.KINDS``.
+        "none" (unaltered), one of ``alterations.KINDS`` (cores) or of
+        ``rulebook.RULEBOOK_KINDS`` (nails, shaved, wax, legal grips, ...).
     nuisances : iterable of str
         The nuisances to draw (``nuisances.NUISANCES`` and ``OPTIONAL_NUISANCES``).
     integrity : str or None
@@ -353,7 +357,11 @@ def draw_case(
     truth = {"kind": kind, "altered": kind != "none", "integrity": integrity,
              "expected": _expected_answer(kind, integrity),
              "nuisances": list(nuis), "drawn": rec, "serial": serial}
-    if kind != "none":
+    if kind in RULEBOOK_KINDS:  # the rulebook's changes: all in updating.simulate.rulebook
+        change = draw_change(rng, kind, truth_profile, wood.rho_kg_m3, cup_depth_in + 0.25)
+        retest = replace(retest, local_changes=change.changes)
+        truth.update(change.truth(integrity))
+    elif kind != "none":
         alt = draw_alteration(rng, kind, length_m / IN_TO_M, min_plug_in=cup_depth_in + 0.25)
         retest = replace(retest, core=alt.core, cavities=retest.cavities + alt.cavities)
         truth.update(alt.truth())

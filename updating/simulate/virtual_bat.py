@@ -29,6 +29,7 @@ from ema.io.frf_data import FrfTest
 from rigs.modal_model import ModalModel
 from rigs.virtual_test import add_noise, simulate_frf
 from updating.model.assembly import Attachment, Beam, build_model, displacement_at
+from updating.model.local_change import LocalChange, apply_local_changes, change_stations_m
 from updating.model.material import Material
 from updating.model.modes import model_modes
 from updating.model.profile import Profile
@@ -88,6 +89,8 @@ class VirtualBat:
         E/G of the tangential bending plane; None: one plane (``material``'s).
     theta_deg : float
         Angle of hammer and accelerometer to the radial plane, degrees.
+    local_changes : tuple[LocalChange, ...]
+        The rulebook's changes (``updating.simulate.rulebook``), applied last.
     """
 
     profile: Profile
@@ -109,6 +112,7 @@ class VirtualBat:
     cavities: tuple[Core, ...] = ()
     e_over_g_t: float | None = None
     theta_deg: float = 0.0
+    local_changes: tuple[LocalChange, ...] = ()
 
     def planes(self) -> tuple[tuple[str, float], ...]:
         """Return the (plane, weight) pairs of the measured FRF.
@@ -158,11 +162,13 @@ class VirtualBat:
             for x in (IN_TO_M, self.profile.length_m - IN_TO_M):
                 attach.append(Attachment(x, k_n_per_m=self.bungee_k_n_per_m))
         stations = np.concatenate([points, cavity_stations_m(self.cavities,
-                                                             self.profile.length_m)])
+                                                             self.profile.length_m),
+                                   change_stations_m(self.local_changes, self.profile.length_m)])
         model = build_model(self.profile, material, beam=self.beam,
                             element_length_m=self.element_length_m, stations_m=stations,
                             core=self.core, attachments=tuple(attach))
-        return apply_wood_field(apply_cavities(model, material, self.cavities), self.wood)
+        model = apply_wood_field(apply_cavities(model, material, self.cavities), self.wood)
+        return apply_local_changes(model, self.local_changes, plane)
 
 
 def damping_ratios(freq_hz: np.ndarray, zeta1: float, exponent: float) -> np.ndarray:

@@ -1,0 +1,142 @@
+"""What the inspection makes of every change the rulebook names, and of the legal grips.
+
+For each kind (clean bats, the legal grips, pine tar past 18 in, nails, shaved, flattened
+and grooved barrels, wax coats, and core kinds of ``updating.simulate.alterations``), N
+realistic bats (``updating.simulate.field_fleet.draw_case``, every nuisance at random) are
+written as the lab's files and inspected through the real command in this process
+(``batlab inspect ... --json``, ``benchmarks/fleet_runner.py``), with retest.json and,
+for the first ``--without`` of them, the same bats without it. One JSON line per bat on
+stdout (kind, truth, status, reasons, region_in, finding, time); progress and a table per
+kind on stderr: altered / not_altered / inconclusive, the region's start within 1.5 in of
+the truth's (of the altered bats called altered), the right ``finding.kind`` (when the
+output has a finding).
+
+    nice python benchmarks/bench_rulebook.py --per-kind 6 --without 3 --workers 2 \
+        > rulebook.jsonl
+
+``--summary FILE`` re-summarises a run.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import tempfile
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+import numpy as np  # noqa: E402
+from fleet_runner import inspect_args, pool_map, timed, verdict_row  # noqa: E402
+
+from updating.simulate.field_fleet import draw_case, write_case  # noqa: E402
+
+KINDS = ("none", "pine_tar", "grip_tape", "spray", "tar_past_18", "nails", "shaved",
+         "flattened", "grooved", "wax", "cork", "neutral", "empty")
+"""The kinds run by default, in the table's order."""
+CORE_KINDS = ("cork", "deep", "empty", "end_plug", "partial", "small", "neutral")
+REGION_TOL_IN = 1.5
+
+
+def one(job: tuple[str, int, bool]) -> dict:
+    """Draw, write and inspect one bat; return its result row.
+
+    Parameters
+    ----------
+    job : tuple
+        (kind, seed, with retest.json).
+
+    Returns
+    -------
+    dict
+        ``fleet_runner.verdict_row`` plus with_meta, finding, region_ok and kind_ok.
+    """
+    kind, seed, with_meta = job
+    try:
+        case = draw_case(np.random.default_rng(seed), kind, serial=f"R-{seed}")
+        with tempfile.TemporaryDirectory(prefix="batlab-rulebook-") as tmp:
+            paths = write_case(case, tmp, seed, retest_meta_keys=None if with_meta else [])
+            out, err, seconds = timed(inspect_args(paths))
+    except ValueError as exc:  # the simulator could not make this bat: reported, not counted
+        return {"kind": kind, "seed": seed, "with_meta": with_meta, "status": "error",
+                "error": str(exc), "seconds": 0.0}
+    row = verdict_row(out, err, seconds, case.truth)
+    row.update(seed=seed, with_meta=with_meta,
+               finding=None if out is None else out.get("finding"))
+    return score(row)
+
+
+def score(row: dict) -> dict:
+    """Add region_ok and kind_ok to a row (None where they do not apply)."""
+    truth = row["truth"]
+    found = row["status"] == "altered" and truth.get("altered")
+    true_region = (truth.get("finding") or {}).get("region_in") or truth.get("region_in")
+    row["region_ok"] = None
+    if found and row.get("region_in") and true_region:
+        row["region_ok"] = abs(row["region_in"][0] - true_region[0]) <= REGION_TOL_IN
+    true_kind = (truth.get("finding") or {}).get("kind") or (
+        "core" if row["kind"] in CORE_KINDS else None)
+    row["kind_ok"] = None
+    if row.get("finding") and true_kind:
+        row["kind_ok"] = row["finding"].get("kind") == true_kind
+    return row
+
+
+def ratio(rows: list[dict], key: str) -> str:
+    """Return "k/n" of the rows where ``key`` is True, over those where it applies."""
+    vals = [r[key] for r in rows if r.get(key) is not None]
+    return f"{sum(vals)}/{len(vals)}" if vals else "-"
+
+
+def table(rows: list[dict]) -> str:
+    """Return the markdown table: per kind and retest.json, the statuses and readings."""
+    lines = ["| kind | retest.json | bats | altered | not_altered | inconclusive | refused/error "
+             "| start within 1.5 in | finding kind right | median s |",
+             "|---|---|---|---|---|---|---|---|---|---|"]
+    kinds = [k for k in KINDS if any(r["kind"] == k for r in rows)]
+    kinds += sorted({r["kind"] for r in rows} - set(kinds))
+    for kind in kinds:
+        for meta in (True, False):
+            rs = [r for r in rows if r["kind"] == kind and r["with_meta"] == meta]
+            if not rs:
+                continue
+            c = {s: sum(r["status"] == s for r in rs) for s in
+                 ("altered", "not_altered", "inconclusive")}
+            bad = sum(r["status"] in ("refused", "error") for r in rs)
+            t = sorted(r["seconds"] for r in rs)
+            lines.append(f"| {kind} | {'yes' if meta else 'no'} | {len(rs)} | {c['altered']} | "
+                         f"{c['not_altered']} | {c['inconclusive']} | {bad} | "
+                         f"{ratio(rs, 'region_ok')} | {ratio(rs, 'kind_ok')} | "
+                         f"{t[len(t) // 2]:.1f} |")
+    return "\n".join(lines)
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Run the benchmark (or re-summarise a run) and print the table on stderr."""
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--kinds", nargs="+", default=list(KINDS))
+    ap.add_argument("--per-kind", type=int, default=6, help="bats per kind with retest.json")
+    ap.add_argument("--without", type=int, default=3,
+                    help="of these, how many also without retest.json")
+    ap.add_argument("--seed", type=int, default=2400)
+    ap.add_argument("--workers", type=int, default=2, help="processes (at most 2)")
+    ap.add_argument("--summary", default=None, help="summarise a JSON-lines file and stop")
+    args = ap.parse_args(argv)
+    if args.summary:
+        lines = Path(args.summary).read_text().splitlines()
+        print(table([json.loads(s) for s in lines if s.strip()]), file=sys.stderr)
+        return 0
+    jobs = [(kind, args.seed + 1000 * k + i, meta)
+            for k, kind in enumerate(args.kinds) for meta in (True, False)
+            for i in range(args.per_kind if meta else min(args.without, args.per_kind))]
+    rows = pool_map(one, jobs, args.workers, "bat")
+    for row in rows:
+        print(json.dumps(row, default=float))
+    print(table(rows), file=sys.stderr)
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
