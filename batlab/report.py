@@ -23,7 +23,7 @@ from pathlib import Path
 import numpy as np
 
 from batlab.formatting import chance_words, p_value, status_of
-from batlab.pipeline import ReportInputs, jsonable
+from batlab.pipeline.records import ReportInputs, jsonable
 from batlab.registry import now_utc
 from ema.io.atomic_write import atomic_write
 from updating.inspect.details import InspectionDetails, ModePair

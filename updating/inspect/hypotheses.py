@@ -341,7 +341,7 @@ def plane_shift(diff: Differences, x: np.ndarray) -> np.ndarray:
 def plane_shape_shift(diff: Differences, x: np.ndarray) -> np.ndarray | float:
     """(n_points, m) shape change of each pair from the two-plane mix c = x[6]:
     dphi / d ln(E/G) c. The merged pair's shape is cos^2 phi_R + sin^2 phi_T
-    (``planes.merge_plane_pairs``), so tapping at another angle moves it by
+    (``updating.correlate.planes.merge_plane_pairs``), so tapping at another angle moves it by
     Delta(sin^2 theta) (phi_T - phi_R) = c dphi / d ln(E/G) to first order."""
     if diff.plane_shape_sens is None:
         return 0.0

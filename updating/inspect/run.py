@@ -45,6 +45,7 @@ from updating.inspect.checks import (
     identity_reason,
     pairing_reason,
 )
+from updating.inspect.decision import CONFUSABLE, Evidence, decide, is_significant
 from updating.inspect.details import (
     CoreCandidate,
     ElementMap,
@@ -97,40 +98,11 @@ squared shape residuals grew in proportion to phi^2 with a per-bat floor k of 0-
 (median 0.3); 0.5 is the floor kept. Weighting every point of a mode alike let the
 large-amplitude points' noise dominate and read as a core at the barrel end."""
 MAP_MASS_NORMALISED = True
-MIN_CORE_DIAMETER_IN = 0.30
-"""Physical floor: the fitted core's diameter, less two standard uncertainties, must reach
-this for "altered" (reported holes are 0.75-1.25 in, the smallest considered 0.5 in); a
-significant change that only a thinner or undetermined core explains is model error or
-drift, not a core. Calibrated with the two-plane shapes and the per-point shape noise
-(sixth round, docs/inspection.md) on 320 nuisance-rich clean bats (seeds 600-639,
-3000-3039, 7000-7119, 8000-8119; validated on 9000-9119): clean bats whose F passed the
-floor reached 0.18 in; altered bats' candidates 0.33 in and more."""
-
-
-F_FLOOR = 10.0
-"""Calibrated floor on F: on nuisance-rich clean bats (end-grain moisture, billet gradients,
-two planes tapped at another angle, temperature, cupped end, replaced accelerometer,
-bungees, 1-2 % noise, 8-20 points; docs/inspection.md) F's tail is heavier than
-F(4, N - 11). With the two planes' shapes and the per-point shape noise modelled (sixth
-round), the largest F of a clean bat with a practical candidate core was 7.9 on 320 bats
-(seeds 600-639, 3000-3039, 7000-7119, 8000-8119; 11.7 before those two models, against
-which the earlier floors of 12 and 14 were set); the floor is 10, 27 % above it, fixed
-before a fresh clean fleet (seeds 9000-9119) reached 4.4. With a shape-noise level per mode
-(seventh round) the largest was 6.7 on 560 clean bats (those and 11000-11119)."""
 PARTIAL_LEVEL = 0.01
 """Level of the chi^2 test (one degree) by which a light fill's reading is described as a
 partial fill (``fit.fit_partial``: part of the hole behind the plug empty). The reading itself
 always comes from that fit (it contains the hole filled to the plug); neither changes the
 verdict."""
-WEIGHT_DRIFT_MAX = 0.04
-"""|ln(W_retest / W_registered)| beyond which moisture (+-2.5 points, 1 %/point, plus the
-scale) cannot explain a weight change."""
-CONFUSABLE = ("barrel_end_moisture_pt", "sensor_mass_change_g", "sensor_shift_in")
-"""Nuisances that act where a core does (the barrel end): a core fit that needs one of them
-at its physical bound cannot be told from that drift. (A uniform scale at its bound beside
-a core only says the core model is not the alteration's exact shape.)"""
-
-
 def _rel_freq_std(m: MeasuredModes) -> np.ndarray:
     if m.freq_std_hz is not None and np.all(np.asarray(m.freq_std_hz) > 0):
         return np.asarray(m.freq_std_hz) / m.freq_hz
@@ -328,7 +300,7 @@ def _core_beyond_drift(predict, diff, space, hyp: Hypotheses, q: int, dof: int,
                     hyp.sigma_rel, x0=hyp.null.x)
     rss1 = min(hyp.full.rss, hyp.null.rss)
     F, p = nested_f(wide.rss, rss1, q, dof)
-    return F if p < false_alarm and F >= F_FLOOR else None
+    return F if is_significant(F, p, false_alarm) else None
 
 
 def _light_fill_reading(predict, diff, space, sigma_rel: np.ndarray, full: ChangeFit,
@@ -366,164 +338,196 @@ def _nan_verdict(predict: ChangePredictor, false_alarm: float, reasons: list[str
                    details, tuple(reasons))
 
 
-def inspect_retest(
-    profile: Profile, reference: BatReference, baseline: MeasuredModes,
-    retest: MeasuredModes, false_alarm: float = 0.01, *,
-    conditions: RetestConditions | None = None, registered_weight_kg: float | None = None,
-    baseline_temperature_c: float | None = None,
-    baseline_sensor_mass_kg: float | None = None, fill_modulus_ratio: float = 0.0,
-    n_starts: int = 2, min_mac: float = 0.8,
-) -> Verdict:
-    """The lab's verdict on a re-test of a bat against its baseline test and reference.
 
-    Args:
-        profile: the bat's outer profile.
-        reference: its calibrated reference (from the baseline test).
-        baseline, retest: identified elastic modes of the two tests, at the same points.
-        false_alarm: significance level of the test "no local alteration".
-        conditions: the re-test's retest.json (weight, accelerometer mass, temperature).
-        registered_weight_kg: the bat's weight at registration (meta.json).
-        baseline_temperature_c: the lab's temperature at the baseline, if known.
-        baseline_sensor_mass_kg: the baseline's accelerometer mass, if known (with the
-            re-test's from ``conditions`` it fixes the change of accelerometer mass).
-        fill_modulus_ratio: assumed fill stiffness of a core.
-        n_starts: number of core positions refined by least squares.
-        min_mac: minimum MAC to pair two modes.
-    Raises:
-        ValueError: when the tests were measured at different points.
+
+@dataclass(frozen=True)
+class NestedTest:
+    """The nested F test of H1 (drift and a core) against H0 (drift alone).
+
+    Attributes
+    ----------
+    F, p_value : float
+        The statistic and P(F_{q, dof} > F) (``nested_f``).
+    q, dof : int
+        Its degrees of freedom: the core's parameters, the data less H1's parameters.
+    n : int
+        Number of data (frequencies, shapes, weight).
+    rss_null, rss_core : float
+        Weighted residual sums of squares of H0 and of H1 (the lower of the two fits).
     """
-    t0 = time.perf_counter()
-    cond = conditions or RetestConditions()
-    _check(profile, baseline, retest)
-    points = np.asarray(baseline.x_m, dtype=float)
-    n_solve = max(baseline.freq_hz.size, retest.freq_hz.size) + 6
-    predict = ChangePredictor(profile, reference, points, reference.sensor_x_m, n_solve)
-    offset = baseline_sensor_offset(predict, baseline.freq_hz, baseline.shapes)
-    predict = predict.at_sensor(reference.sensor_x_m + offset)
 
-    # 1. can the tests be compared?
-    dlnw = None
-    if cond.weight_kg is not None and registered_weight_kg:
-        dlnw = float(np.log(cond.weight_kg / registered_weight_kg))
-    pairs = pair_tests(predict, baseline, retest, min_mac)
-    reasons = [r for r in (coverage_reason(points, profile.length_m),
-                           pairing_reason(pairs.n)) if r]
-    if pairs.n >= 1:
-        ib, ir = pairs.baseline_index, pairs.retest_index
-        psi_r = align_signs(baseline.shapes[:, ib], retest.shapes[:, ir])
-        reasons += [r for r in (
-            amplitude_reason(baseline.shapes[:, ib], psi_r, baseline.freq_hz[ib]),
-            identity_reason(np.log(retest.freq_hz[ir] / baseline.freq_hz[ib]), dlnw)) if r]
-    if reasons:
-        return _nan_verdict(predict, false_alarm, reasons,
-                            InspectionDetails(pairs.n, time.perf_counter() - t0))
+    F: float
+    p_value: float
+    q: int
+    dof: int
+    n: int
+    rss_null: float
+    rss_core: float
 
-    # 2. H0 and H1
-    diff = differences(predict, baseline, retest, pairs, dlnw)
-    dT = None
-    if cond.temperature_c is not None and baseline_temperature_c is not None:
-        dT = cond.temperature_c - baseline_temperature_c
-    dm = None
-    if cond.sensor_mass_kg is not None and baseline_sensor_mass_kg is not None:
-        dm = cond.sensor_mass_kg - baseline_sensor_mass_kg
-    bounds = NullBounds.physical(dm, dT)
-    space = ParamSpace(profile, bounds, fill_modulus_ratio,
-                       float(retest.sensor_x_m - baseline.sensor_x_m))
-    hyp = fit_hypotheses(predict, diff, space, n_starts)
-    null, full, sigma = hyp.null, hyp.full, hyp.sigma_rel
 
-    # 3. the test
-    n, p1, q = diff.n_data, N_NULL + N_CORE, N_CORE
-    dof = max(n - p1, 1)
-    rss0, rss1 = null.rss, min(full.rss, null.rss)
+def nested_test(diff: Differences, hyp: Hypotheses) -> NestedTest:
+    """Test H1 against H0 on the differences (module docstring, step 3).
+
+    Parameters
+    ----------
+    diff : Differences
+        The measured changes (their count, ``n_data``).
+    hyp : Hypotheses
+        H0 and H1 fitted.
+
+    Returns
+    -------
+    NestedTest
+        F, p and what they were computed from.
+    """
+    n, q = diff.n_data, N_CORE
+    dof = max(n - (N_NULL + N_CORE), 1)
+    rss0, rss1 = hyp.null.rss, min(hyp.full.rss, hyp.null.rss)
     F, p_value = nested_f(rss0, rss1, q, dof)
-    significant = p_value < false_alarm and F >= F_FLOOR
+    return NestedTest(F, p_value, q, dof, n, rss0, rss1)
 
-    # 4. decision
-    cov1 = covariance(full, dof)
-    candidate = space.reading(full.x, cov1)
+
+def weigh_evidence(predict: ChangePredictor, diff: Differences, space: ParamSpace,
+                   hyp: Hypotheses, test: NestedTest, false_alarm: float,
+                   dlnw: float | None) -> tuple[Evidence, dict]:
+    """Gather what the decision reads, running only the checks its rules need.
+
+    The uniform explanation is tried when the change is significant; drift three times
+    beyond the bounds when a practical core needs a confusable nuisance at its bound; the
+    relaxed bounds when the change is not significant and H0 holds a nuisance at a bound.
+
+    Parameters
+    ----------
+    predict : ChangePredictor
+        The reference model's changes.
+    diff : Differences
+        The measured changes.
+    space : ParamSpace
+        The parameters' bounds and priors.
+    hyp : Hypotheses
+        H0 and H1 fitted.
+    test : NestedTest
+        The nested test.
+    false_alarm : float
+        The significance level.
+    dlnw : float or None
+        ln(W_retest / W_registered), None when unknown.
+
+    Returns
+    -------
+    evidence : Evidence
+        The decision's input.
+    candidate : dict
+        The H1 core's reading with its standard uncertainties (``ParamSpace.reading``).
+    """
+    full, length_m = hyp.full, space.profile.length_m
+    candidate = space.reading(full.x, covariance(full, test.dof))
     c = full.params.core
     d_in = c.diameter_m / IN_TO_M
-    start_in, end_in = (v / IN_TO_M for v in c.interval_m(profile.length_m))
-    held0 = NullBounds.held(null)
-    held1 = [h for h in NullBounds.held(full) if h in CONFUSABLE]
-    weight_note = ""
-    if dlnw is not None:
-        weight_note = f"; weight {100 * np.expm1(dlnw):+.1f} % since registration"
-    core_text = (f"a core {d_in:.2f} in across at {start_in:.1f}-{end_in:.1f} in from the "
-                 f"knob end, fill/wood density {c.fill_density_ratio:.2f}")
-    d_low_in = d_in - 2 * candidate["sd"]["core_diameter_m"] / IN_TO_M
-    practical = d_low_in >= MIN_CORE_DIAMETER_IN
-    uniform = F_wide = None
-    if significant:
-        uniform = _uniform_explanation(predict, diff, space, hyp, q, dof, false_alarm)
-    if significant and practical and held1 and uniform is None:
-        F_wide = _core_beyond_drift(predict, diff, space, hyp, q, dof, false_alarm)
-    if uniform is not None:
-        altered = None
-        reasons = [f"the tests differ as two bats of this profile would (uniform stiffness "
-                   f"{uniform[0]:+.1f} %, density {uniform[1]:+.1f} %), far beyond what moisture "
-                   "and temperature do: check that the re-test is of this bat (serial) and the "
-                   "registered baseline is its own"]
-    elif significant and practical and (not held1 or F_wide is not None):
-        altered = True
-        beyond = "" if not held1 else (
-            f"; with {', '.join(held1)} at its physical bound, but no drift even three times "
-            f"beyond the physical bounds explains it (F = {F_wide:.1f})")
-        reasons = [f"the change between the tests is not one moisture, temperature or the "
-                   f"accelerometer can make (F = {F:.1f}, p = {p_value:.1e}){weight_note}"
-                   f"{beyond}", f"it fits {core_text}"]
-    elif significant and practical:
-        altered = None
-        reasons = [f"the change between the tests fits {core_text}, but only with "
-                   f"{', '.join(held1)} at its physical bound: an alteration and that drift "
-                   "cannot be told apart; weigh the bat, give retest.json (weight, "
-                   "accelerometer mass, temperature) and re-test after a week at the "
-                   "baseline's conditions"]
-    elif significant and dlnw is not None and abs(dlnw) > WEIGHT_DRIFT_MAX:
-        altered = None
-        reasons = [f"the weight changed by {100 * np.expm1(dlnw):+.1f} %, more than moisture "
-                   f"does, and the tests differ (F = {F:.1f}), but not as a core would (the "
-                   f"best is {d_in:.2f} in across, at least {max(d_low_in, 0):.2f} in at 2 "
-                   "sigma): check that the re-test is of this bat and re-weigh it"]
-    elif significant:
-        altered = False
-        reasons = [f"the tests differ beyond noise (F = {F:.1f}) but only as a core "
-                   f"{d_in:.2f} in across would (at least {max(d_low_in, 0):.2f} in at 2 "
-                   f"sigma), not surely a practical core ({MIN_CORE_DIAMETER_IN} in)"
-                   f"{weight_note}"]
-    elif held0 and _bounds_matter(predict, diff, space, hyp, n):
-        altered = None
-        reasons = [f"the drift between the tests is beyond physical bounds "
-                   f"({', '.join(held0)} at its bound): re-test at the baseline's "
-                   "conditions (same accelerometer, temperature, after the wood has settled)"]
-    else:
-        altered = False
-        reasons = [f"the change between the tests is what moisture, temperature and the "
-                   f"accelerometer make (F = {F:.2f}, p = {p_value:.2f}){weight_note}"]
+    start_in, end_in = (v / IN_TO_M for v in c.interval_m(length_m))
+    evidence = Evidence(
+        F=test.F, p_value=test.p_value,
+        significant=is_significant(test.F, test.p_value, false_alarm),
+        core_text=(f"a core {d_in:.2f} in across at {start_in:.1f}-{end_in:.1f} in from the "
+                   f"knob end, fill/wood density {c.fill_density_ratio:.2f}"),
+        d_in=d_in, d_low_in=d_in - 2 * candidate["sd"]["core_diameter_m"] / IN_TO_M,
+        held_null=tuple(NullBounds.held(hyp.null)),
+        held_core=tuple(h for h in NullBounds.held(full) if h in CONFUSABLE), dlnw=dlnw)
+    if evidence.significant:
+        uniform = _uniform_explanation(predict, diff, space, hyp, test.q, test.dof,
+                                       false_alarm)
+        evidence = replace(evidence, uniform=uniform)
+        if evidence.practical and evidence.held_core and uniform is None:
+            evidence = replace(evidence, F_wide=_core_beyond_drift(
+                predict, diff, space, hyp, test.q, test.dof, false_alarm))
+    elif evidence.held_null:
+        evidence = replace(evidence, drift_beyond_bounds=_bounds_matter(
+            predict, diff, space, hyp, test.n))
+    return evidence, candidate
 
-    # 5. reading (a light fill: part of its hole possibly empty, ``_light_fill_reading``)
-    read, read_cov, read_sd = full, cov1, candidate["sd"]
-    if altered and c.fill_density_ratio < 1.0:
-        read, read_cov, read_sd, reasons[-1] = _light_fill_reading(
-            predict, diff, space, sigma, full, n - p1 - 1, profile.length_m)
-    rc = read.params.core
-    cov0 = covariance(null, max(n - N_NULL, 1))
-    accepted, cov = (read, read_cov) if altered else (null, cov0)
-    sd = np.sqrt(np.clip(np.diag(cov), 0.0, None))
-    ps = accepted.params
-    uncertainty = {"stiffness_scale": sd[0] / 100, "density_scale": sd[1] / 100,
-                   "sensor_shift_m": sd[2] * IN_TO_M}
-    region = core_d = ratio = None
-    if altered:
-        region = rc.interval_m(profile.length_m)
-        core_d, ratio = rc.diameter_m, rc.mean_fill_density_ratio
-        uncertainty.update(read_sd)
-    factors = core_element_factors(predict.system().model, rc if altered else None)
 
-    f_fit, _ = predict(read.params)
+@dataclass(frozen=True)
+class Reading:
+    """The fit the verdict reports, with its covariance and the core's uncertainties.
+
+    Attributes
+    ----------
+    fit : ChangeFit
+        H1 (or its partial-fill refit) when altered, else H0.
+    core_fit : ChangeFit
+        The fit the core is read from (H1 or its partial-fill refit).
+    covariance : numpy.ndarray
+        The reported fit's parameter covariance.
+    core_sd : dict
+        Standard uncertainties of the core's reading (``ParamSpace.reading``).
+    reason : str or None
+        The light fill's reading in words, replacing the last reason, or None.
+    """
+
+    fit: ChangeFit
+    core_fit: ChangeFit
+    covariance: np.ndarray
+    core_sd: dict
+    reason: str | None = None
+
+
+def read_fit(predict: ChangePredictor, diff: Differences, space: ParamSpace, hyp: Hypotheses,
+             test: NestedTest, altered: bool | None, candidate: dict) -> Reading:
+    """Choose the fit the verdict reports (module docstring, step 5).
+
+    Parameters
+    ----------
+    predict, diff, space, hyp, test
+        As for ``weigh_evidence``.
+    altered : bool or None
+        The decision.
+    candidate : dict
+        The H1 core's reading (``weigh_evidence``).
+
+    Returns
+    -------
+    Reading
+        H1's core, re-read with part of its hole possibly empty when its fill is light, when
+        altered; else H0 with the core's candidate kept for the record.
+    """
+    full = hyp.full
+    if not altered:
+        return Reading(hyp.null, full, covariance(hyp.null, max(test.n - N_NULL, 1)),
+                       candidate["sd"])
+    if full.params.core.fill_density_ratio >= 1.0:
+        return Reading(full, full, covariance(full, test.dof), candidate["sd"])
+    fit, cov, sd, reason = _light_fill_reading(predict, diff, space, hyp.sigma_rel, full,
+                                               test.n - (N_NULL + N_CORE) - 1,
+                                               space.profile.length_m)
+    return Reading(fit, fit, cov, sd, reason)
+
+
+def mode_pairs(predict: ChangePredictor, diff: Differences, pairs: RetestPairs,
+               baseline: MeasuredModes, retest: MeasuredModes, null: ChangeFit,
+               core: ChangeFit) -> tuple[ModePair, ...]:
+    """Describe each paired mode: both tests, the reference, and the two fits' changes.
+
+    Parameters
+    ----------
+    predict : ChangePredictor
+        The reference model's changes.
+    diff : Differences
+        The measured changes (the paired modes' model index and reference frequency).
+    pairs : RetestPairs
+        The pairing.
+    baseline, retest : MeasuredModes
+        The two tests' modes.
+    null, core : ChangeFit
+        H0, and the fit the core is read from.
+
+    Returns
+    -------
+    tuple of ModePair
+        One per paired mode, in the pairing's order.
+    """
+    f_fit, _ = predict(core.params)
     f_null, _ = predict(null.params)
-    shift_null, shift_fit = np.exp(plane_shift(diff, null.x)), np.exp(plane_shift(diff, read.x))
+    shift_null, shift_fit = np.exp(plane_shift(diff, null.x)), np.exp(plane_shift(diff, core.x))
     modes = []
     for k in range(pairs.n):
         j = diff.model_index[k]
@@ -534,44 +538,255 @@ def inspect_retest(
             mac_reference=float(pairs.mac_model[k]), change_pct=float(100 * (fr / fb - 1)),
             moisture_fit_change_pct=float(100 * (f_null[j] / diff.f0[k] * shift_null[k] - 1)),
             core_fit_change_pct=float(100 * (f_fit[j] / diff.f0[k] * shift_fit[k] - 1))))
+    return tuple(modes)
 
-    # 6. the MSSO map, with the accepted model's drift (when there is a core, the null fit's
-    # uniform scales absorb part of it and the map would show that as a change of the bat)
-    msso = _element_map(profile, reference, baseline, retest, pairs, ps, offset, sigma,
-                        diff.sigma_lnf)
-    if msso.result is not None:
-        msso = replace(msso, agrees_with_fit=_agree(msso.region_m, region))
 
-    region_c = c.interval_m(profile.length_m)
-    evidence = FitEvidence(
+def fit_evidence(diff: Differences, space: ParamSpace, hyp: Hypotheses, test: NestedTest,
+                 evidence: Evidence, reading: Reading, candidate: dict, altered: bool | None,
+                 beta_shear: np.ndarray, offset_m: float, msso: ElementMap) -> FitEvidence:
+    """Record the evidence of a test made (``details.FitEvidence``).
+
+    Parameters
+    ----------
+    diff, space, hyp, test
+        As for ``weigh_evidence``.
+    evidence : Evidence
+        What the decision read.
+    reading : Reading
+        The reported fit.
+    candidate : dict
+        The H1 core's reading.
+    altered : bool or None
+        The decision.
+    beta_shear : numpy.ndarray
+        The element shear factors of the reported core (``core_element_factors``).
+    offset_m : float
+        The baseline's accelerometer offset from the reference's, m.
+    msso : ElementMap
+        The MSSO element map.
+
+    Returns
+    -------
+    FitEvidence
+        The record the verdict's details carry.
+    """
+    null, full = hyp.null, hyp.full
+    c = full.params.core
+    region_c = c.interval_m(space.profile.length_m)
+    return FitEvidence(
         statistic="F (drift+core vs drift-only, nested least squares)",
-        dof=(q, dof), p_value=p_value, rss_null=rss0, rss_core=rss1, n_data=n,
-        shape_noise_rel=tuple(sigma.tolist()), freq_noise_rel=tuple(diff.sigma_lnf.tolist()),
+        dof=(test.q, test.dof), p_value=test.p_value, rss_null=test.rss_null,
+        rss_core=test.rss_core, n_data=test.n,
+        shape_noise_rel=tuple(hyp.sigma_rel.tolist()),
+        freq_noise_rel=tuple(diff.sigma_lnf.tolist()),
         null_fit=dict(zip(NULL_NAMES, map(float, null.x), strict=True)),
-        null_at_bound=tuple(held0), core_fit_at_bound=tuple(held1),
-        weight_change_rel=None if dlnw is None else float(np.expm1(dlnw)),
+        null_at_bound=evidence.held_null, core_fit_at_bound=evidence.held_core,
+        weight_change_rel=None if evidence.dlnw is None else float(np.expm1(evidence.dlnw)),
         element_source=("physical core fit (element-averaged section ratios)" if altered
                         else "drift-only model (no local change)"),
-        element_beta_shear=tuple(factors.beta_shear.tolist()),
+        element_beta_shear=tuple(beta_shear.tolist()),
         candidate_core=CoreCandidate((float(region_c[0]), float(region_c[1])), c.diameter_m,
                                      c.fill_density_ratio, candidate["sd"]),
         core_fit_moisture={"stiffness_scale": float(full.params.stiffness_scale),
                            "density_scale": float(full.params.density_scale)},
-        sensor_shift_m=float(ps.sensor_shift_m - space.sensor_mount_m),
-        baseline_sensor_offset_m=offset, position_scan=hyp.scan, msso=msso,
-        plug_m=c.plug_m, fill_modulus_ratio=fill_modulus_ratio,
-        empty_m=rc.empty_m if altered else 0.0)
-    details = InspectionDetails(pairs.n, time.perf_counter() - t0, evidence)
+        sensor_shift_m=float(reading.fit.params.sensor_shift_m - space.sensor_mount_m),
+        baseline_sensor_offset_m=offset_m, position_scan=hyp.scan, msso=msso,
+        plug_m=c.plug_m, fill_modulus_ratio=space.fill_modulus_ratio,
+        empty_m=reading.core_fit.params.core.empty_m if altered else 0.0)
+
+
+def _weight_change(cond: RetestConditions, registered_weight_kg: float | None) -> float | None:
+    """ln(W_retest / W_registered), None when either weight is unknown."""
+    if cond.weight_kg is not None and registered_weight_kg:
+        return float(np.log(cond.weight_kg / registered_weight_kg))
+    return None
+
+
+def _null_bounds(cond: RetestConditions, baseline_temperature_c: float | None,
+                 baseline_sensor_mass_kg: float | None) -> NullBounds:
+    """H0's physical bounds, narrowed by the temperature and accelerometer change if known."""
+    dT = None
+    if cond.temperature_c is not None and baseline_temperature_c is not None:
+        dT = cond.temperature_c - baseline_temperature_c
+    dm = None
+    if cond.sensor_mass_kg is not None and baseline_sensor_mass_kg is not None:
+        dm = cond.sensor_mass_kg - baseline_sensor_mass_kg
+    return NullBounds.physical(dm, dT)
+
+
+def comparability_reasons(profile: Profile, baseline: MeasuredModes, retest: MeasuredModes,
+                          pairs: RetestPairs, dlnw: float | None) -> list[str]:
+    """Say why the two tests cannot be compared (module docstring, step 1); [] when they can.
+
+    Parameters
+    ----------
+    profile : Profile
+        The bat's outer profile.
+    baseline, retest : MeasuredModes
+        The two tests' modes at the same points.
+    pairs : RetestPairs
+        The pairing.
+    dlnw : float or None
+        ln(W_retest / W_registered), None when unknown.
+
+    Returns
+    -------
+    list of str
+        The failed checks' reasons (``updating.inspect.checks``).
+    """
+    reasons = [r for r in (coverage_reason(np.asarray(baseline.x_m, dtype=float),
+                                           profile.length_m),
+                           pairing_reason(pairs.n)) if r]
+    if pairs.n >= 1:
+        ib, ir = pairs.baseline_index, pairs.retest_index
+        psi_r = align_signs(baseline.shapes[:, ib], retest.shapes[:, ir])
+        reasons += [r for r in (
+            amplitude_reason(baseline.shapes[:, ib], psi_r, baseline.freq_hz[ib]),
+            identity_reason(np.log(retest.freq_hz[ir] / baseline.freq_hz[ib]), dlnw)) if r]
+    return reasons
+
+
+def _predictor(profile: Profile, reference: BatReference, baseline: MeasuredModes,
+               retest: MeasuredModes) -> tuple[ChangePredictor, float]:
+    """The reference model's changes at the test points, its accelerometer moved to the
+    baseline's (``baseline_sensor_offset``), and that offset, m."""
+    points = np.asarray(baseline.x_m, dtype=float)
+    n_solve = max(baseline.freq_hz.size, retest.freq_hz.size) + 6
+    predict = ChangePredictor(profile, reference, points, reference.sensor_x_m, n_solve)
+    offset = baseline_sensor_offset(predict, baseline.freq_hz, baseline.shapes)
+    return predict.at_sensor(reference.sensor_x_m + offset), offset
+
+
+def inspect_retest(
+    profile: Profile, reference: BatReference, baseline: MeasuredModes,
+    retest: MeasuredModes, false_alarm: float = 0.01, *,
+    conditions: RetestConditions | None = None, registered_weight_kg: float | None = None,
+    baseline_temperature_c: float | None = None,
+    baseline_sensor_mass_kg: float | None = None, fill_modulus_ratio: float = 0.0,
+    n_starts: int = 2, min_mac: float = 0.8,
+) -> Verdict:
+    """Judge a re-test of a bat against its baseline test and reference (module docstring).
+
+    Parameters
+    ----------
+    profile : Profile
+        The bat's outer profile.
+    reference : BatReference
+        Its calibrated reference (from the baseline test).
+    baseline, retest : MeasuredModes
+        Identified elastic modes of the two tests, at the same points.
+    false_alarm : float
+        Significance level of the test "no local alteration".
+    conditions : RetestConditions or None
+        The re-test's retest.json (weight, accelerometer mass, temperature).
+    registered_weight_kg : float or None
+        The bat's weight at registration (meta.json), kg.
+    baseline_temperature_c : float or None
+        The lab's temperature at the baseline, deg C, if known.
+    baseline_sensor_mass_kg : float or None
+        The baseline's accelerometer mass, kg, if known (with the re-test's from
+        ``conditions`` it fixes the change of accelerometer mass).
+    fill_modulus_ratio : float
+        Assumed fill stiffness of a core (fill/wood modulus).
+    n_starts : int
+        Number of core positions refined by least squares.
+    min_mac : float
+        Minimum MAC to pair two modes.
+
+    Returns
+    -------
+    Verdict
+        Altered, not altered or inconclusive, with the core read and the evidence.
+
+    Raises
+    ------
+    ValueError
+        When the tests were measured at different points.
+    """
+    t0 = time.perf_counter()
+    cond = conditions or RetestConditions()
+    _check(profile, baseline, retest)
+    predict, offset = _predictor(profile, reference, baseline, retest)
+    dlnw = _weight_change(cond, registered_weight_kg)
+    pairs = pair_tests(predict, baseline, retest, min_mac)
+    reasons = comparability_reasons(profile, baseline, retest, pairs, dlnw)
+    if reasons:
+        return _nan_verdict(predict, false_alarm, reasons,
+                            InspectionDetails(pairs.n, time.perf_counter() - t0))
+    diff = differences(predict, baseline, retest, pairs, dlnw)
+    space = ParamSpace(profile, _null_bounds(cond, baseline_temperature_c,
+                                             baseline_sensor_mass_kg),
+                       fill_modulus_ratio, float(retest.sensor_x_m - baseline.sensor_x_m))
+    hyp = fit_hypotheses(predict, diff, space, n_starts)
+    test = nested_test(diff, hyp)
+    evidence, candidate = weigh_evidence(predict, diff, space, hyp, test, false_alarm, dlnw)
+    altered, reasons = decide(evidence)
+    reading = read_fit(predict, diff, space, hyp, test, altered, candidate)
+    if reading.reason is not None:
+        reasons[-1] = reading.reason
+    core = reading.core_fit.params.core if altered else None
+    factors = core_element_factors(predict.system().model, core)
+    # 6. the MSSO map, with the accepted model's drift (when there is a core, the null fit's
+    # uniform scales absorb part of it and the map would show that as a change of the bat)
+    ps = reading.fit.params
+    msso = _element_map(profile, reference, baseline, retest, pairs, ps, offset,
+                        hyp.sigma_rel, diff.sigma_lnf)
+    region = None if core is None else core.interval_m(profile.length_m)
+    if msso.result is not None:
+        msso = replace(msso, agrees_with_fit=_agree(msso.region_m, region))
+    record = fit_evidence(diff, space, hyp, test, evidence, reading, candidate, altered,
+                          factors.beta_shear, offset, msso)
+    sd = np.sqrt(np.clip(np.diag(reading.covariance), 0.0, None))
+    uncertainty = {"stiffness_scale": sd[0] / 100, "density_scale": sd[1] / 100,
+                   "sensor_shift_m": sd[2] * IN_TO_M}
+    if core is not None:
+        uncertainty.update(reading.core_sd)
     return Verdict(
-        altered=altered, confidence=1.0 - p_value, false_alarm_rate=false_alarm,
-        statistic=float(F), region_m=None if region is None else (float(region[0]),
-                                                                  float(region[1])),
-        core_diameter_m=None if core_d is None else float(core_d),
-        fill_density_ratio=None if ratio is None else float(ratio),
+        altered=altered, confidence=1.0 - test.p_value, false_alarm_rate=false_alarm,
+        statistic=float(test.F),
+        region_m=None if region is None else (float(region[0]), float(region[1])),
+        core_diameter_m=None if core is None else float(core.diameter_m),
+        fill_density_ratio=None if core is None else float(core.mean_fill_density_ratio),
         uncertainty={k: float(v) for k, v in uncertainty.items()},
         element_x0_m=factors.x0_m, element_x1_m=factors.x1_m,
         alpha=factors.alpha, beta=factors.beta,
         moisture={"stiffness_scale": float(ps.stiffness_scale),
                   "density_scale": float(ps.density_scale)},
-        modes=tuple(modes), details=details, reasons=tuple(reasons),
-    )
+        modes=mode_pairs(predict, diff, pairs, baseline, retest, hyp.null, reading.core_fit),
+        details=InspectionDetails(pairs.n, time.perf_counter() - t0, record),
+        reasons=tuple(reasons))
+
+
+def inspect(profile: Profile, reference: BatReference, baseline: MeasuredModes,
+            retest: MeasuredModes, false_alarm: float = 0.01,
+            conditions: RetestConditions | None = None,
+            registered: RetestConditions | None = None) -> Verdict:
+    """Judge a re-test against the bat's reference: the method's one entry.
+
+    Parameters
+    ----------
+    profile : Profile
+        The bat's outer profile.
+    reference : BatReference
+        Its reference calibrated to the baseline (``updating.diagnose.calibrate_baseline``).
+    baseline, retest : MeasuredModes
+        The two tests' fitted elastic modes, the re-test's point rows in the baseline's
+        order (``updating.correlate.points.match_points``).
+    false_alarm : float
+        Significance level of the test "no local alteration".
+    conditions : RetestConditions or None
+        The re-test's retest.json (weight, accelerometer mass, temperature).
+    registered : RetestConditions or None
+        The same keys of the bat's meta.json (its weight at registration, and the
+        baseline's accelerometer mass and temperature when the lab recorded them).
+
+    Returns
+    -------
+    Verdict
+        The verdict (``inspect_retest``).
+    """
+    reg = registered or RetestConditions()
+    return inspect_retest(profile, reference, baseline, retest, false_alarm=false_alarm,
+                          conditions=conditions, registered_weight_kg=reg.weight_kg,
+                          baseline_temperature_c=reg.temperature_c,
+                          baseline_sensor_mass_kg=reg.sensor_mass_kg)

@@ -12,7 +12,8 @@ there. ``merge_plane_pairs`` replaces each resolved pair by that one mode:
 
 which is phi with the frequency an unresolved fit would give (the members' mean weighted by
 their share of the response). A re-test tapped at another angle moves that weighting: the
-inspection treats the resulting frequency change as a nuisance (``fit.PLANE_MIX``).
+inspection treats the resulting frequency change as a nuisance
+(``updating.inspect.hypotheses.plane_shift``).
 """
 
 from __future__ import annotations
