@@ -4,9 +4,10 @@ Files to verdict costs ~3 s a bat, most of it the two modal fits and diagnose, w
 of the inspection's H0/H1 or of its decision gates does not touch. ``build`` runs the real
 stateless path (``bench_inspect_field``'s bats: ``draw_case``, ``write_case``, then
 ``batlab.pipeline.stateless_case``: reading, modal fits and calibration) once per bat and
-pickles what ``updating.inspect.run.inspect`` takes (profile, calibrated reference, both
-tests' modes, the re-test's and the registration's conditions) with the truth; ``score`` runs only the
-inspection on the cached bats (~1 s each) and prints ``bench_inspect_field``'s summary.
+pickles what ``updating.inspect.run.inspect`` takes (profile, calibrated reference,
+both tests' modes, the re-test's and the registration's conditions) with the truth;
+``score`` runs only the inspection on the cached bats (~1 s each) and prints
+``bench_inspect_field``'s summary.
 
     OPENBLAS_NUM_THREADS=1 PYTHONPATH=. python benchmarks/inspect_cache.py build \
         --clean 40 --altered 42 --seed 600

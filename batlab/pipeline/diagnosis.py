@@ -1,5 +1,8 @@
-"""A baseline against the nominal model (`batlab diagnose`), a rig's reference bar
-(`batlab check-rig`): a test file fitted, then the diagnosis."""
+"""Diagnose a baseline, check a rig.
+
+A baseline against the nominal model (`batlab diagnose`), a rig's reference bar
+(`batlab check-rig`): a test file fitted, then the diagnosis.
+"""
 
 from __future__ import annotations
 

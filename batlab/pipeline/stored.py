@@ -85,7 +85,7 @@ def report_inputs(result: InspectionResult, meta: dict, prov: dict) -> ReportInp
 
 def _stored_inspection(conn: sqlite3.Connection, serial: str,
                        inspection_id: int | None) -> reg.Inspection:
-    """The bat's inspection ``inspection_id`` (None: its latest) that kept its files."""
+    """Find the bat's inspection ``inspection_id`` (None: its latest) that kept its files."""
     rows = reg.history(conn, serial)
     if not rows:
         raise ValueError(f"bat {serial!r} has no inspection in the registry")

@@ -33,8 +33,11 @@ def _mac(a: np.ndarray, b: np.ndarray) -> float:
 
 
 def merge_plane_pairs(modes: MeasuredModes) -> MeasuredModes:
-    """The modes with each resolved two-plane pair (adjacent, within ``PAIR_MAX_REL_DF``,
-    MAC >= ``PAIR_MIN_MAC``) replaced by one mode (module docstring)."""
+    """Merge each resolved two-plane pair into one mode.
+
+    The modes with each resolved two-plane pair (adjacent, within ``PAIR_MAX_REL_DF``,
+    MAC >= ``PAIR_MIN_MAC``) replaced by one mode (module docstring).
+    """
     f, psi = np.asarray(modes.freq_hz, float), np.asarray(modes.shapes, float)
     std = None if modes.freq_std_hz is None else np.asarray(modes.freq_std_hz, float)
     out_f, out_psi, out_z, out_std = [], [], [], []

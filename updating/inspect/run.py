@@ -121,10 +121,16 @@ def _check(profile: Profile, baseline: MeasuredModes, retest: MeasuredModes) -> 
 class RetestPairs:
     """Modes paired re-test to baseline to reference model.
 
-    Attributes:
-        baseline_index, retest_index: (m,) indices into the two tests' modes.
-        model_index: (m,) index among the predictor's modes.
-        mac: (m,) MAC baseline-retest; mac_model: (m,) MAC baseline-model.
+    Attributes
+    ----------
+    baseline_index, retest_index
+        (m,) indices into the two tests' modes.
+    model_index
+        (m,) index among the predictor's modes.
+    mac
+        (m,) MAC baseline-retest.
+    mac_model
+        (m,) MAC baseline-model.
     """
 
     baseline_index: np.ndarray
@@ -135,6 +141,7 @@ class RetestPairs:
 
     @property
     def n(self) -> int:
+        """Return the number of pairs."""
         return int(self.baseline_index.size)
 
 
@@ -159,7 +166,7 @@ def pair_tests(predict: ChangePredictor, baseline: MeasuredModes, retest: Measur
 
 def differences(predict: ChangePredictor, baseline: MeasuredModes, retest: MeasuredModes,
                 pairs: RetestPairs, dlnw: float | None) -> Differences:
-    """The measured changes of the paired modes (and of the weight) and their weights."""
+    """Return the measured changes of the paired modes (and of the weight) and their weights."""
     ib, ir, jmod = pairs.baseline_index, pairs.retest_index, pairs.model_index
     f_mod, phi_mod = predict(ChangeParams())
     psi_b = baseline.shapes[:, ib]
@@ -179,12 +186,15 @@ def differences(predict: ChangePredictor, baseline: MeasuredModes, retest: Measu
 
 def shear_sensitivity(predict: ChangePredictor,
                       step: float = 0.02) -> tuple[np.ndarray, np.ndarray]:
-    """(S_f, S_phi): S_f[r] = d ln f_r / d ln(E/G) (all of the predictor's modes) and
+    """Return the shear sensitivities of the reference's frequencies and shapes.
+
+    (S_f, S_phi): S_f[r] = d ln f_r / d ln(E/G) (all of the predictor's modes) and
     S_phi[:, r] = d phi_r / d ln(E/G) at the test points (mass-normalised, signs of the
     reference's shapes) of the reference model, central differences at E fixed: how a
     change of the effective shear modulus -- the two bending planes mixed in another
     proportion -- moves each frequency and shape (``fit.plane_shift``,
-    ``fit.plane_shape_shift``)."""
+    ``fit.plane_shape_shift``).
+    """
     ref = predict.reference
     _, phi0 = predict(ChangeParams())
     f, phi = zip(*(predict.with_reference(replace(ref, e_over_g=ref.e_over_g * np.exp(s)))(
@@ -199,9 +209,12 @@ def shear_sensitivity(predict: ChangePredictor,
 
 def _element_map(profile, reference, baseline, retest, pairs: RetestPairs, drift, offset,
                  sigma, sigma_lnf) -> ElementMap:
-    """The MSSO map of the paired modes (its ``error`` when the modes cannot be updated
+    """Map the paired modes element by element (MSSO).
+
+    The MSSO map of the paired modes (its ``error`` when the modes cannot be updated
     element by element), weighted with the median of the per-mode noise levels (the map
-    takes one shape and one frequency level)."""
+    takes one shape and one frequency level).
+    """
     try:
         mp = msso_map(profile, reference, baseline.select(pairs.baseline_index),
                       retest.select(pairs.retest_index),
@@ -224,8 +237,11 @@ def _agree(map_region, fit_region) -> bool:
 
 @dataclass(frozen=True)
 class Hypotheses:
-    """H0 and H1 fitted, with the shape noise they were weighted with ((m,), one relative
-    level per paired mode, ``fit.shape_noise``)."""
+    """H0 and H1 fitted.
+
+    H0 and H1 fitted, with the shape noise they were weighted with ((m,), one relative
+    level per paired mode, ``fit.shape_noise``).
+    """
 
     null: ChangeFit
     full: ChangeFit
@@ -235,8 +251,11 @@ class Hypotheses:
 
 def fit_hypotheses(predict: ChangePredictor, diff: Differences, space: ParamSpace,
                    n_starts: int) -> Hypotheses:
-    """Shape noise of each mode from the null fit, then from the core fit (both refitted
-    with it)."""
+    """Fit H0 and H1 with each mode's shape noise.
+
+    Shape noise of each mode from the null fit, then from the core fit (both refitted
+    with it).
+    """
     null = fit_null(predict, diff, space, INITIAL_SHAPE_NOISE)
     sigma = shape_noise(null, diff, INITIAL_SHAPE_NOISE, N_NULL)
     null = fit_null(predict, diff, space, sigma, x0=null.x)
@@ -252,19 +271,25 @@ def fit_hypotheses(predict: ChangePredictor, diff: Differences, space: ParamSpac
 
 
 def nested_f(rss_null: float, rss_core: float, q: int, dof: int) -> tuple[float, float]:
-    """(F, p) of the nested test: F = ((RSS_0 - RSS_1) / q) / max(RSS_1 / dof, 1), the
+    """Return F and p of the nested test.
+
+    (F, p) of the nested test: F = ((RSS_0 - RSS_1) / q) / max(RSS_1 / dof, 1), the
     residual variance per datum not below 1 (the weights hold the noise floors,
     ``SHAPE_NOISE_FLOOR``, and data cleaner than them must not make model error
-    significant); p = P(F_{q, dof} > F)."""
+    significant); p = P(F_{q, dof} > F).
+    """
     F = max(rss_null - rss_core, 0.0) / q / max(rss_core / dof, 1.0)
     return F, float(f_dist.sf(F, q, dof))
 
 
 def _uniform_explanation(predict, diff, space, hyp: Hypotheses, q: int, dof: int,
                          false_alarm: float) -> tuple[float, float] | None:
-    """(stiffness %, density %) when a uniform change of the wood beyond physical bounds
+    """Ask whether another bat explains the change.
+
+    (stiffness %, density %) when a uniform change of the wood beyond physical bounds
     explains the change as well as the core does (another bat, not an alteration), else
-    None."""
+    None.
+    """
     wide = replace(space, bounds=space.bounds.widened())
     fit = fit_null(predict, diff, wide, hyp.sigma_rel, x0=hyp.null.x)
     rss1 = min(hyp.full.rss, hyp.null.rss)
@@ -278,10 +303,13 @@ def _uniform_explanation(predict, diff, space, hyp: Hypotheses, q: int, dof: int
 
 def _bounds_matter(predict, diff, space, hyp: Hypotheses, n: int,
                    level: float = 0.01) -> bool:
-    """Do the data really want the null's nuisances beyond their physical bounds? The null
+    """Ask whether the bounds on the drift matter.
+
+    Do the data really want the null's nuisances beyond their physical bounds? The null
     refitted with every range three times as wide must fit significantly better
     (chi^2 test on the drop of the weighted residual, one degree per held parameter); a
-    bound that only ends a flat valley does not make the verdict inconclusive."""
+    bound that only ends a flat valley does not make the verdict inconclusive.
+    """
     held = NullBounds.held(hyp.null)
     wide = fit_null(predict, diff, replace(space, bounds=space.bounds.relaxed()),
                     hyp.sigma_rel, x0=hyp.null.x)
@@ -291,11 +319,14 @@ def _bounds_matter(predict, diff, space, hyp: Hypotheses, n: int,
 
 def _core_beyond_drift(predict, diff, space, hyp: Hypotheses, q: int, dof: int,
                        false_alarm: float, factor: float = 3.0) -> float | None:
-    """F of the core against the null with every nuisance range ``factor`` times as wide
+    """Ask whether the core beats drift beyond the bounds.
+
+    F of the core against the null with every nuisance range ``factor`` times as wide
     (``NullBounds.relaxed``, priors kept) when the core is still significant there (p below
     ``false_alarm``, F at least ``F_FLOOR``), else None: a core fit that holds a nuisance
     at its bound is told apart from that drift when no drift three times as large explains
-    the change."""
+    the change.
+    """
     wide = fit_null(predict, diff, replace(space, bounds=space.bounds.relaxed(factor)),
                     hyp.sigma_rel, x0=hyp.null.x)
     rss1 = min(hyp.full.rss, hyp.null.rss)
@@ -305,11 +336,14 @@ def _core_beyond_drift(predict, diff, space, hyp: Hypotheses, q: int, dof: int,
 
 def _light_fill_reading(predict, diff, space, sigma_rel: np.ndarray, full: ChangeFit,
                         dof: int, length_m: float):
-    """(fit, covariance, reading sd, reason) of a light fill read with part of its hole
+    """Read a light fill with part of its hole possibly empty.
+
+    (fit, covariance, reading sd, reason) of a light fill read with part of its hole
     possibly empty (``fit_partial``). The family contains H1 (e = 0), so its fit replaces
     H1's whenever its residual is lower; its hole-averaged fill r (1 - e) is what a scale
     would miss, unbiased where the fill sits at the bottom of the hole. The reason calls it
-    a partial fill only when the empty stretch is significant (``PARTIAL_LEVEL``)."""
+    a partial fill only when the empty stretch is significant (``PARTIAL_LEVEL``).
+    """
     partial = fit_partial(predict, diff, space, sigma_rel, full)
     dof = max(dof, 1)
     read = partial if partial.rss < full.rss else full
@@ -331,7 +365,7 @@ def _light_fill_reading(predict, diff, space, sigma_rel: np.ndarray, full: Chang
 
 def _nan_verdict(predict: ChangePredictor, false_alarm: float, reasons: list[str],
                  details: InspectionDetails) -> Verdict:
-    """An inconclusive verdict (no test made)."""
+    """Return an inconclusive verdict (no test made)."""
     factors = core_element_factors(predict.system().model, None)
     return Verdict(None, float("nan"), false_alarm, float("nan"), None, None, None, {},
                    factors.x0_m, factors.x1_m, factors.alpha, factors.beta, {}, (),
@@ -648,8 +682,11 @@ def comparability_reasons(profile: Profile, baseline: MeasuredModes, retest: Mea
 
 def _predictor(profile: Profile, reference: BatReference, baseline: MeasuredModes,
                retest: MeasuredModes) -> tuple[ChangePredictor, float]:
-    """The reference model's changes at the test points, its accelerometer moved to the
-    baseline's (``baseline_sensor_offset``), and that offset, m."""
+    """Return the reference's change predictor at the baseline's accelerometer.
+
+    The reference model's changes at the test points, its accelerometer moved to the
+    baseline's (``baseline_sensor_offset``), and that offset, m.
+    """
     points = np.asarray(baseline.x_m, dtype=float)
     n_solve = max(baseline.freq_hz.size, retest.freq_hz.size) + 6
     predict = ChangePredictor(profile, reference, points, reference.sensor_x_m, n_solve)
