@@ -5,13 +5,14 @@ with explicit arguments, and prints what they return (``batlab.formatting`` word
 imports no stage module itself (tests/test_architecture.py checks it). One module per job:
 
 - ``files``: the lab's files in and out (FRF tests, profile.csv, meta.json, retest.json,
-  modes, CSV).
+  CSV).
+- ``modal``: `batlab fit` -- a test's modal analysis, its modes file and figures.
 - ``records``: the fitted tests, a report's inputs and the contract's JSON (light: the
   report imports it without the stages).
 - ``inspection``: files to verdict -- a bat's inputs read once (``InspectionCase``), then
   the method's one call (``judge``); the stateless form.
-- ``registered``: register a bat, inspect a re-test against it, store the verdict.
-- ``stored``: stored inspections read back -- provenance, report inputs, export.
+- ``registered``: register a bat, inspect a re-test against it.
+- ``stored``: an inspection stored, and read back -- provenance, report inputs, export.
 - ``diagnosis``: a baseline against the nominal model, a rig's reference bar.
 - ``bench``: the test bench -- a bat's wood, FE model and pre-test summary, tests on the
   virtual rig (one test, a nuisance-rich field case, the demo's pair, the rig's modal model).
@@ -44,9 +45,11 @@ _SOURCES = {
         "check_rig_files", "diagnose_files",
     ),
     "batlab.pipeline.files": (
-        "MIN_SNR", "file_sha256", "fit_test_file", "plot_fit_files", "read_bat_files",
-        "read_conditions", "read_frf", "read_meta_dict", "read_test_file", "write_csv",
-        "write_modes_file",
+        "file_sha256", "read_bat_files", "read_conditions", "read_frf", "read_meta_dict",
+        "write_csv",
+    ),
+    "batlab.pipeline.modal": (
+        "MIN_SNR", "fit_test_file", "plot_fit_files", "read_test_file", "write_modes_file",
     ),
     "batlab.pipeline.inspection": (
         "InspectionCase", "InspectionResult", "calibrate_baseline", "fit_file",
@@ -59,11 +62,12 @@ _SOURCES = {
         "FittedTest", "ReportInputs", "contract_dict", "jsonable", "verdict_record",
     ),
     "batlab.pipeline.registered": (
-        "Registration", "inspect_registered", "note_report", "prepare_registration",
-        "register_files", "registered_case", "store_inspection", "stored_bat",
+        "Registration", "inspect_registered", "prepare_registration", "register_files",
+        "registered_case",
     ),
     "batlab.pipeline.stored": (
-        "history_table", "provenance", "report_inputs", "stored_report_inputs",
+        "history_table", "note_report", "provenance", "report_inputs", "store_inspection",
+        "stored_bat", "stored_report_inputs",
     ),
     "updating.model.units": (
         "IN_TO_M", "KG_M2_TO_LB_IN2", "LBF_IN3_TO_KG_M3", "LB_TO_KG", "PSI_TO_PA",
@@ -72,8 +76,8 @@ _SOURCES = {
 """The module each public name is defined in."""
 
 _WHERE = {name: module for module, names in _SOURCES.items() for name in names}
-_SUBMODULES = ("acquisition", "bench", "diagnosis", "files", "inspection", "paper", "records",
-               "registered", "stored")
+_SUBMODULES = ("acquisition", "bench", "diagnosis", "files", "inspection", "modal", "paper",
+               "records", "registered", "stored")
 
 __all__ = sorted(_WHERE)
 

@@ -10,7 +10,6 @@ import sqlite3
 from dataclasses import dataclass
 from pathlib import Path
 
-from batlab import __version__
 from batlab import registry as reg
 from batlab.pipeline.files import (
     Progress,
@@ -27,7 +26,7 @@ from batlab.pipeline.inspection import (
     fit_file,
     judge,
 )
-from batlab.pipeline.records import FittedTest, verdict_record
+from batlab.pipeline.records import FittedTest
 from updating.correlate.points import match_points, point_positions_m
 from updating.inspect.retest_meta import conditions_from_dict
 from updating.model.profile import make_profile
@@ -214,46 +213,3 @@ def inspect_registered(
     case = registered_case(conn, serial, retest_path, refit_baseline, progress, baseline_fit)
     progress("inspecting the re-test against the registered reference")
     return judge(case, false_alarm, conditions)
-
-
-def store_inspection(
-    conn: sqlite3.Connection, result: InspectionResult, retest_path, false_alarm: float = 0.01,
-) -> reg.Inspection:
-    """Record an inspection of a registered bat.
-
-    Its verdict, a copy of the re-test file, the registration it was judged against and the
-    inputs its report needs.
-
-    Parameters
-    ----------
-    conn : sqlite3.Connection
-        The registry.
-    result : InspectionResult
-        The inspection.
-    retest_path : str or os.PathLike
-        The re-test file (its bytes as judged are stored when the result kept them).
-    false_alarm : float
-        The decision's false-alarm rate.
-
-    Returns
-    -------
-    Inspection
-        The stored inspection.
-    """
-    path = Path(retest_path)
-    content = result.retest_content if result.retest_content is not None else \
-        path.read_bytes()
-    return reg.add_inspection(
-        conn, result.serial, verdict_record(result.serial, result.verdict), path.name,
-        content, reference_seq=result.reference_seq,
-        inputs={"false_alarm": float(false_alarm), "batlab_version": __version__})
-
-
-def stored_bat(conn: sqlite3.Connection, stored: reg.Inspection) -> reg.BatRecord:
-    """Return the registration a stored inspection was judged against."""
-    return reg.bat_as_registered(conn, stored.reference_seq)
-
-
-def note_report(conn: sqlite3.Connection, stored: reg.Inspection, path: str) -> None:
-    """Record where the inspection's report was written."""
-    reg.set_report_path(conn, stored.id, path)

@@ -1,8 +1,9 @@
-"""Stored inspections read back: provenance, a report's inputs, the export table."""
+"""Stored inspections: an inspection stored, and read back (provenance, report inputs, export)."""
 
 from __future__ import annotations
 
 import sqlite3
+from pathlib import Path
 
 from batlab import __version__
 from batlab import registry as reg
@@ -21,6 +22,49 @@ EXPORT_COLUMNS = [
     "baseline_sha256", "registration_record", "verdict_record", "verdict_record_sha256",
     "report_path"]
 """The columns of `batlab export`, in order."""
+
+
+def store_inspection(
+    conn: sqlite3.Connection, result: InspectionResult, retest_path, false_alarm: float = 0.01,
+) -> reg.Inspection:
+    """Record an inspection of a registered bat.
+
+    Its verdict, a copy of the re-test file, the registration it was judged against and the
+    inputs its report needs.
+
+    Parameters
+    ----------
+    conn : sqlite3.Connection
+        The registry.
+    result : InspectionResult
+        The inspection.
+    retest_path : str or os.PathLike
+        The re-test file (its bytes as judged are stored when the result kept them).
+    false_alarm : float
+        The decision's false-alarm rate.
+
+    Returns
+    -------
+    Inspection
+        The stored inspection.
+    """
+    path = Path(retest_path)
+    content = result.retest_content if result.retest_content is not None else \
+        path.read_bytes()
+    return reg.add_inspection(
+        conn, result.serial, verdict_record(result.serial, result.verdict), path.name,
+        content, reference_seq=result.reference_seq,
+        inputs={"false_alarm": float(false_alarm), "batlab_version": __version__})
+
+
+def stored_bat(conn: sqlite3.Connection, stored: reg.Inspection) -> reg.BatRecord:
+    """Return the registration a stored inspection was judged against."""
+    return reg.bat_as_registered(conn, stored.reference_seq)
+
+
+def note_report(conn: sqlite3.Connection, stored: reg.Inspection, path: str) -> None:
+    """Record where the inspection's report was written."""
+    reg.set_report_path(conn, stored.id, path)
 
 
 def provenance(

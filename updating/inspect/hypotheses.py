@@ -13,7 +13,7 @@ their standard deviations: sigma_f from the modal fit's frequency uncertainties 
 model-error floor), sigma_psi[j,r] = sigma_r * psi_scale[j,r] (a relative shape-noise
 level per mode, estimated from the residuals, ``shape_noise``; psi_scale ~ sqrt(phi0[j,r]^2 +
 k^2 rms_r^2), the noise of an FRF relative to |H| with a floor near the nodes,
-``run.SHAPE_NOISE_FLOOR_SHARE``),
+``changes.SHAPE_NOISE_FLOOR_SHARE``),
 sigma_w = ``WEIGHT_SIGMA_REL``. Parameters:
 
     null (what an unaltered bat does between tests, physically bounded, ``NullBounds``):
@@ -219,7 +219,7 @@ class Differences:
     psi_scale
         (n_points, m) shape-noise scale of each entry: sqrt(rms_baseline^2 + rms_retest^2) of
         the mode, shared among its points as sqrt(phi0^2 + k^2 rms0^2)
-        (``run.SHAPE_NOISE_FLOOR_SHARE``: noise relative to |phi| with a floor).
+        (``changes.SHAPE_NOISE_FLOOR_SHARE``: noise relative to |phi| with a floor).
     f0
         (m,) reference model frequencies, Hz.
     phi0
