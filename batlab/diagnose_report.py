@@ -7,7 +7,7 @@ from pathlib import Path
 
 
 def format_table(out: dict) -> str:
-    """The diagnose JSON object as text: modes, RMS errors, ranked causes, calibrated values."""
+    """Write the diagnose JSON object as text: modes, RMS errors, causes, calibrated values."""
     lines = [f"bat {out.get('serial', '')}".rstrip(),
              "mode  measured_hz  nominal_hz  error_%  extended_hz  error_%    MAC"]
     for i, m in enumerate(out["modes"], 1):
@@ -44,7 +44,7 @@ def format_table(out: dict) -> str:
 
 
 def _num(v) -> str:
-    """A value of the JSON as text: numbers to 4 digits, lists element-wise."""
+    """Write a value of the JSON as text: numbers to 4 digits, lists element-wise."""
     if isinstance(v, bool) or isinstance(v, str):
         return str(v)
     if isinstance(v, (list, tuple)):

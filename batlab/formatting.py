@@ -1,6 +1,9 @@
-"""Verdicts in words for a terminal: shared by `inspect`, `demo` and `history`, so commands do
+"""Verdicts in words for a terminal.
+
+Verdicts in words for a terminal: shared by `inspect`, `demo` and `history`, so commands do
 not import each other. The stored record's evidence is read through its type
-(``updating.inspect.details.InspectionDetails.from_json_dict``)."""
+(``updating.inspect.details.InspectionDetails.from_json_dict``).
+"""
 
 from __future__ import annotations
 
@@ -10,8 +13,11 @@ from updating.inspect.details import InspectionDetails
 
 
 def status_of(verdict: dict) -> str:
-    """"altered", "not_altered" or "inconclusive": the verdict's own ``status``, else derived
-    from ``altered`` (true/false/null)."""
+    """Return a stored verdict's status.
+
+    "altered", "not_altered" or "inconclusive": the verdict's own ``status``, else derived
+    from ``altered`` (true/false/null).
+    """
     if verdict.get("status"):
         return str(verdict["status"])
     altered = verdict.get("altered")
@@ -23,8 +29,11 @@ STATUS_WORDS = {"altered": "ALTERED", "not_altered": "not altered",
 
 
 def p_value(verdict: dict) -> float | None:
-    """The chance that an unaltered bat differs at least this much from its baseline: the
-    verdict's ``details.p_value``, else 1 - ``confidence`` (None when it has neither)."""
+    """Return the p-value of a stored verdict.
+
+    The chance that an unaltered bat differs at least this much from its baseline: the
+    verdict's ``details.p_value``, else 1 - ``confidence`` (None when it has neither).
+    """
     p = InspectionDetails.from_json_dict(verdict.get("details")).p_value
     if p is not None and math.isnan(p):  # stored as null: not computed
         p = None
@@ -43,8 +52,11 @@ def chance_words(p: float) -> str:
 
 
 def p_value_words(verdict: dict) -> str | None:
-    """"p = 0.925: an unaltered bat differs this much in about 92 of 100 re-tests" (a
-    confidence of 0.075 is not "7.5 % sure")."""
+    """Say a p-value in words.
+
+    "p = 0.925: an unaltered bat differs this much in about 92 of 100 re-tests" (a
+    confidence of 0.075 is not "7.5 % sure").
+    """
     p = p_value(verdict)
     if p is None:
         return None
@@ -52,7 +64,7 @@ def p_value_words(verdict: dict) -> str | None:
 
 
 def readable(out: dict) -> str:
-    """The contract dict as a short verdict for a person."""
+    """Write the contract dict as a short verdict for a person."""
     status = status_of(out)
     lines = [f"{out['serial']}: {STATUS_WORDS.get(status, status)}"]
     for reason in out.get("reasons") or []:

@@ -1,4 +1,6 @@
-"""The inspection report: one self-contained HTML page (figures embedded as base64 PNG) for a
+"""The inspection report: one self-contained HTML page for a lab manager.
+
+The inspection report: one self-contained HTML page (figures embedded as base64 PNG) for a
 lab manager.
 
 Drawn from ``ReportInputs`` (the verdict as the registry stores it, the model, both fitted
@@ -23,7 +25,7 @@ from pathlib import Path
 import numpy as np
 
 from batlab.formatting import chance_words, p_value, status_of
-from batlab.pipeline import ReportInputs, jsonable
+from batlab.pipeline.records import ReportInputs, jsonable
 from batlab.registry import now_utc
 from batlab.report_check import seal_page
 from ema.io.atomic_write import atomic_write
@@ -40,8 +42,11 @@ from updating.model.units import (
 
 
 def stored_details(v: dict) -> InspectionDetails:
-    """The stored verdict record's evidence, typed; the MSSO map's element ends are the
-    record's ``elements``."""
+    """Read the stored verdict record's evidence.
+
+    The stored verdict record's evidence, typed; the MSSO map's element ends are the
+    record's ``elements``.
+    """
     els = v.get("elements") or []
     return InspectionDetails.from_json_dict(v.get("details"),
                                             [e["x0_in"] * IN_TO_M for e in els],
@@ -53,7 +58,7 @@ def _data_uri(png: bytes) -> str:
 
 
 def _png_bytes(fig) -> bytes:
-    """A figure as PNG bytes (the figure is closed)."""
+    """Encode a figure as PNG bytes (the figure is closed)."""
     import matplotlib.pyplot as plt
 
     buf = io.BytesIO()
@@ -63,7 +68,7 @@ def _png_bytes(fig) -> bytes:
 
 
 def stabilisation_png(fit) -> bytes:
-    """The fit's stabilisation diagram (``ema.plots.plot_stabilisation``) as PNG bytes."""
+    """Draw the fit's stabilisation diagram (``ema.plots.plot_stabilisation``) as PNG bytes."""
     from ema.plots import plot_stabilisation
 
     with tempfile.TemporaryDirectory(prefix="batlab-report-") as tmp:
@@ -122,8 +127,11 @@ def mac_figure(result: ReportInputs):
 
 
 def _symmetric_limit(values, floor: float) -> float:
-    """A symmetric axis limit: the largest magnitude plus 15 %, never below ``floor`` (so that
-    noise does not fill the axis of a clean bat)."""
+    """Return a symmetric axis limit.
+
+    A symmetric axis limit: the largest magnitude plus 15 %, never below ``floor`` (so that
+    noise does not fill the axis of a clean bat).
+    """
     vals = np.abs(np.concatenate([np.ravel(np.asarray(v, dtype=float)) for v in values]))
     vals = vals[np.isfinite(vals)]
     return max(1.15 * float(vals.max()) if vals.size else 0.0, floor)
@@ -134,11 +142,14 @@ SCALE_FLOOR = 0.05
 
 
 def element_figure(r: ReportInputs):
-    """alpha and beta per element as bars, over the bat's profile drawn to scale (inches):
+    """Draw the element factors over the bat.
+
+    Alpha and beta per element as bars, over the bat's profile drawn to scale (inches):
     the physical fit's factors (how much; left half of each element) beside the MSSO map
     (where; right half, hatched) with its +-2 sigma noise band. One symmetric scale, shared
     by both panels and both kinds of bar, at least +-SCALE_FLOOR: the bars compare by eye and
-    noise never fills a clean bat's plot."""
+    noise never fills a clean bat's plot.
+    """
     import matplotlib.pyplot as plt
 
     v, prof = r.verdict, r.profile
@@ -211,11 +222,14 @@ def element_figure(r: ReportInputs):
 
 
 def element_mass_change(r: ReportInputs, n_quad: int = 24) -> MassProperties:
-    """Mass, first and second moments added by the element factors, as a MassProperties of the
+    """Return the mass properties the element factors add.
+
+    Mass, first and second moments added by the element factors, as a MassProperties of the
     change: dm = sum alpha_e int rho A dx, d(m x_cg) = sum alpha_e int rho A x dx,
     dI_knob = sum alpha_e int (rho A x^2 + rho I) dx, I = pi D^4 / 64 (the section's own
     rotary inertia, as in ``updating.model.mass_properties``);
-    cg_m holds d(m x_cg) / dm, i_cg is 0."""
+    cg_m holds d(m x_cg) / dm, i_cg is 0.
+    """
     els = r.verdict.get("elements") or []
     rho = r.reference.rho_kg_m3
     x0 = np.array([e["x0_in"] for e in els], dtype=float) * IN_TO_M
@@ -235,8 +249,11 @@ def element_mass_change(r: ReportInputs, n_quad: int = 24) -> MassProperties:
 
 
 def mass_rows(r: ReportInputs) -> list[tuple[str, float, float, float]]:
-    """(label, weight lb, centre of mass in, I_knob lb in^2): reference, with the element
-    factors applied, with the fitted core."""
+    """Tabulate the mass properties of the reference and of the fits.
+
+    (label, weight lb, centre of mass in, I_knob lb in^2): reference, with the element
+    factors applied, with the fitted core.
+    """
     ref = mass_properties(r.reference.build(r.profile))
     rows = [("reference (baseline)", ref.mass_kg, ref.cg_m, ref.i_knob_kg_m2)]
     d = element_mass_change(r)
@@ -260,7 +277,7 @@ def mass_rows(r: ReportInputs) -> list[tuple[str, float, float, float]]:
 
 
 def _one_in(p: float) -> str:
-    """A rate as "1 in 100", "5 in 100", "1 in 1,000"."""
+    """Say a rate as "1 in 100", "5 in 100", "1 in 1,000"."""
     if p >= 0.01:
         return f"{round(p * 100):g} in 100"
     return f"{round(p * 1000):g} in 1,000" if p >= 0.001 else f"{p:.1g}"
@@ -306,7 +323,7 @@ def headline(r: ReportInputs) -> str:
 
 
 def regions_note(r: ReportInputs) -> str:
-    """The two localisations side by side, reconciled or their difference explained."""
+    """Write the two localisations side by side, reconciled or their difference explained."""
     v = r.verdict
     fit = v.get("region_in") if status_of(v) == "altered" else None
     emap = stored_details(v).msso
@@ -374,7 +391,7 @@ MODE_HEADERS = {
 
 
 def _label(key: str) -> str:
-    """A readable header for a key without one in MODE_HEADERS (units from its suffix)."""
+    """Make a readable header for a key without one in MODE_HEADERS (units from its suffix)."""
     if key in MODE_HEADERS:
         return MODE_HEADERS[key]
     for suffix, unit in (("_hz", "Hz"), ("_pct", "%"), ("_in", "in"), ("_m", "m")):
@@ -498,9 +515,12 @@ def _provenance(r: ReportInputs, generated_at: str) -> list[list]:
 
 
 def provenance_hashes(page: str) -> dict:
-    """The hashes a report page carries (its Provenance rows, as ``_provenance`` writes them):
+    """Read the hashes a report page carries.
+
+    The hashes a report page carries (its Provenance rows, as ``_provenance`` writes them):
     {"baseline_sha256", "retest_sha256", "verdict_record", "verdict_record_sha256",
-    "reference_record", "reference_record_sha256"} (missing keys absent)."""
+    "reference_record", "reference_record_sha256"} (missing keys absent).
+    """
     import re
 
     out: dict = {}
@@ -517,7 +537,7 @@ def provenance_hashes(page: str) -> dict:
 
 
 def render_html(r: ReportInputs, generated_at: str, figures: dict[str, bytes]) -> str:
-    """The report page as a string (``figures``: name -> PNG bytes, see ``figures_png``)."""
+    """Render the report page as a string (``figures``: name -> PNG bytes, see ``figures_png``)."""
     v = r.verdict
     status = status_of(v)
     parts = [f"<h1>Inspection of bat {html.escape(r.serial)}</h1>",
@@ -589,8 +609,11 @@ def figures_png(r: ReportInputs) -> dict[str, bytes]:
 
 
 def check_destination(out_dir: str | os.PathLike, what: str = "report") -> Path:
-    """Create ``out_dir`` if needed and prove it writable (a probe file created and removed),
-    before any work: ValueError naming it otherwise."""
+    """Check a report destination.
+
+    Create ``out_dir`` if needed and prove it writable (a probe file created and removed),
+    before any work: ValueError naming it otherwise.
+    """
     out_dir = Path(out_dir)
     if out_dir.exists() and not out_dir.is_dir():
         raise ValueError(f"{out_dir}: {what} destination is not a directory")
@@ -617,8 +640,11 @@ def write_report(
     out_dir: str | os.PathLike, r: ReportInputs, plots_dir: str | os.PathLike | None = None,
     generated_at: str | None = None,
 ) -> Path:
-    """Write ``out_dir/index.html`` (temporary file, then rename) and, with ``plots_dir``, each
-    figure as ``plots_dir/<name>.png``; returns the page's path."""
+    """Write the report.
+
+    Write ``out_dir/index.html`` (temporary file, then rename) and, with ``plots_dir``, each
+    figure as ``plots_dir/<name>.png``; returns the page's path.
+    """
     out_dir = check_destination(out_dir)
     if plots_dir is not None:
         plots_dir = check_destination(plots_dir, "plots")

@@ -27,7 +27,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 import numpy as np  # noqa: E402
 
 from batlab import pipeline  # noqa: E402
-from updating.inspect import run as inspect_run  # noqa: E402
+from updating.inspect import decision  # noqa: E402
 from updating.model.units import IN_TO_M  # noqa: E402
 from updating.simulate.alterations import KINDS  # noqa: E402
 from updating.simulate.field_fleet import draw_case, write_case  # noqa: E402
@@ -97,7 +97,7 @@ def clean_margin(clean: list[dict]) -> str:
     """How close the clean bats came to "altered": the largest F among those whose candidate
     core was practical, and the largest lower diameter bound among those whose F passed the
     floor (each gate alone would have let that bat through)."""
-    F_FLOOR, MIN_CORE_DIAMETER_IN = inspect_run.F_FLOOR, inspect_run.MIN_CORE_DIAMETER_IN
+    F_FLOOR, MIN_CORE_DIAMETER_IN = decision.F_FLOOR, decision.MIN_CORE_DIAMETER_IN
     prac = [r["F"] for r in clean if (d_low_in(r) or 0.0) >= MIN_CORE_DIAMETER_IN
             and r.get("F") is not None]
     over = [d_low_in(r) or 0.0 for r in clean if (r.get("F") or 0.0) >= F_FLOOR]

@@ -3,10 +3,11 @@
 Files to verdict costs ~3 s a bat, most of it the two modal fits and diagnose, which a change
 of the inspection's H0/H1 or of its decision gates does not touch. ``build`` runs the real
 stateless path (``bench_inspect_field``'s bats: ``draw_case``, ``write_case``, then
-``batlab.pipeline``'s reading, modal fits and calibration) once per bat and pickles what
-``pipeline.inspect_modes`` takes (profile, calibrated reference, both tests' modes, the
-re-test's and the registration's conditions) with the truth; ``score`` runs only the
-inspection on the cached bats (~1 s each) and prints ``bench_inspect_field``'s summary.
+``batlab.pipeline.stateless_case``: reading, modal fits and calibration) once per bat and
+pickles what ``updating.inspect.run.inspect`` takes (profile, calibrated reference,
+both tests' modes, the re-test's and the registration's conditions) with the truth;
+``score`` runs only the inspection on the cached bats (~1 s each) and prints
+``bench_inspect_field``'s summary.
 
     OPENBLAS_NUM_THREADS=1 PYTHONPATH=. python benchmarks/inspect_cache.py build \
         --clean 40 --altered 42 --seed 600
@@ -39,6 +40,7 @@ from bench_inspect_field import score_verdict, summarise  # noqa: E402
 
 from batlab import pipeline  # noqa: E402
 from updating.inspect.retest_meta import RetestConditions, conditions_from_dict  # noqa: E402
+from updating.inspect.run import inspect  # noqa: E402
 from updating.simulate.alterations import KINDS  # noqa: E402
 from updating.simulate.field_fleet import draw_case, write_case  # noqa: E402
 from updating.simulate.integrity import INTEGRITY  # noqa: E402
@@ -60,7 +62,7 @@ def path_of(folder: Path, seed: int, kind: str, integ: str | None) -> Path:
 
 def build_one(seed: int, kind: str, integ: str | None, with_meta: bool = True,
               nuisances=NUISANCES, registration: bool = False) -> dict:
-    """Everything ``inspect_modes`` needs for this bat, and its truth (or an error)."""
+    """Everything ``inspect`` needs for this bat, and its truth (or an error)."""
     rng = np.random.default_rng(seed)
     out: dict = {"seed": seed, "kind": kind, "integrity": integ}
     with tempfile.TemporaryDirectory(prefix="batlab-cache-") as tmp:
@@ -73,23 +75,16 @@ def build_one(seed: int, kind: str, integ: str | None, with_meta: bool = True,
             return out
         out["truth"], out["expected"] = case.truth, case.expected
         try:
-            profile, meta = pipeline.read_bat_files(paths["profile"], paths["meta"])
             cond = pipeline.read_conditions(paths["retest_meta"])
-            base_test = pipeline.read_frf(paths["baseline"])
-            re_test = pipeline.read_frf(paths["retest"])
-            order = pipeline.match_points(pipeline.point_positions_m(base_test),
-                                          pipeline.point_positions_m(re_test),
-                                          str(paths["retest"]))
-            baseline = pipeline.fit_file("baseline.uff", base_test, meta.weight_kg)
-            reference = pipeline.calibrate(profile, meta, baseline).reference
-            retest = pipeline.fit_file("retest.uff", re_test, meta.weight_kg, order)
+            bat = pipeline.stateless_case(paths["profile"], paths["meta"], paths["baseline"],
+                                          paths["retest"])
         except ValueError as exc:
             out["error"] = ("refused", str(exc))
             return out
-    out.update(nuisances=list(nuisances), registration=registration, serial=meta.serial,
-               profile=profile, reference=reference,
-               baseline=baseline.modes, retest=retest.modes, conditions=cond,
-               registered=conditions_from_dict(meta.extra, "meta.json"))
+    out.update(nuisances=list(nuisances), registration=registration, serial=bat.serial,
+               profile=bat.profile, reference=bat.reference,
+               baseline=bat.baseline.modes, retest=bat.retest.modes, conditions=cond,
+               registered=bat.registered)
     return out
 
 
@@ -117,9 +112,8 @@ def score_one(bat: dict, false_alarm: float = 0.01, registration: bool = False) 
         bat = dict(bat, registered=registered_conditions(bat))
     t0 = time.perf_counter()
     try:
-        v = pipeline.inspect_modes(bat["profile"], bat["reference"], bat["baseline"],
-                                   bat["retest"], false_alarm, bat["conditions"],
-                                   bat["registered"])
+        v = inspect(bat["profile"], bat["reference"], bat["baseline"], bat["retest"],
+                    false_alarm, bat["conditions"], bat["registered"])
     except ValueError as exc:
         row.update(status="refused", reasons=[str(exc)], time_s=time.perf_counter() - t0)
         return row
@@ -142,8 +136,8 @@ def main() -> int:
                          "mass (build: written; score: added to cached bats)")
     ap.add_argument("--out", type=Path, default=None, help="score: JSON lines of the rows")
     ap.add_argument("--set", action="append", default=[], metavar="MODULE.NAME=VALUE",
-                    help="score: override a module constant, e.g. updating.inspect.run."
-                         "F_FLOOR=10 (for studies; the summary's gates read the module)")
+                    help="score: override a module constant, e.g. updating.inspect."
+                         "decision.F_FLOOR=10 (for studies; the summary's gates read the module)")
     args = ap.parse_args()
     for item in args.set:
         name, value = item.split("=", 1)

@@ -3,8 +3,9 @@ report) can be tested on its own. Each is small but honest about its inputs: the
 real peaks of the driving-point FRF, the inspector decides from the frequency shifts, so
 a wrong file, a lost re-ordering or a swapped test changes what they return.
 
-``use_standins(monkeypatch, ...)`` patches batlab.pipeline.inspection (where the pipeline's
-stage calls live); pass ``fit=False`` etc. to keep a real stage once it exists.
+``use_standins(monkeypatch, ...)`` patches the stage calls: the modal fit where
+``updating.correlate.fitted`` calls it, calibration and the inspection where
+``batlab.pipeline.inspection`` calls them; pass ``fit=False`` etc. to keep a real stage.
 """
 
 from __future__ import annotations
@@ -40,10 +41,10 @@ def fake_fit(test, known_mass_kg=None):
         band_freq_hz=f, synth=test.frf * 1.02, sweep=None, stability=None)
 
 
-def fake_calibrate(profile, meta, baseline):
+def fake_calibrate(profile, meta, baseline_modes, suspension_hz=None):
     m = meta.material
     return SimpleNamespace(reference=BatReference(m.E_pa, m.rho_kg_m3, m.e_over_g,
-                                                  sensor_x_m=baseline.modes.sensor_x_m))
+                                                  sensor_x_m=baseline_modes.sensor_x_m))
 
 
 def fake_inspect(profile, reference, baseline, retest, false_alarm, conditions=None,
@@ -74,13 +75,14 @@ def fake_inspect(profile, reference, baseline, retest, false_alarm, conditions=N
 def use_standins(monkeypatch, fit: bool = True, calibrate: bool = True,
                  inspect: bool = True) -> None:
     import batlab.pipeline.inspection as pipeline
+    from updating.correlate import fitted
 
     if fit:
-        monkeypatch.setattr(pipeline, "fit_modes", fake_fit)
+        monkeypatch.setattr(fitted, "fit_test", fake_fit)
     if calibrate:
         monkeypatch.setattr(pipeline, "calibrate", fake_calibrate)
     if inspect:
-        monkeypatch.setattr(pipeline, "inspect_modes", fake_inspect)
+        monkeypatch.setattr(pipeline, "inspect", fake_inspect)
 
 
 SAMPLE = Path("data_samples/smooth_bat")

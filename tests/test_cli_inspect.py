@@ -96,7 +96,7 @@ def _recording(monkeypatch):
         seen.append((conditions, registered))
         return fake_inspect(profile, reference, baseline, retest, false_alarm)
 
-    monkeypatch.setattr(pipeline.inspection, "inspect_modes", rec)
+    monkeypatch.setattr(pipeline.inspection, "inspect", rec)
     return seen
 
 

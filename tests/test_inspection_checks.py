@@ -11,13 +11,13 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from updating.correlate.measured import MeasuredModes
+from updating.correlate.planes import merge_plane_pairs
 from updating.inspect.checks import (
     amplitude_reason,
     coverage_reason,
     identity_reason,
     pairing_reason,
 )
-from updating.inspect.planes import merge_plane_pairs
 from updating.inspect.retest_meta import read_retest_meta
 from updating.model.units import IN_TO_M, LB_TO_KG
 

@@ -1,4 +1,4 @@
-"""The inspection's shape-noise model: per point (``run.differences``,
+"""The inspection's shape-noise model: per point (``changes.differences``,
 ``SHAPE_NOISE_FLOOR_SHARE``) and per mode (``fit.shape_noise``).
 
 An averaged FRF's random error is relative to |H| (var H / |H|^2 = (1 - gamma^2) /
@@ -27,9 +27,11 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from updating.inspect.changes import differences, pair_tests
 from updating.inspect.hypotheses import SHAPE_NOISE_PRIOR_POINTS, NullBounds, ParamSpace
 from updating.inspect.model import ChangePredictor, baseline_sensor_offset
-from updating.inspect.run import differences, fit_hypotheses, inspect_retest, pair_tests
+from updating.inspect.nested import fit_hypotheses
+from updating.inspect.run import inspect_retest
 from updating.model.sections import Core
 from updating.model.units import IN_TO_M
 from updating.simulate.fleet import random_case

@@ -1,5 +1,5 @@
 """The two bending planes as a null parameter (``fit.plane_shift``, ``fit.plane_shape_shift``,
-``run.shear_sensitivity``).
+``changes.shear_sensitivity``).
 
 A pair tapped at theta to the radial plane shows ln f = ln f_R + sin^2(theta) ln(f_T / f_R)
 and the shape cos^2(theta) phi_R + sin^2(theta) phi_T; the split is a shear effect,
@@ -18,9 +18,10 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from updating.correlate.pairing import align_signs
+from updating.inspect.changes import ELASTIC_MIN_HZ, shear_sensitivity
 from updating.inspect.hypotheses import PLANE_MIX_MAX
 from updating.inspect.model import ChangeParams, make_predictor
-from updating.inspect.run import ELASTIC_MIN_HZ, inspect_retest, shear_sensitivity
+from updating.inspect.run import inspect_retest
 from updating.simulate.fleet import case_modes, random_case
 
 

@@ -119,8 +119,8 @@ def test_unwritable_report_fails_at_once_and_stores_nothing(lab, capsys, monkeyp
     register(lab, capsys)
     (lab / "afile").write_text("x")
     calls = []
-    import batlab.pipeline.inspection as pipeline
-    monkeypatch.setattr(pipeline, "fit_modes", lambda *a, **k: calls.append(1))
+    from updating.correlate import fitted
+    monkeypatch.setattr(fitted, "fit_test", lambda *a, **k: calls.append(1))
     code, out, err = run_cli(["inspect", "--serial", "HX-2001", lab / "retest_corked.uff",
                               "--report", lab / "afile" / "rep"], capsys)
     assert code == 2 and out == "" and "--report destination not writable" in err

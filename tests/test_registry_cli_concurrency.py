@@ -19,9 +19,10 @@ def _lab_worker(db: str, folder: str, serial: str, n_inspections: int) -> None:
     import batlab.pipeline.inspection as pipeline
     from batlab.cli import main
     from tests.inspect_standins import fake_calibrate, fake_fit, fake_inspect
+    from updating.correlate import fitted
 
-    pipeline.fit_modes, pipeline.calibrate = fake_fit, fake_calibrate
-    pipeline.inspect_modes = fake_inspect
+    fitted.fit_test, pipeline.calibrate = fake_fit, fake_calibrate
+    pipeline.inspect = fake_inspect
     d = Path(folder)
     code = main(["register", "--profile", str(d / "profile.csv"), "--meta",
                  str(d / "meta.json"), "--baseline", str(SAMPLE / "baseline.uff"),

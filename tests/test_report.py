@@ -8,6 +8,7 @@ import os
 import re
 import shutil
 import subprocess
+import sys
 from dataclasses import replace
 from pathlib import Path
 
@@ -223,3 +224,19 @@ def test_no_table_overflows_in_chromium(monkeypatch, tmp_path):
                         + "<td style='white-space:nowrap'>moisture_fit_change_pct</td>" * 12
                         + "</tr></table></body>")
     assert overflowing(wide, tmp_path) != ""
+
+
+def test_report_import_loads_no_stage():
+    """The report draws a page: importing it loads neither pyserial, scipy.signal nor the
+    modal fit (``batlab.pipeline.records`` is light; the package loads names lazily)."""
+    heavy = ("serial", "scipy.signal", "ema.modal_fit", "rigs.driver")
+    code = ("import sys, batlab.report; "
+            f"print(' '.join(m for m in {heavy!r} if m in sys.modules))")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         check=True, cwd=Path(__file__).resolve().parents[1])
+    assert out.stdout.strip() == ""
+    code = ("import sys, batlab.pipeline as p; p.inspect_files; "
+            "print('ema.modal_fit' in sys.modules)")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         check=True, cwd=Path(__file__).resolve().parents[1])
+    assert out.stdout.strip() == "True"  # the check above can fail: a pipeline name loads it

@@ -1,4 +1,6 @@
-"""The acquisition behind `batlab acquire`: the box's driver, capture settings and the
+"""The acquisition behind `batlab acquire`.
+
+The acquisition behind `batlab acquire`: the box's driver, capture settings and the
 roving-hammer session (``rigs``), the session's files beside its raw stream, and the FRF file
 written at the end (``ema.io``).
 
@@ -37,9 +39,12 @@ def write_json_atomic(path, obj: dict) -> None:
 def write_session_test(out, result, points: list[int], driving: int,
                        node_x_m: dict[int, float], exp_window_tau_s: float | None, raw,
                        hits: int) -> FrfTest:
-    """The session's H1 FRFs as an ``FrfTest`` (response node ``driving``, impact nodes the
+    """Combine a session's H1 FRFs into an ``FrfTest``.
+
+    The session's H1 FRFs as an ``FrfTest`` (response node ``driving``, impact nodes the
     session's ``points``, positions ``node_x_m`` by point number), written to ``out`` (UFF,
-    CSV or NPZ by extension; atomic)."""
+    CSV or NPZ by extension; atomic).
+    """
     from ema.io.frf_io import write_test
 
     test = FrfTest(result.freq_hz, result.h1, [driving], result.points,
@@ -52,9 +57,12 @@ def write_session_test(out, result, points: list[int], driving: int,
 
 
 def save_points(path, estimates: dict[int, FrfEstimate]) -> None:
-    """Every completed point's FRF estimate in one NPZ (atomic: temporary name, rename), so a
+    """Save every completed point's FRF estimate in one NPZ.
+
+    Every completed point's FRF estimate in one NPZ (atomic: temporary name, rename), so a
     killed session keeps what it measured: ``point_N_{h1,h2,coherence}``, ``freq_hz``,
-    ``n_averages`` and ``points`` (in completion order)."""
+    ``n_averages`` and ``points`` (in completion order).
+    """
     order = list(estimates)
     arrays = {"points": np.asarray(order, dtype=int),
               "n_averages": np.asarray([estimates[n].n_averages for n in order], dtype=int)}
@@ -72,7 +80,7 @@ def save_points(path, estimates: dict[int, FrfEstimate]) -> None:
 
 
 def load_points(path, exp_window_tau_s: float | None) -> dict[int, FrfEstimate]:
-    """The completed points saved by :func:`save_points` (empty when there is no file)."""
+    """Load the completed points saved by :func:`save_points` (empty when there is no file)."""
     if not Path(path).exists():
         return {}
     try:

@@ -1,4 +1,6 @@
-"""The test-bench operations behind `model`, `simulate`, `rig serve` and `demo`: a bat's wood,
+"""The test bench behind `model`, `simulate`, `rig serve` and `demo`.
+
+The test-bench operations behind `model`, `simulate`, `rig serve` and `demo`: a bat's wood,
 its FE model and pre-test summary, and tests of a bat on the virtual rig.
 
 One default wood for every command that builds or simulates a bat: meta.json's species
@@ -52,8 +54,11 @@ def describe_wood(material, e_over_g: float) -> str:
 
 
 def wood(meta_path: str | None, e_over_g: float | None, note: Progress = _quiet):
-    """The ``Material`` of a bat: meta.json's (``read_meta``) or the paper's birch, with
-    ``e_over_g`` (default DEFAULT_E_OVER_G); ``note`` receives which default was taken."""
+    """Return a bat's ``Material``.
+
+    The ``Material`` of a bat: meta.json's (``read_meta``) or the paper's birch, with
+    ``e_over_g`` (default DEFAULT_E_OVER_G); ``note`` receives which default was taken.
+    """
     from updating.model.lab_input import read_meta
     from updating.model.material import Material, paper_material
 
@@ -83,8 +88,11 @@ def meta_points_m(meta_path) -> np.ndarray:
 
 
 def core_spec(alter: str | None):
-    """An alteration spec (``cork:depth=10,d=1.0,ratio=0.33,plug=1``, inches) as a ``Core``;
-    None stays None."""
+    """Parse an alteration spec into a ``Core``.
+
+    An alteration spec (``cork:depth=10,d=1.0,ratio=0.33,plug=1``, inches) as a ``Core``;
+    None stays None.
+    """
     from updating.model.lab_input import parse_core_spec
 
     return parse_core_spec(alter) if alter else None
@@ -92,7 +100,7 @@ def core_spec(alter: str | None):
 
 def bat_model(profile, material, beam: Beam = "euler", rotary_inertia: bool | None = None,
               n_elements: int | None = None, alter: str | None = None):
-    """The bat's FE model (``updating.model.assembly.build_model``), ``alter``ed if given."""
+    """Build the bat's FE model (``updating.model.assembly.build_model``), ``alter``ed if given."""
     from updating.model.assembly import build_model
 
     return build_model(profile, material, beam=beam, rotary_inertia=rotary_inertia,
@@ -100,9 +108,12 @@ def bat_model(profile, material, beam: Beam = "euler", rotary_inertia: bool | No
 
 
 def summarise_model(model, n_modes: int = 8, n_points: int = 16) -> dict:
-    """The pre-test summary `batlab model` prints, lab units: ndof, weight, centre of mass,
+    """Summarise a bat's model as `batlab model` prints it.
+
+    The pre-test summary `batlab model` prints, lab units: ndof, weight, centre of mass,
     inertias, the lowest frequencies and the suggested test points (barrel row plus EfI,
-    ``updating.model.placement.suggest_points``)."""
+    ``updating.model.placement.suggest_points``).
+    """
     from updating.model.assembly import displacement_at
     from updating.model.mass_properties import mass_properties
     from updating.model.modes import model_modes
@@ -138,9 +149,12 @@ def virtual_bat(
     alter: str | None = None, moisture_pct: float = 0.0, zeta1: float = 0.005,
     rel_noise: float = 0.0,
 ):
-    """A bat on the virtual rig (``updating.simulate.virtual_bat.VirtualBat``: impact points
+    """Place a bat on the virtual rig.
+
+    A bat on the virtual rig (``updating.simulate.virtual_bat.VirtualBat``: impact points
     ``points_m``, accelerometer at the driving point, bungees, damping, noise), ``alter``ed
-    if given."""
+    if given.
+    """
     from updating.simulate.virtual_bat import VirtualBat
 
     return VirtualBat(
@@ -150,7 +164,7 @@ def virtual_bat(
 
 
 def simulate_bat_test(bat, freq_hz: np.ndarray, seed: int | None):
-    """A roving-hammer test (``FrfTest``) of a virtual bat at ``freq_hz``, noise ``seed``."""
+    """Simulate a roving-hammer test (``FrfTest``) of a bat at ``freq_hz``, seed ``seed``."""
     from updating.simulate.virtual_bat import simulate_test
 
     return simulate_test(bat, freq_hz, seed=seed)
@@ -174,10 +188,13 @@ def simulate_field_case(
     seed: int | None, kind: FieldKind, nuisances: tuple[str, ...], integrity: Integrity | None,
     folder, progress: Progress = _quiet,
 ) -> tuple[dict, str]:
-    """One random bat of the nuisance-rich fleet written as a lab hands it over (profile.csv,
+    """Draw one random bat of the nuisance-rich fleet and write its files.
+
+    One random bat of the nuisance-rich fleet written as a lab hands it over (profile.csv,
     meta.json, baseline.uff, retest.uff, retest.json, truth.json in ``folder``;
     ``updating.simulate.field_fleet``). Returns (paths by name, the expected verdict);
-    ``progress`` is told before the files are simulated."""
+    ``progress`` is told before the files are simulated.
+    """
     from updating.simulate.field_fleet import draw_case, write_case
 
     rng = np.random.default_rng(seed)
@@ -189,10 +206,13 @@ def simulate_field_case(
 
 def bat_modal_model(profile_path, meta_path, points_m: np.ndarray, accel_point: int,
                     alter: str | None, note: Progress = _quiet):
-    """(ModalModel, accelerometer point index) of a bat at ``points_m`` from its profile
+    """Build a bat's modal model for the virtual rig.
+
+    (ModalModel, accelerometer point index) of a bat at ``points_m`` from its profile
     (updating's virtual bat: FE model, Timoshenko, 3 g accelerometer at the driving point --
     point ``accel_point``, 1-based, 0: the point nearest 1 in from the barrel end -- two
-    150 N/m bungees), for `rig serve --profile`."""
+    150 N/m bungees), for `rig serve --profile`.
+    """
     from updating.simulate.virtual_bat import VirtualBat, modal_model
 
     profile = bat_profile(profile_path)
@@ -224,12 +244,14 @@ DEMO_RETEST = {"alteration": "cork:depth=10,d=1.0,ratio=0.3,plug=1", "moisture_p
 
 
 def builtin_dir() -> Path:
-    """The built-in bat's files (package data ``batlab/builtin``)."""
+    """Return the built-in bat's files (package data ``batlab/builtin``)."""
     return Path(__file__).resolve().parent.parent / "builtin"
 
 
 @dataclass(frozen=True)
 class DemoFiles:
+    """The demo's files: the built-in bat's profile.csv and meta.json, its baseline and re-test."""
+
     profile: Path
     meta: Path
     baseline: Path
@@ -238,9 +260,12 @@ class DemoFiles:
 
 def simulate_demo_pair(work: Path, seed: int, progress: Progress = _quiet,
                        alteration: str | None = DEMO_RETEST["alteration"]) -> DemoFiles:
-    """Copy the built-in bat to ``work`` and write its baseline and re-test as UFF (the re-test
+    """Write the demo's pair of tests.
+
+    Copy the built-in bat to ``work`` and write its baseline and re-test as UFF (the re-test
     after moisture and a re-mounted sensor, and ``alteration`` unless None; noise seeds
-    ``seed`` and ``seed + 1``)."""
+    ``seed`` and ``seed + 1``).
+    """
     from updating.model.lab_input import read_meta
     from updating.model.material import Material
     from updating.model.profile import read_profile_csv

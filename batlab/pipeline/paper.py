@@ -32,6 +32,8 @@ CORED = slice(23, 32)  # elements 24-32 (1-based from the knob)
 
 @dataclass(frozen=True)
 class PaperCase:
+    """The paper's corked-bat case: the reference model, the element update, two summaries."""
+
     reference: BatModel
     update: ElementUpdate
     final: dict
@@ -51,7 +53,7 @@ def _summary(model: BatModel, f: ElementFactors, reading: CoreReading) -> dict:
 
 
 def run_paper_case(n_modes: int = 6, noise_pct: float = 0.0, seed: int = 0) -> PaperCase:
-    """Reference and corked paper bat, test = corked modes at translational DOFs."""
+    """Build the reference and corked paper bat; the test: corked modes at translational DOFs."""
     ref = build_model(paper_profile(), paper_material())
     cork = build_model(paper_profile(), paper_material(),
                        core=Core(IN_TO_M, 10 * IN_TO_M, 1 / 3, 0.0, IN_TO_M))
@@ -72,14 +74,18 @@ def run_paper_case(n_modes: int = 6, noise_pct: float = 0.0, seed: int = 0) -> P
 
 
 def element_rows(model: BatModel, f: ElementFactors) -> list[dict]:
+    """Tabulate the element factors (element ends in inches, alpha, beta)."""
     x = model.node_x_m / IN_TO_M
     return [{"x0_in": float(x[i]), "x1_in": float(x[i + 1]), "alpha": float(f.alpha_trans[i]),
              "beta": float(f.beta_bend[i])} for i in range(model.n_elements)]
 
 
 def plot_figures(case: PaperCase, out_dir: str | Path) -> list[Path]:
-    """Figure 2 (stiffness change) and Figure 3 (mass change) per element, one pass and
-    final, against the truth; written as PNG (temporary name, then rename)."""
+    """Draw Figures 2 and 3 of the paper.
+
+    Figure 2 (stiffness change) and Figure 3 (mass change) per element, one pass and
+    final, against the truth; written as PNG (temporary name, then rename).
+    """
     import matplotlib
 
     matplotlib.use("Agg")

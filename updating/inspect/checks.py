@@ -1,4 +1,6 @@
-"""Can the two tests be compared at all? Checks made before any verdict (three-way verdict,
+"""Checks made before any verdict, that the two tests can be compared at all.
+
+Can the two tests be compared at all? Checks made before any verdict (three-way verdict,
 ../docs/inspection.md). Each returns a plain one-line reason saying what to do, or None.
 None of these ever makes a bat "altered": a failed check makes the verdict inconclusive.
 """
@@ -31,6 +33,7 @@ apart than 5 in, and one within 5 in of the barrel end."""
 
 
 def pairing_reason(n_pairs: int) -> str | None:
+    """Say why too few modes pair (None when enough do)."""
     if n_pairs >= MIN_PAIRS:
         return None
     return (f"only {n_pairs} modes pair between baseline, re-test and the model (need "
@@ -63,7 +66,7 @@ def amplitude_reason(psi_b: np.ndarray, psi_r: np.ndarray, freq_hz: np.ndarray) 
 
 
 def identity_reason(dlnf: np.ndarray, dlnw: float | None) -> str | None:
-    """Does the re-test look like the same bat (frequencies, weight)?"""
+    """Say whether the re-test looks like the same bat (frequencies, weight)."""
     mid = float(np.median(dlnf))
     if abs(mid) > FREQ_MAX_LOG:
         return (f"the re-test's frequencies differ from the baseline's by {100 * mid:+.1f} % "
@@ -77,7 +80,7 @@ def identity_reason(dlnf: np.ndarray, dlnw: float | None) -> str | None:
 
 
 def coverage_reason(points_m: np.ndarray, length_m: float) -> str | None:
-    """Can the test points see the barrel?"""
+    """Say whether the test points can see the barrel."""
     x = np.sort(np.asarray(points_m, dtype=float)) / IN_TO_M
     L = length_m / IN_TO_M
     start = L - BARREL_REACH_IN

@@ -22,13 +22,21 @@ if TYPE_CHECKING:  # only a type here: fit.py imports this module without the MS
 class ModePair:
     """One mode paired re-test to baseline (to reference model).
 
-    Attributes:
-        baseline_hz, retest_hz: the two tests' natural frequencies.
-        mac: MAC baseline-retest. reference_hz, mac_reference: the paired reference mode.
-        change_pct: 100 (f_retest / f_baseline - 1).
-        moisture_fit_change_pct, core_fit_change_pct: the same change predicted by the
-            drift-only (H0) and drift+core (H1) fits, relative to the reference.
     Optional fields are None when not computed (and then left out of the JSON).
+
+    Attributes
+    ----------
+    baseline_hz, retest_hz
+        The two tests' natural frequencies.
+    mac
+        MAC baseline-retest.
+    reference_hz, mac_reference
+        The paired reference mode.
+    change_pct
+        100 (f_retest / f_baseline - 1).
+    moisture_fit_change_pct, core_fit_change_pct
+        The same change predicted by the drift-only (H0) and drift+core (H1) fits, relative to
+        the reference.
     """
 
     baseline_hz: float
@@ -41,12 +49,16 @@ class ModePair:
     core_fit_change_pct: float | None = None
 
     def to_json_dict(self) -> dict[str, float]:
+        """Write the pair as a JSON dict (None fields left out)."""
         return {k: float(v) for k, v in vars(self).items() if v is not None}
 
     @classmethod
     def from_json_dict(cls, d: Mapping[str, Any]) -> ModePair:
-        """Inverse of ``to_json_dict``: a stored null (NaN) is NaN, a missing key None
-        (missing frequencies NaN); unknown keys are ignored."""
+        """Read a pair from its JSON dict.
+
+        Inverse of ``to_json_dict``: a stored null (NaN) is NaN, a missing key None
+        (missing frequencies NaN); unknown keys are ignored.
+        """
         kw = {f.name: _num(d[f.name]) for f in fields(cls) if f.name in d}
         kw.setdefault("baseline_hz", math.nan)
         kw.setdefault("retest_hz", math.nan)
@@ -57,10 +69,14 @@ class ModePair:
 class PositionScan:
     """The linearised scan that seeds the core fit (``updating.inspect.hypotheses.fit_core``).
 
-    Attributes:
-        scan_norm: weighted residual norm of each trial (plug, length).
-        starts_plug_length_in: the (plug, length) in inches refined by least squares.
-        start_rss: the RSS each start reached.
+    Attributes
+    ----------
+    scan_norm
+        Weighted residual norm of each trial (plug, length).
+    starts_plug_length_in
+        The (plug, length) in inches refined by least squares.
+    start_rss
+        The RSS each start reached.
     """
 
     scan_norm: tuple[float, ...] = ()
@@ -68,6 +84,7 @@ class PositionScan:
     start_rss: tuple[float, ...] = ()
 
     def to_json_dict(self) -> dict[str, Any]:
+        """Write the scan as a JSON dict ({} when empty)."""
         if not (self.scan_norm or self.starts_plug_length_in or self.start_rss):
             return {}
         return {"scan_norm": list(self.scan_norm),
@@ -87,10 +104,14 @@ class PositionScan:
 class ElementMap:
     """The MSSO element map (``msso_map``) or why it could not be computed.
 
-    Attributes:
-        result: the map, or None when ``error`` says why there is none.
-        agrees_with_fit: both localisations agree (no change, or overlapping regions).
-        error: the reason there is no map, or None.
+    Attributes
+    ----------
+    result
+        The map, or None when ``error`` says why there is none.
+    agrees_with_fit
+        Both localisations agree (no change, or overlapping regions).
+    error
+        The reason there is no map, or None.
     """
 
     result: MssoMap | None = None
@@ -99,9 +120,11 @@ class ElementMap:
 
     @property
     def region_m(self) -> tuple[float, float] | None:
+        """Return the map's region (start, end), m, or None."""
         return None if self.result is None else self.result.region_m
 
     def to_json_dict(self) -> dict[str, Any]:
+        """Write the map as a JSON dict."""
         if self.result is None:
             return {"error": self.error} if self.error is not None else {}
         out = self.result.to_dict()
@@ -111,9 +134,12 @@ class ElementMap:
 
     @classmethod
     def from_json_dict(cls, d: Mapping[str, Any] | None, x0_m=None, x1_m=None) -> ElementMap:
-        """Inverse of ``to_json_dict``. The stored map does not repeat the element ends (the
+        """Read a map from its JSON dict.
+
+        Inverse of ``to_json_dict``. The stored map does not repeat the element ends (the
         record's ``elements`` hold them): pass them as ``x0_m``, ``x1_m``, else they are NaN.
-        No ``alpha``: no map (with the stored ``error`` if any)."""
+        No ``alpha``: no map (with the stored ``error`` if any).
+        """
         d = d or {}
         if "alpha" not in d:
             return cls(error=d.get("error"))
@@ -141,9 +167,14 @@ class ElementMap:
 class CoreCandidate:
     """The drift+core (H1) fit's core, whatever the decision (SI).
 
-    Attributes:
-        region_m: (start, end) from the knob end. diameter_m, fill_density_ratio: the core.
-        uncertainty: standard uncertainties of the fitted quantities (SI, by name).
+    Attributes
+    ----------
+    region_m
+        (start, end) from the knob end.
+    diameter_m, fill_density_ratio
+        The core.
+    uncertainty
+        Standard uncertainties of the fitted quantities (SI, by name).
     """
 
     region_m: tuple[float, float]
@@ -152,6 +183,7 @@ class CoreCandidate:
     uncertainty: dict[str, float] = field(default_factory=dict)
 
     def to_json_dict(self) -> dict[str, Any]:
+        """Write the candidate as a JSON dict."""
         return {"region_m": list(self.region_m), "diameter_m": self.diameter_m,
                 "fill_density_ratio": self.fill_density_ratio,
                 "uncertainty": dict(self.uncertainty)}
@@ -169,23 +201,49 @@ class CoreCandidate:
 class FitEvidence:
     """The test and the fits behind a verdict (absent when the tests could not be compared).
 
-    Attributes:
-        statistic: the test statistic's name. dof: (q, N - p_1) of the F test.
-        p_value: P(F_{q, N-p_1} > F). rss_null, rss_core: the fits' weighted residuals.
-        n_data: number of data. shape_noise_rel, freq_noise_rel: the noise levels weighted
-            with (relative, per paired mode).
-        null_fit: the H0 parameters by name. null_at_bound, core_fit_at_bound: nuisances
-            held at their physical bounds in H0 and (confusable ones) in H1.
-        weight_change_rel: W_retest / W_registered - 1, or None without weights.
-        element_source: which model the element factors come from.
-        element_beta_shear: (e,) shear-stiffness factors of the elements.
-        candidate_core: H1's core. core_fit_moisture: H1's uniform scales.
-        sensor_shift_m: accelerometer shift fitted beyond the stated re-mount.
-        baseline_sensor_offset_m: the baseline accelerometer's fitted offset.
-        position_scan: the scan that seeded H1. msso: the element map.
-        plug_m: H1's plug (solid wood at the barrel end). fill_modulus_ratio: assumed.
-        empty_m: the reading's empty stretch of the hole behind the plug (a partial fill),
-            m; 0 when the hole reads as filled to the plug.
+    Attributes
+    ----------
+    statistic
+        The test statistic's name.
+    dof
+        (q, N - p_1) of the F test.
+    p_value
+        P(F_{q, N-p_1} > F).
+    rss_null, rss_core
+        The fits' weighted residuals.
+    n_data
+        Number of data.
+    shape_noise_rel, freq_noise_rel
+        The noise levels weighted with (relative, per paired mode).
+    null_fit
+        The H0 parameters by name.
+    null_at_bound, core_fit_at_bound
+        Nuisances held at their physical bounds in H0 and (confusable ones) in H1.
+    weight_change_rel
+        W_retest / W_registered - 1, or None without weights.
+    element_source
+        Which model the element factors come from.
+    element_beta_shear
+        (e,) shear-stiffness factors of the elements.
+    candidate_core
+        H1's core.
+    core_fit_moisture
+        H1's uniform scales.
+    sensor_shift_m
+        Accelerometer shift fitted beyond the stated re-mount.
+    baseline_sensor_offset_m
+        The baseline accelerometer's fitted offset.
+    position_scan
+        The scan that seeded H1.
+    msso
+        The element map.
+    plug_m
+        H1's plug (solid wood at the barrel end).
+    fill_modulus_ratio
+        Assumed.
+    empty_m
+        The reading's empty stretch of the hole behind the plug (a partial fill), m; 0 when the
+        hole reads as filled to the plug.
     """
 
     statistic: str
@@ -217,9 +275,14 @@ class FitEvidence:
 class InspectionDetails:
     """Everything worth reporting beside the verdict: fit residuals, ranks, timings.
 
-    Attributes:
-        n_modes: number of paired modes. time_s: wall time of the inspection.
-        fit: the test and fits, or None when no test was made (inconclusive before it).
+    Attributes
+    ----------
+    n_modes
+        Number of paired modes.
+    time_s
+        Wall time of the inspection.
+    fit
+        The test and fits, or None when no test was made (inconclusive before it).
     """
 
     n_modes: int
@@ -228,14 +291,19 @@ class InspectionDetails:
 
     @property
     def p_value(self) -> float | None:
+        """Return the nested test's p-value, or None without a test."""
         return None if self.fit is None else self.fit.p_value
 
     @property
     def msso(self) -> ElementMap:
+        """Return the MSSO element map (empty without a test)."""
         return ElementMap() if self.fit is None else self.fit.msso
 
     def to_json_dict(self) -> dict[str, Any]:
-        """The stored form (key order as stored since issue 11)."""
+        """Write the details as a JSON dict.
+
+        The stored form (key order as stored since issue 11).
+        """
         f = self.fit
         if f is None:
             out: dict[str, Any] = {"n_modes": self.n_modes}
@@ -267,10 +335,13 @@ class InspectionDetails:
     @classmethod
     def from_json_dict(cls, d: Mapping[str, Any] | None, x0_m=None, x1_m=None
                        ) -> InspectionDetails:
-        """Inverse of ``to_json_dict``: a stored record's ``details`` (None or {}: nothing
+        """Read the details from a stored record.
+
+        Inverse of ``to_json_dict``: a stored record's ``details`` (None or {}: nothing
         known). The fit evidence is read when the record has the test (``statistic`` or
         ``p_value``); ``x0_m``, ``x1_m``: the element ends for the MSSO map (see
-        ``ElementMap.from_json_dict``)."""
+        ``ElementMap.from_json_dict``).
+        """
         d = d or {}
         n_modes = int(d.get("n_modes") or 0)
         time_s = None if d.get("time_s") is None else float(d["time_s"])
@@ -302,13 +373,16 @@ class InspectionDetails:
 
 
 def _levels(v: Any) -> tuple[float, ...]:
-    """Stored noise levels: a list per mode, or one number (records before per-mode shape
-    noise); missing: ()."""
+    """Read stored noise levels.
+
+    Stored noise levels: a list per mode, or one number (records before per-mode shape
+    noise); missing: ().
+    """
     if v is None:
         return ()
     return tuple(_num(x) for x in v) if isinstance(v, list | tuple) else (_num(v),)
 
 
 def _num(v: Any) -> float:
-    """A stored number (JSON null: NaN was stored as null) as a float; missing: NaN."""
+    """Read a stored number (JSON null: NaN was stored as null) as a float; missing: NaN."""
     return math.nan if v is None else float(v)

@@ -13,7 +13,7 @@ their standard deviations: sigma_f from the modal fit's frequency uncertainties 
 model-error floor), sigma_psi[j,r] = sigma_r * psi_scale[j,r] (a relative shape-noise
 level per mode, estimated from the residuals, ``shape_noise``; psi_scale ~ sqrt(phi0[j,r]^2 +
 k^2 rms_r^2), the noise of an FRF relative to |H| with a floor near the nodes,
-``run.SHAPE_NOISE_FLOOR_SHARE``),
+``changes.SHAPE_NOISE_FLOOR_SHARE``),
 sigma_w = ``WEIGHT_SIGMA_REL``. Parameters:
 
     null (what an unaltered bat does between tests, physically bounded, ``NullBounds``):
@@ -112,19 +112,25 @@ sin^2(theta) by up to sin(10 deg) = 0.17, the planes' E/G differ by up to ~1.8x 
 
 
 def plane_sigma(elastic_order: np.ndarray) -> np.ndarray:
-    """Standard deviation of ln f change from the two bending planes, per elastic mode
-    (0-based order among the elastic modes)."""
+    """Return the frequency spread of the two bending planes per mode.
+
+    Standard deviation of ln f change from the two bending planes, per elastic mode
+    (0-based order among the elastic modes).
+    """
     split = np.asarray(PLANE_SPLIT_REL)
     return PLANE_MIX * split[np.minimum(np.asarray(elastic_order, dtype=int), split.size - 1)]
 
 
 @dataclass(frozen=True)
 class NullBounds:
-    """Physical bounds of the null parameters (x[:N_NULL], module docstring), from
+    """Physical bounds of the null parameters.
+
+    Physical bounds of the null parameters (x[:N_NULL], module docstring), from
     ../docs/inspection.md: moisture +-2.5 points (E -2 %, mass +1 % per point), temperature
     +-10 C (E -0.1..-0.3 %/C), end grain up to 2.5 points beyond the middle, the sensor
     re-mounted within 0.3 in, a replacement accelerometer within 0-10 g (or its known mass
-    within 0.3 g)."""
+    within 0.3 g).
+    """
 
     lower: np.ndarray
     upper: np.ndarray
@@ -137,11 +143,14 @@ class NullBounds:
     @staticmethod
     def physical(sensor_change_kg: float | None = None,
                  temperature_change_c: float | None = None) -> NullBounds:
-        """``sensor_change_kg``: the change of accelerometer mass when both tests' masses
+        """Return the physical bounds, narrowed by what the lab recorded.
+
+        ``sensor_change_kg``: the change of accelerometer mass when both tests' masses
         are known (else fitted within +-10 g, prior ``PRIOR_SENSOR_MASS_G``: the calibrated
         reference's own sensor mass can hold other physics, even be 0 g, so the change is
         not bounded by it); ``temperature_change_c``: re-test minus baseline temperature
-        when both are known."""
+        when both are known.
+        """
         if temperature_change_c is None:
             t_lo, t_hi = -3.0, 3.0
         else:
@@ -164,20 +173,27 @@ class NullBounds:
         return NullBounds(lo, hi, center, sigma)
 
     def widened(self) -> NullBounds:
-        """The same with the uniform stiffness and density free (+-40 %, +-30 %): what
-        another bat of the same profile, or a drift far beyond physics, would need."""
+        """Return the bounds with the uniform stiffness and density free.
+
+        The same with the uniform stiffness and density free (+-40 %, +-30 %): what
+        another bat of the same profile, or a drift far beyond physics, would need.
+        """
         lo, hi = self.lower.copy(), self.upper.copy()
         lo[:2], hi[:2] = (-40.0, -30.0), (40.0, 30.0)
         return NullBounds(lo, hi, self.prior_center, self.prior_sigma)
 
     def relaxed(self, factor: float = 3.0) -> NullBounds:
-        """Every range ``factor`` times as wide about its middle: to ask whether the data
-        really want a nuisance beyond its physical bound."""
+        """Return the bounds widened about their middles.
+
+        Every range ``factor`` times as wide about its middle: to ask whether the data
+        really want a nuisance beyond its physical bound.
+        """
         mid, half = 0.5 * (self.lower + self.upper), 0.5 * (self.upper - self.lower)
         return NullBounds(mid - factor * half, mid + factor * half, self.prior_center,
                           self.prior_sigma)
 
     def prior_residual(self, x: np.ndarray) -> np.ndarray:
+        """Return the priors' weighted residuals at ``x``."""
         return (x[:N_NULL] - self.prior_center) / self.prior_sigma
 
     @staticmethod
@@ -190,20 +206,34 @@ class NullBounds:
 class Differences:
     """Measured changes between the tests, their weights and the reference's modes.
 
-    Attributes:
-        model_index: (m,) index of each pair's mode among the predictor's modes.
-        dlnf: (m,) ln(f_retest / f_baseline); sigma_lnf: (m,) its standard deviation.
-        dpsi: (n_points, m) retest minus baseline shapes (signs aligned).
-        psi_scale: (n_points, m) shape-noise scale of each entry: sqrt(rms_baseline^2 +
-            rms_retest^2) of the mode, shared among its points as sqrt(phi0^2 + k^2 rms0^2)
-            (``run.SHAPE_NOISE_FLOOR_SHARE``: noise relative to |phi| with a floor).
-        f0: (m,) reference model frequencies, Hz; phi0: (n_points, m) its shapes, aligned.
-        dlnw: ln(W_retest / W_registered), or None when a weight is missing.
-        mass0_kg: the reference's wood mass (the model's weight before any change).
-        plane_sens: (m,) S_r = d ln f_r / d ln(E/G) of the reference (the two-plane mix's
-            effect on each pair's ln f per unit c), or None (no plane mix).
-        plane_shape_sens: (n_points, m) d phi_r / d ln(E/G), aligned as phi0 (the mix's
-            effect on each pair's shape per unit c), or None.
+    Attributes
+    ----------
+    model_index
+        (m,) index of each pair's mode among the predictor's modes.
+    dlnf
+        (m,) ln(f_retest / f_baseline)
+    sigma_lnf
+        (m,) its standard deviation.
+    dpsi
+        (n_points, m) retest minus baseline shapes (signs aligned).
+    psi_scale
+        (n_points, m) shape-noise scale of each entry: sqrt(rms_baseline^2 + rms_retest^2) of
+        the mode, shared among its points as sqrt(phi0^2 + k^2 rms0^2)
+        (``changes.SHAPE_NOISE_FLOOR_SHARE``: noise relative to |phi| with a floor).
+    f0
+        (m,) reference model frequencies, Hz.
+    phi0
+        (n_points, m) its shapes, aligned.
+    dlnw
+        ln(W_retest / W_registered), or None when a weight is missing.
+    mass0_kg
+        The reference's wood mass (the model's weight before any change).
+    plane_sens
+        (m,) S_r = d ln f_r / d ln(E/G) of the reference (the two-plane mix's effect on each
+        pair's ln f per unit c), or None (no plane mix).
+    plane_shape_sens
+        (n_points, m) d phi_r / d ln(E/G), aligned as phi0 (the mix's effect on each pair's
+        shape per unit c), or None.
     """
 
     model_index: np.ndarray
@@ -220,18 +250,23 @@ class Differences:
 
     @property
     def n_freq(self) -> int:
+        """Return the number of frequency data."""
         return self.dlnf.size
 
     @property
     def n_data(self) -> int:
+        """Return the number of data (frequencies, shapes, weight)."""
         return self.dlnf.size + self.dpsi.size + (self.dlnw is not None)
 
 
 @dataclass(frozen=True)
 class ChangeFit:
-    """A change fit: the least-squares solution (x, weighted residual, Jacobian in x units,
+    """A change fit.
+
+    A change fit: the least-squares solution (x, weighted residual, Jacobian in x units,
     active bounds), the bat's state it stands for, and where the residual's blocks are
-    (``n_freq`` frequency rows, then ``n_psi`` shape rows)."""
+    (``n_freq`` frequency rows, then ``n_psi`` shape rows).
+    """
 
     solution: LsqSolution
     params: ChangeParams
@@ -240,14 +275,17 @@ class ChangeFit:
 
     @property
     def x(self) -> np.ndarray:
+        """Return the solution, in x units."""
         return self.solution.x
 
     @property
     def residual(self) -> np.ndarray:
+        """Return the weighted residual at the solution."""
         return self.solution.residual
 
     @property
     def jac(self) -> np.ndarray:
+        """Return the Jacobian at the solution, in x units."""
         return self.solution.jac
 
     @property
@@ -257,6 +295,7 @@ class ChangeFit:
 
     @property
     def rss(self) -> float:
+        """Return the weighted residual sum of squares."""
         return self.solution.ssr
 
     @property
@@ -279,16 +318,21 @@ class ParamSpace:
     sensor_mount_m: float = 0.0
 
     def lower(self) -> np.ndarray:
+        """Return the lower bounds of x."""
         return np.concatenate([self.bounds.lower, CORE_LOWER])
 
     def upper(self) -> np.ndarray:
+        """Return the upper bounds of x."""
         return np.concatenate([self.bounds.upper, CORE_UPPER])
 
     def core(self, plug_in: float, length_in: float, p: float, q: float,
              empty_fraction: float = 0.0) -> Core:
-        """The core of x[N_NULL:]; depth kept within 95 % of the bat, diameter clipped to 90 %
+        """Return the core of x[N_NULL:].
+
+        The core of x[N_NULL:]; depth kept within 95 % of the bat, diameter clipped to 90 %
         of the thinnest outer diameter it spans; ``empty_fraction`` of the hole, behind the
-        plug, left empty (``fit_partial``)."""
+        plug, left empty (``fit_partial``).
+        """
         L = self.profile.length_m
         plug = plug_in * IN_TO_M
         depth = min(plug + length_in * IN_TO_M, 0.95 * L)
@@ -300,9 +344,12 @@ class ParamSpace:
         return Core(d, depth, r, self.fill_modulus_ratio, plug, empty_fraction * (depth - plug))
 
     def reading(self, x: np.ndarray, cov: np.ndarray) -> dict:
-        """Core start (m from the knob end), diameter (m), fill ratio (averaged over the hole
+        """Read the core of x with its standard uncertainties.
+
+        Core start (m from the knob end), diameter (m), fill ratio (averaged over the hole
         when part of it is empty) and their standard uncertainties from the covariance of x
-        (first-order propagation)."""
+        (first-order propagation).
+        """
         _, _, p, q = x[N_NULL:N_NULL + N_CORE]
         e = float(x[N_NULL + N_CORE]) if x.size > N_NULL + N_CORE else None
         s = max(p + q, R_MAX * MIN_B)
@@ -320,6 +367,7 @@ class ParamSpace:
         return {"core": self.core(*x[N_NULL:]), "sd": sd}
 
     def params(self, x: np.ndarray) -> ChangeParams:
+        """Return x as the predictor's parameters."""
         core = None if x.size == N_NULL else self.core(*x[N_NULL:])
         return ChangeParams(1 + (x[0] + MOISTURE_COUPLING * x[1]) / 100, 1 + x[1] / 100,
                             self.sensor_mount_m + x[2] * IN_TO_M, core,
@@ -339,10 +387,13 @@ def plane_shift(diff: Differences, x: np.ndarray) -> np.ndarray:
 
 
 def plane_shape_shift(diff: Differences, x: np.ndarray) -> np.ndarray | float:
-    """(n_points, m) shape change of each pair from the two-plane mix c = x[6]:
+    """Return the shape change of the two-plane mix.
+
+    (n_points, m) shape change of each pair from the two-plane mix c = x[6]:
     dphi / d ln(E/G) c. The merged pair's shape is cos^2 phi_R + sin^2 phi_T
-    (``planes.merge_plane_pairs``), so tapping at another angle moves it by
-    Delta(sin^2 theta) (phi_T - phi_R) = c dphi / d ln(E/G) to first order."""
+    (``updating.correlate.planes.merge_plane_pairs``), so tapping at another angle moves it by
+    Delta(sin^2 theta) (phi_T - phi_R) = c dphi / d ln(E/G) to first order.
+    """
     if diff.plane_shape_sens is None:
         return 0.0
     return diff.plane_shape_sens * float(x[6])
@@ -351,8 +402,11 @@ def plane_shape_shift(diff: Differences, x: np.ndarray) -> np.ndarray | float:
 def residual_function(
     predict, diff: Differences, space: ParamSpace, sigma_rel: SigmaRel,
 ) -> Callable[[np.ndarray], np.ndarray]:
-    """x -> weighted residual (measured minus predicted change), length n_data, then the
-    null parameters' prior residuals (N_NULL)."""
+    """Build the weighted residual function of x.
+
+    x -> weighted residual (measured minus predicted change), length n_data, then the
+    null parameters' prior residuals (N_NULL).
+    """
     def fun(x: np.ndarray) -> np.ndarray:
         params = space.params(np.asarray(x, dtype=float))
         f, phi = predict(params)
@@ -372,11 +426,14 @@ def residual_function(
 
 
 def forward_jacobian(fun: Callable, upper: np.ndarray) -> Callable:
-    """x -> forward-difference Jacobian of ``fun`` with the absolute step ``DIFF_STEP``
+    """Build the Jacobian function of x.
+
+    x -> forward-difference Jacobian of ``fun`` with the absolute step ``DIFF_STEP``
     (backward where the step would cross ``upper``); reuses fun(x) of the last call at x.
 
     scipy's relative steps shrink with |x|: a parameter started at 1e-9 (just inside a
-    bound) got a 1e-13 step and a Jacobian swamped by the eigen-solver's rounding."""
+    bound) got a 1e-13 step and a Jacobian swamped by the eigen-solver's rounding.
+    """
     last: dict = {}
 
     def f(x: np.ndarray) -> np.ndarray:
@@ -401,9 +458,12 @@ def forward_jacobian(fun: Callable, upper: np.ndarray) -> Callable:
 
 def fit_bounded(fun: Callable, x0: np.ndarray, lower: np.ndarray, upper: np.ndarray,
                 space: ParamSpace, diff: Differences, max_nfev: int | None = None) -> ChangeFit:
-    """Bounded Gauss-Newton (trust-region reflective, ``updating.lsq.solve_bounded``) from
+    """Fit x within bounds.
+
+    Bounded Gauss-Newton (trust-region reflective, ``updating.lsq.solve_bounded``) from
     x0, moved at least 1 % of the range inside the bounds: the first trust region is |x0|,
-    so a start a hair inside a bound (x0 ~ 1e-9) would crawl."""
+    so a start a hair inside a bound (x0 ~ 1e-9) would crawl.
+    """
     f, jac = forward_jacobian(fun, upper)
     res = solve_bounded(f, x0, lower, upper, jac=jac, margin=0.01 * (upper - lower),
                         held_within=HELD_WITHIN * (upper - lower),
@@ -413,8 +473,11 @@ def fit_bounded(fun: Callable, x0: np.ndarray, lower: np.ndarray, upper: np.ndar
 
 def fit_null(predict, diff: Differences, space: ParamSpace, sigma_rel: SigmaRel,
              x0: np.ndarray | None = None) -> ChangeFit:
-    """What every bat does between tests: moisture (uniform and end grain), temperature,
-    the re-mounted or replaced accelerometer."""
+    """Fit H0.
+
+    What every bat does between tests: moisture (uniform and end grain), temperature,
+    the re-mounted or replaced accelerometer.
+    """
     fun = residual_function(predict, diff, space, sigma_rel)
     b = space.bounds
     x0 = np.clip(0.0, b.lower, b.upper) if x0 is None else x0
@@ -459,8 +522,11 @@ def fit_core(
     predict, diff: Differences, space: ParamSpace, sigma_rel: SigmaRel, null: ChangeFit,
     n_starts: int = 2, x0: np.ndarray | None = None,
 ) -> tuple[ChangeFit, PositionScan]:
-    """The null model and a core; multi-start from the position scan (or from x0, with an
-    empty scan)."""
+    """Fit H1.
+
+    The null model and a core; multi-start from the position scan (or from x0, with an
+    empty scan).
+    """
     fun = residual_function(predict, diff, space, sigma_rel)
     lo, hi = space.lower(), space.upper()
     if x0 is not None:
@@ -489,10 +555,13 @@ MAX_EMPTY_FRACTION = 0.8
 
 def fit_partial(predict, diff: Differences, space: ParamSpace, sigma_rel: SigmaRel,
                 full: ChangeFit, start_fraction: float = 0.4) -> ChangeFit:
-    """H1 with one more parameter, the empty fraction e of the hole behind the plug (a
+    """Fit H1 with part of the hole possibly empty.
+
+    H1 with one more parameter, the empty fraction e of the hole behind the plug (a
     partial fill: the fill at the bottom of the hole, x = core + [e]), started from the H1
     core at e = ``start_fraction`` with the fill ratio raised so that its hole-averaged
-    ratio r (1 - e) is H1's."""
+    ratio r (1 - e) is H1's.
+    """
     fun = residual_function(predict, diff, space, sigma_rel)
     lo = np.append(space.lower(), 0.0)
     hi = np.append(space.upper(), MAX_EMPTY_FRACTION)
@@ -512,11 +581,14 @@ would have zero residual."""
 
 
 def shape_noise_profile(phi: np.ndarray, floor_share: float) -> np.ndarray:
-    """(n_points, m) standard deviation of each shape entry relative to its mode's RMS
+    """Return the shape-noise profile of each mode.
+
+    (n_points, m) standard deviation of each shape entry relative to its mode's RMS
     noise: sqrt((phi^2 + k^2 rms^2) / ((1 + k^2) rms^2)), k = ``floor_share``, rms the
     mode's RMS over the points (mean square 1 over each mode's points). An FRF's random
     error is relative to |H|, and near a resonance |H_j| ~ |phi_j|; k is the floor near
-    the nodes."""
+    the nodes.
+    """
     rms = np.sqrt(np.mean(phi**2, axis=0))
     k2 = floor_share**2
     return np.sqrt((phi**2 + k2 * rms**2) / ((1 + k2) * rms**2))
@@ -532,7 +604,9 @@ the mean: n0 = n 0.15 / 1.27 ~ 1.7 points."""
 
 def shape_noise(fit: ChangeFit, diff: Differences, sigma_rel: SigmaRel,
                 n_params: int) -> np.ndarray:
-    """(m,) relative shape noise of each mode, re-estimated from a fit weighted with
+    """Re-estimate each mode's relative shape noise.
+
+    (m,) relative shape noise of each mode, re-estimated from a fit weighted with
     ``sigma_rel`` (its shape residual r[j, r], n points j, m modes r):
 
         s_r^2 = sigma_old_r^2 sum_j r[j,r]^2 / (n c),   c = 1 - p / N
@@ -544,7 +618,8 @@ def shape_noise(fit: ChangeFit, diff: Differences, sigma_rel: SigmaRel,
     on 30 clean fleet bats the null's residual variance per shape entry was 1.6 (median) for
     mode 1 against 0.3-0.5 for modes 2-4 under one common level, and a member of a badly
     merged plane pair (mode 6) reached 3-4; one level for all modes under-weighted the quiet
-    ones and let one bad mode set every mode's noise."""
+    ones and let one bad mode set every mode's noise.
+    """
     r = fit.shape_residual
     n_points = r.shape[0]
     c = 1.0 - n_params / diff.n_data

@@ -59,8 +59,11 @@ E_PER_POINT, MASS_PER_POINT = -0.02, 0.01
 
 @dataclass(frozen=True)
 class WoodSystem:
-    """The bat without its accelerometer: model, K_wood (+ bungees), M_wood, shape rows of
-    the test points, and the end-grain weighted matrices (knob, barrel)."""
+    """A bat without its accelerometer.
+
+    The bat without its accelerometer: model, K_wood (+ bungees), M_wood, shape rows of
+    the test points, and the end-grain weighted matrices (knob, barrel).
+    """
 
     model: BatModel
     K: np.ndarray
@@ -130,19 +133,23 @@ class ChangePredictor:
         self._cache: dict[Core | None, WoodSystem] = {}
 
     def at_sensor(self, sensor_x_m: float) -> ChangePredictor:
-        """The same bat with the accelerometer's unshifted position at ``sensor_x_m`` (the
-        wood systems already built are shared)."""
+        """Return the same bat with its accelerometer elsewhere.
+
+        The same bat with the accelerometer's unshifted position at ``sensor_x_m`` (the
+        wood systems already built are shared).
+        """
         out = ChangePredictor(self.profile, self.reference, self.points_m, sensor_x_m,
                               self.n_solve)
         out._cache = self._cache
         return out
 
     def with_reference(self, reference: BatReference) -> ChangePredictor:
-        """The same points and sensor with another reference (no wood systems shared)."""
+        """Return the same points and sensor with another reference (no wood systems shared)."""
         return ChangePredictor(self.profile, reference, self.points_m, self.sensor_x_m,
                                self.n_solve)
 
     def system(self, core: Core | None = None) -> WoodSystem:
+        """Return the wood's system, with ``core`` if given."""
         if core not in self._cache:
             if len(self._cache) > 32:
                 for key in [k for k in self._cache if k is not None]:
@@ -153,11 +160,13 @@ class ChangePredictor:
         return self._cache[core]
 
     def wood_mass_kg(self, p: ChangeParams) -> float:
+        """Return the wood's mass with the changes ``p``, kg."""
         ws = self.system(p.core)
         _, M = ws.wood_matrices(p.end_moisture_pt)
         return p.density_scale * ws.mass_kg(M)
 
     def __call__(self, p: ChangeParams) -> tuple[np.ndarray, np.ndarray]:
+        """Return the frequencies, Hz, and shapes at the points of the bat changed by ``p``."""
         ws = self.system(p.core)
         K, M = ws.wood_matrices(p.end_moisture_pt)
         M = p.density_scale * M
@@ -183,12 +192,14 @@ def make_predictor(
     profile: Profile, reference: BatReference, points_m: np.ndarray, sensor_x_m: float,
     n_solve: int,
 ) -> ChangePredictor:
-    """The bat's change predictor (``ChangePredictor``)."""
+    """Build the bat's change predictor (``ChangePredictor``)."""
     return ChangePredictor(profile, reference, points_m, sensor_x_m, n_solve)
 
 
 def driving_point_scale(at_sensor: np.ndarray, at_drive: np.ndarray) -> np.ndarray:
-    """Per-mode factor sqrt(phi(x_s) / phi(x_d)) that a roving-hammer test puts on the
+    """Return the baseline accelerometer's offset.
+
+    Per-mode factor sqrt(phi(x_s) / phi(x_d)) that a roving-hammer test puts on the
     mass-normalised shapes when its accelerometer sits at x_s, off the driving point x_d.
 
     The fitter scales through the driving-point FRF, H(x_s, x_d), with modal constant

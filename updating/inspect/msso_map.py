@@ -57,16 +57,33 @@ redone from no change (the one pass can land on a mode-swapped model)."""
 
 @dataclass(frozen=True)
 class MssoMap:
-    """Per-element factors of the re-test relative to the moisture-corrected, baseline-updated
+    """Per-element factors of the re-test.
+
+    Per-element factors of the re-test relative to the moisture-corrected, baseline-updated
     reference (SI positions; factors dimensionless).
 
-    Attributes:
-        x0_m, x1_m: (e,) element ends. alpha, beta: (e,) translational-mass and bending
-            factors. alpha_std, beta_std: their linearised standard deviations.
-        region_m: (start, end) of the contiguous significant run, or None. peak_z: its z.
-        rank: rank of MSSO's one-pass system. chi2, n_data: data misfit of the refinement.
-        baseline_chi2: the same for the baseline update (step 1).
-        groups: parameter groups. time_s: wall time of the three steps.
+    Attributes
+    ----------
+    x0_m, x1_m
+        (e,) element ends.
+    alpha, beta
+        (e,) translational-mass and bending factors.
+    alpha_std, beta_std
+        Their linearised standard deviations.
+    region_m
+        (start, end) of the contiguous significant run, or None.
+    peak_z
+        Its z.
+    rank
+        Rank of MSSO's one-pass system.
+    chi2, n_data
+        Data misfit of the refinement.
+    baseline_chi2
+        The same for the baseline update (step 1).
+    groups
+        Parameter groups.
+    time_s
+        Wall time of the three steps.
     """
 
     x0_m: np.ndarray
@@ -85,6 +102,7 @@ class MssoMap:
     time_s: float
 
     def to_dict(self) -> dict:
+        """Write the map as a dict."""
         return {"alpha": self.alpha.tolist(), "beta": self.beta.tolist(),
                 "alpha_std": self.alpha_std.tolist(), "beta_std": self.beta_std.tolist(),
                 "region_m": None if self.region_m is None else list(self.region_m),
@@ -96,9 +114,12 @@ class MssoMap:
 def _without_driving_point_factor(
     model: BatModel, modes: MeasuredModes, dofs, sensor_x_m: float,
 ) -> MeasuredModes:
-    """``modes`` with each shape divided by sqrt(phi(x_s) / phi(x_d))
+    """Rescale a roving-hammer test's shapes.
+
+    ``modes`` with each shape divided by sqrt(phi(x_s) / phi(x_d))
     (``driving_point_scale``): phi the model's modes paired with them, x_s = ``sensor_x_m``
-    where the accelerometer sat, x_d = ``modes.sensor_x_m`` the labelled driving point."""
+    where the accelerometer sat, x_d = ``modes.sensor_x_m`` the labelled driving point.
+    """
     Phi = model_modes(model).shapes
     idx = paired_elastic(Phi, modes.shapes, dofs, 2)
     phi_s, phi_d = displacement_at(model, Phi[:, idx], [sensor_x_m, modes.sensor_x_m])
@@ -128,21 +149,33 @@ def msso_map(
     prior_sigma: float = PRIOR_SIGMA,
     stiffness: Stiffness = "bend", mass: Mass = "trans", mass_normalised: bool = True,
 ) -> MssoMap:
-    """The element map of ``retest`` (module docstring).
+    """Map the re-test's change element by element (module docstring).
 
-    Args:
-        profile, reference: the bat and its calibrated reference.
-        baseline, retest: paired elastic modes (mass-normalised shapes at the test points).
-        stiffness_scale, density_scale, sensor_shift_m: the accepted fit's drift (the shift
-            relative to the baseline's sensor position, as ``ChangeParams.sensor_shift_m``).
-        baseline_sensor_offset_m: the baseline's sensor position relative to
-            ``reference.sensor_x_m`` (``updating.inspect.model.baseline_sensor_offset``).
-        shape_sigma: shape noise relative to each mode's RMS; freq_sigma: relative frequency
-            noise of one test.
-        prior_sigma: smoothness prior of the refinement (``updating.msso.iterate.prior_matrix``).
-        stiffness, mass: ``update_elements`` parameterisation ("bend"/"trans" by default).
-    Raises:
-        ValueError: when the test modes cannot be paired with the model's.
+    Parameters
+    ----------
+    profile, reference
+        The bat and its calibrated reference.
+    baseline, retest
+        Paired elastic modes (mass-normalised shapes at the test points).
+    stiffness_scale, density_scale, sensor_shift_m
+        The accepted fit's drift (the shift relative to the baseline's sensor position, as
+        ``ChangeParams.sensor_shift_m``).
+    baseline_sensor_offset_m
+        The baseline's sensor position relative to ``reference.sensor_x_m``
+        (``updating.inspect.model.baseline_sensor_offset``).
+    shape_sigma
+        Shape noise relative to each mode's RMS.
+    freq_sigma
+        Relative frequency noise of one test.
+    prior_sigma
+        Smoothness prior of the refinement (``updating.msso.iterate.prior_matrix``).
+    stiffness, mass
+        ``update_elements`` parameterisation ("bend"/"trans" by default).
+
+    Raises
+    ------
+    ValueError
+        When the test modes cannot be paired with the model's.
     """
     t0 = time.perf_counter()
     points = np.asarray(baseline.x_m, dtype=float)

@@ -1,4 +1,6 @@
-"""The re-test's own conditions (``retest.json``, ../docs/inspection.md), every key optional:
+"""The re-test's own conditions (``retest.json``).
+
+The re-test's own conditions (``retest.json``, ../docs/inspection.md), every key optional:
 
     {"weight_lb": 2.2388, "accelerometer_mass_g": 4.1, "temperature_c": 24.0,
      "tested_on": "2026-05-02"}
@@ -28,11 +30,16 @@ RANGES = {  # key: (lowest, highest) accepted, in the file's units
 class RetestConditions:
     """What the lab knows about the re-test (None: not given).
 
-    Attributes:
-        weight_kg: the bat on a scale at the re-test (no accelerometer on it).
-        sensor_mass_kg: the accelerometer (and cable) mass used at the re-test.
-        temperature_c: the lab's temperature at the re-test.
-        tested_on: the date of the re-test (ISO string).
+    Attributes
+    ----------
+    weight_kg
+        The bat on a scale at the re-test (no accelerometer on it).
+    sensor_mass_kg
+        The accelerometer (and cable) mass used at the re-test.
+    temperature_c
+        The lab's temperature at the re-test.
+    tested_on
+        The date of the re-test (ISO string).
     """
 
     weight_kg: float | None = None
@@ -57,9 +64,12 @@ def read_retest_meta(path: str | Path) -> RetestConditions:
 
 
 def conditions_from_dict(raw: dict, source: str | Path) -> RetestConditions:
-    """A test's conditions from a dict with retest.json's keys (also meta.json's optional
+    """Read a test's conditions from a dict.
+
+    A test's conditions from a dict with retest.json's keys (also meta.json's optional
     ``weight_lb``, ``accelerometer_mass_g``, ``temperature_c`` of the baseline); ``source``
-    names it in errors."""
+    names it in errors.
+    """
     path = source
     weight = _number(path, raw, "weight_lb")
     mass_g = _number(path, raw, "accelerometer_mass_g")

@@ -22,23 +22,36 @@ class Status(str, Enum):
 class Verdict:
     """Inspection result, SI.
 
-    Attributes:
-        altered: True (altered), False (not altered) or None (inconclusive: the data cannot
-            support a verdict; ``reasons`` say why and what to do).
-        confidence: 1 - p-value of the test "no local alteration" (0..1); NaN when no test
-            was made.
-        false_alarm_rate: the test's significance level.
-        statistic: the test statistic (e.g. F) and its name in ``details``.
-        region_m: (start, end) of the altered region from the knob end, or None.
-        core_diameter_m, fill_density_ratio: the fitted core, or None when not altered.
-        uncertainty: standard uncertainties of the fitted quantities (same keys, SI).
-        element_x0_m, element_x1_m: (e,) element ends; alpha, beta: (e,) element mass and
-            stiffness factors (translational mass, bending stiffness).
-        moisture: {"stiffness_scale": ..., "density_scale": ...} uniform drift fitted.
-        modes: the paired modes (``ModePair``: baseline_hz, retest_hz, mac, ...).
-        details: everything else worth reporting (``InspectionDetails``: the test, the fits'
-            residuals, the position scan, the MSSO map, timings), None when not recorded.
-        reasons: one line each: why altered, why not, or why no verdict is possible.
+    Attributes
+    ----------
+    altered
+        True (altered), False (not altered) or None (inconclusive: the data cannot support a
+        verdict; ``reasons`` say why and what to do).
+    confidence
+        1 - p-value of the test "no local alteration" (0..1); NaN when no test was made.
+    false_alarm_rate
+        The test's significance level.
+    statistic
+        The test statistic (e.g. F) and its name in ``details``.
+    region_m
+        (start, end) of the altered region from the knob end, or None.
+    core_diameter_m, fill_density_ratio
+        The fitted core, or None when not altered.
+    uncertainty
+        Standard uncertainties of the fitted quantities (same keys, SI).
+    element_x0_m, element_x1_m
+        (e,) element ends.
+    alpha, beta
+        (e,) element mass and stiffness factors (translational mass, bending stiffness).
+    moisture
+        {"stiffness_scale": ..., "density_scale": ...} uniform drift fitted.
+    modes
+        The paired modes (``ModePair``: baseline_hz, retest_hz, mac, ...).
+    details
+        Everything else worth reporting (``InspectionDetails``: the test, the fits' residuals,
+        the position scan, the MSSO map, timings), None when not recorded.
+    reasons
+        One line each: why altered, why not, or why no verdict is possible.
     """
 
     altered: bool | None
@@ -60,6 +73,7 @@ class Verdict:
 
     @property
     def status(self) -> Status:
+        """Return the verdict's status (altered, not altered or inconclusive)."""
         if self.altered is None:
             return Status.INCONCLUSIVE
         return Status.ALTERED if self.altered else Status.NOT_ALTERED

@@ -12,7 +12,8 @@ there. ``merge_plane_pairs`` replaces each resolved pair by that one mode:
 
 which is phi with the frequency an unresolved fit would give (the members' mean weighted by
 their share of the response). A re-test tapped at another angle moves that weighting: the
-inspection treats the resulting frequency change as a nuisance (``fit.PLANE_MIX``).
+inspection treats the resulting frequency change as a nuisance
+(``updating.inspect.hypotheses.plane_shift``).
 """
 
 from __future__ import annotations
@@ -32,8 +33,11 @@ def _mac(a: np.ndarray, b: np.ndarray) -> float:
 
 
 def merge_plane_pairs(modes: MeasuredModes) -> MeasuredModes:
-    """The modes with each resolved two-plane pair (adjacent, within ``PAIR_MAX_REL_DF``,
-    MAC >= ``PAIR_MIN_MAC``) replaced by one mode (module docstring)."""
+    """Merge each resolved two-plane pair into one mode.
+
+    The modes with each resolved two-plane pair (adjacent, within ``PAIR_MAX_REL_DF``,
+    MAC >= ``PAIR_MIN_MAC``) replaced by one mode (module docstring).
+    """
     f, psi = np.asarray(modes.freq_hz, float), np.asarray(modes.shapes, float)
     std = None if modes.freq_std_hz is None else np.asarray(modes.freq_std_hz, float)
     out_f, out_psi, out_z, out_std = [], [], [], []

@@ -1,0 +1,171 @@
+"""What an inspection hands on: the fitted tests, the report's inputs, the contract's JSON.
+
+A light module (numpy and the unit constants): ``batlab.report`` draws a page from these
+types without loading the stages. Positions are SI inside; the contract dict
+(docs/contract.md) is in inches from the knob end.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from updating.model.units import IN_TO_M
+
+if TYPE_CHECKING:
+    from ema.io.frf_data import FrfTest
+    from updating.correlate.measured import MeasuredModes
+    from updating.inspect.verdict import Verdict
+    from updating.model.profile import Profile
+    from updating.model.reference import BatReference
+
+
+@dataclass(frozen=True)
+class FittedTest:
+    """One test file, read and fitted.
+
+    Attributes
+    ----------
+    name : str
+        The file's name (for messages and the report).
+    test : FrfTest
+        The FRFs.
+    fit : ModalFit or None
+        The modal fit (``ema.modal_fit.ModalFit``), or None for a registered baseline whose
+        modes come from the registry.
+    modes : MeasuredModes
+        Elastic modes at the impact points, in the baseline's point order.
+    """
+
+    name: str
+    test: FrfTest
+    fit: object | None
+    modes: MeasuredModes
+
+
+@dataclass(frozen=True)
+class ReportInputs:
+    """What a report is drawn from.
+
+    The verdict as stored (``verdict``: the contract JSON with the verdict's evidence), the
+    model and both fitted tests, the bat's meta.json and the provenance (file hashes,
+    custody record hashes, inspection number and time). Stored inspections rebuild it from
+    the registry alone (``batlab.pipeline.stored.stored_report_inputs``).
+    """
+
+    serial: str
+    profile: Profile
+    reference: BatReference
+    baseline: FittedTest
+    retest: FittedTest
+    verdict: dict
+    meta: dict
+    provenance: dict
+
+
+def _in(x_m: float) -> float:
+    return round(float(x_m) / IN_TO_M, 4)
+
+
+def _num(v) -> float | None:
+    return None if v is None or not math.isfinite(float(v)) else float(v)
+
+
+def contract_dict(serial: str, verdict: Verdict) -> dict:
+    """Write the verdict as docs/contract.md fixes it.
+
+    Status, altered true/false/null, reasons; inches from the knob end; region, core and
+    fill null unless altered; plus the decision's confidence and significance level.
+
+    Parameters
+    ----------
+    serial : str
+        The bat's serial number.
+    verdict : Verdict
+        The inspection's verdict.
+
+    Returns
+    -------
+    dict
+        The contract's JSON object.
+    """
+    altered = verdict.altered is True
+    region = verdict.region_m if altered else None
+    core = verdict.core_diameter_m if altered else None
+    fill = verdict.fill_density_ratio if altered else None
+    elements = [
+        {"x0_in": _in(a), "x1_in": _in(b), "alpha": float(al), "beta": float(be)}
+        for a, b, al, be in zip(verdict.element_x0_m, verdict.element_x1_m, verdict.alpha,
+                                verdict.beta, strict=True)
+    ]
+    return {
+        "serial": serial,
+        "status": verdict.status.value,
+        "altered": verdict.altered if verdict.altered is None else bool(verdict.altered),
+        "reasons": [str(r) for r in verdict.reasons],
+        "region_in": None if region is None else [_in(region[0]), _in(region[1])],
+        "core_diameter_in": None if core is None else round(float(core) / IN_TO_M, 4),
+        "fill_density_ratio": _num(fill),
+        "elements": elements,
+        "confidence": _num(verdict.confidence),
+        "false_alarm_rate": _num(verdict.false_alarm_rate),
+    }
+
+
+def jsonable(value):
+    """Convert numpy scalars and arrays, tuples and containers to JSON types.
+
+    Parameters
+    ----------
+    value : object
+        Dicts, lists, tuples, numpy arrays and scalars, Python scalars, None or strings
+        (anything else becomes its ``str``).
+
+    Returns
+    -------
+    object
+        The same structure in JSON types, NaN and infinities as None.
+    """
+    if isinstance(value, dict):
+        return {str(k): jsonable(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [jsonable(v) for v in value]
+    if isinstance(value, np.ndarray):
+        return jsonable(value.tolist())
+    if isinstance(value, (np.bool_, bool)):
+        return bool(value)
+    if isinstance(value, (np.integer, int)):
+        return int(value)
+    if isinstance(value, (np.floating, float)):
+        return _num(value)
+    if value is None or isinstance(value, str):
+        return value
+    return str(value)
+
+
+def verdict_record(serial: str, verdict: Verdict) -> dict:
+    """Write what the registry keeps of an inspection.
+
+    Parameters
+    ----------
+    serial : str
+        The bat's serial number.
+    verdict : Verdict
+        The inspection's verdict.
+
+    Returns
+    -------
+    dict
+        The contract dict and the verdict's statistic, drift, uncertainties, paired modes
+        and details, in JSON types.
+    """
+    out = contract_dict(serial, verdict)
+    details = {} if verdict.details is None else verdict.details.to_json_dict()
+    out.update(jsonable({"statistic": verdict.statistic, "moisture": verdict.moisture,
+                         "uncertainty": verdict.uncertainty,
+                         "modes": [m.to_json_dict() for m in verdict.modes],
+                         "details": details}))
+    return out

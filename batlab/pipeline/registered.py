@@ -1,0 +1,215 @@
+"""A registered bat: register it, inspect a re-test against it, store the verdict.
+
+The registry's storage (SQL, hashes, custody records) stays behind ``batlab.registry``'s
+API; the method's steps are those of ``batlab.pipeline.inspection``.
+"""
+
+from __future__ import annotations
+
+import sqlite3
+from dataclasses import dataclass
+from pathlib import Path
+
+from batlab import registry as reg
+from batlab.pipeline.files import (
+    Progress,
+    frf_from_bytes,
+    quiet,
+    read_bat_files,
+    read_conditions,
+    read_frf,
+)
+from batlab.pipeline.inspection import (
+    InspectionCase,
+    InspectionResult,
+    calibrate_baseline,
+    fit_file,
+    judge,
+)
+from batlab.pipeline.records import FittedTest
+from updating.correlate.points import match_points, point_positions_m
+from updating.inspect.retest_meta import conditions_from_dict
+from updating.model.profile import make_profile
+from updating.model.reference import BatReference
+from updating.model.units import LB_TO_KG
+
+
+@dataclass(frozen=True)
+class Registration:
+    """A registered bat: its registry record, fitted baseline and diagnosis.
+
+    Attributes
+    ----------
+    record : BatRecord
+        The registry's record of the bat.
+    baseline : FittedTest
+        The baseline, fitted.
+    diagnosis : Diagnosis
+        The baseline's diagnosis (its calibrated reference).
+    """
+
+    record: reg.BatRecord
+    baseline: FittedTest
+    diagnosis: object
+
+
+def registered_weight_kg(bat: reg.BatRecord) -> float | None:
+    """Return a registered bat's weight from its meta.json, kg (None when not weighed)."""
+    weight = bat.meta.get("weight_lb")
+    return None if weight is None else float(weight) * LB_TO_KG
+
+
+def prepare_registration(
+    profile_path, meta_path, baseline_path, serial: str | None = None,
+    progress: Progress = quiet,
+) -> Registration:
+    """Read a new bat's files, fit its baseline and calibrate its reference (nothing stored).
+
+    Parameters
+    ----------
+    profile_path, meta_path, baseline_path : str or os.PathLike
+        profile.csv, meta.json and the baseline test file.
+    serial : str or None
+        The serial the lab gave (must be meta.json's).
+    progress : Progress
+        Receives one-line messages.
+
+    Returns
+    -------
+    Registration
+        The record to store, the fitted baseline and its diagnosis.
+    """
+    profile, meta = read_bat_files(profile_path, meta_path)
+    if serial is not None and serial != meta.serial:
+        raise ValueError(f"{meta_path}: serial {meta.serial!r} differs from --serial {serial!r}")
+    test = read_frf(baseline_path)
+    baseline = fit_file(Path(baseline_path).name, test, meta.weight_kg, progress=progress)
+    progress("calibrating the reference model to the baseline (diagnose)")
+    diagnosis = calibrate_baseline(profile, meta, baseline)
+    record = reg.BatRecord(
+        serial=meta.serial, profile_x_m=profile.x_m.tolist(),
+        profile_diameter_m=profile.diameter_m.tolist(), meta=meta.extra, species=meta.species,
+        reference=diagnosis.reference.to_dict(), modes=reg.encode_modes(baseline.modes))
+    return Registration(record, baseline, diagnosis)
+
+
+def register_files(
+    conn: sqlite3.Connection, profile_path, meta_path, baseline_path,
+    serial: str | None = None, replace: bool = False, progress: Progress = quiet,
+) -> Registration:
+    """Register a bat: fit, calibrate, store with a copy of the baseline file.
+
+    Parameters
+    ----------
+    conn : sqlite3.Connection
+        The registry.
+    profile_path, meta_path, baseline_path : str or os.PathLike
+        profile.csv, meta.json and the baseline test file.
+    serial : str or None
+        The serial the lab gave (must be meta.json's).
+    replace : bool
+        Replace a registered bat of that serial.
+    progress : Progress
+        Receives one-line messages.
+
+    Returns
+    -------
+    Registration
+        The stored record, the fitted baseline and its diagnosis.
+    """
+    if not replace:  # fail fast, before the fit (add_bat checks again, under the lock)
+        _, meta = read_bat_files(profile_path, meta_path)
+        if reg.has_bat(conn, meta.serial):
+            raise ValueError(f"bat {meta.serial!r} is already registered (use --replace)")
+    done = prepare_registration(profile_path, meta_path, baseline_path, serial, progress)
+    content = Path(baseline_path).read_bytes()
+    stored = reg.add_bat(conn, done.record, Path(baseline_path).name, content, replace=replace)
+    progress(f"registered {stored.serial} (baseline sha256 {stored.baseline_sha256[:12]})")
+    return Registration(stored, done.baseline, done.diagnosis)
+
+
+def registered_case(
+    conn: sqlite3.Connection, serial: str, retest_path, refit_baseline: bool = False,
+    progress: Progress = quiet, baseline_fit=None,
+) -> InspectionCase:
+    """Read a registered bat and a re-test file into the method's inputs.
+
+    The stored baseline file is read (its checksum checked) to check the re-test's points
+    and, with ``refit_baseline`` (for a report), to show its FRFs and stabilisation diagram;
+    the baseline's modes and the reference are the registered ones.
+
+    Parameters
+    ----------
+    conn : sqlite3.Connection
+        The registry.
+    serial : str
+        The bat's serial number.
+    retest_path : str or os.PathLike
+        The re-test file.
+    refit_baseline : bool
+        Refit the stored baseline file (for a report's figures).
+    progress : Progress
+        Receives one-line messages.
+    baseline_fit : ModalFit or None
+        A fit of that same baseline file already at hand (saves the refit).
+
+    Returns
+    -------
+    InspectionCase
+        The case, with the registration it is judged against and the re-test's bytes.
+    """
+    bat = reg.get_bat(conn, serial)
+    base_test = frf_from_bytes(reg.baseline_file(conn, bat), bat.baseline_name)
+    if not Path(retest_path).is_file():
+        raise ValueError(f"{retest_path}: no such file")
+    retest_content = Path(retest_path).read_bytes()
+    re_test = frf_from_bytes(retest_content, Path(retest_path).name, str(retest_path))
+    base_modes = reg.decode_modes(bat.modes)
+    order = match_points(base_modes.x_m, point_positions_m(re_test), str(retest_path))
+    profile = make_profile(bat.profile_x_m, bat.profile_diameter_m, f"registry bat {serial}")
+    weight_kg = registered_weight_kg(bat)
+    fit = baseline_fit
+    if refit_baseline and fit is None:
+        fit = fit_file(bat.baseline_name, base_test, weight_kg, None, progress).fit
+    baseline = FittedTest(bat.baseline_name, base_test, fit, base_modes)
+    retest = fit_file(Path(retest_path).name, re_test, weight_kg, order, progress)
+    return InspectionCase(serial, profile, BatReference.from_dict(bat.reference), baseline,
+                          retest, conditions_from_dict(bat.meta, f"registered bat {serial}"),
+                          weight_kg, bat.reference_seq, retest_content)
+
+
+def inspect_registered(
+    conn: sqlite3.Connection, serial: str, retest_path, false_alarm: float = 0.01,
+    refit_baseline: bool = False, progress: Progress = quiet, baseline_fit=None,
+    retest_meta_path=None,
+) -> InspectionResult:
+    """Inspect a re-test of a registered bat against its stored reference and baseline modes.
+
+    Parameters
+    ----------
+    conn : sqlite3.Connection
+        The registry.
+    serial : str
+        The bat's serial number.
+    retest_path : str or os.PathLike
+        The re-test file.
+    false_alarm : float
+        The decision's false-alarm rate.
+    refit_baseline : bool
+        Refit the stored baseline file (for a report's figures).
+    progress : Progress
+        Receives one-line messages.
+    baseline_fit : ModalFit or None
+        A fit of that same baseline file already at hand (saves the refit).
+    retest_meta_path : str or os.PathLike or None
+        The optional retest.json.
+
+    Returns
+    -------
+    InspectionResult
+        The verdict and what it was judged on (nothing stored: ``store_inspection``).
+    """
+    conditions = read_conditions(retest_meta_path)
+    case = registered_case(conn, serial, retest_path, refit_baseline, progress, baseline_fit)
+    progress("inspecting the re-test against the registered reference")
+    return judge(case, false_alarm, conditions)

@@ -1,0 +1,235 @@
+"""Stored inspections: an inspection stored, and read back (provenance, report inputs, export)."""
+
+from __future__ import annotations
+
+import sqlite3
+from pathlib import Path
+
+from batlab import __version__
+from batlab import registry as reg
+from batlab.pipeline.files import Progress, frf_from_bytes, quiet
+from batlab.pipeline.inspection import InspectionResult, fit_file
+from batlab.pipeline.records import FittedTest, ReportInputs, verdict_record
+from batlab.pipeline.registered import registered_weight_kg
+from updating.correlate.points import match_points, point_positions_m
+from updating.model.profile import make_profile
+from updating.model.reference import BatReference
+
+EXPORT_COLUMNS = [
+    "serial", "species", "inspection", "inspected_at", "status", "altered",
+    "region_start_in", "region_end_in", "core_diameter_in", "fill_density_ratio",
+    "p_value", "false_alarm_rate", "reasons", "retest_file", "retest_sha256",
+    "baseline_sha256", "registration_record", "verdict_record", "verdict_record_sha256",
+    "report_path"]
+"""The columns of `batlab export`, in order."""
+
+
+def store_inspection(
+    conn: sqlite3.Connection, result: InspectionResult, retest_path, false_alarm: float = 0.01,
+) -> reg.Inspection:
+    """Record an inspection of a registered bat.
+
+    Its verdict, a copy of the re-test file, the registration it was judged against and the
+    inputs its report needs.
+
+    Parameters
+    ----------
+    conn : sqlite3.Connection
+        The registry.
+    result : InspectionResult
+        The inspection.
+    retest_path : str or os.PathLike
+        The re-test file (its bytes as judged are stored when the result kept them).
+    false_alarm : float
+        The decision's false-alarm rate.
+
+    Returns
+    -------
+    Inspection
+        The stored inspection.
+    """
+    path = Path(retest_path)
+    content = result.retest_content if result.retest_content is not None else \
+        path.read_bytes()
+    return reg.add_inspection(
+        conn, result.serial, verdict_record(result.serial, result.verdict), path.name,
+        content, reference_seq=result.reference_seq,
+        inputs={"false_alarm": float(false_alarm), "batlab_version": __version__})
+
+
+def stored_bat(conn: sqlite3.Connection, stored: reg.Inspection) -> reg.BatRecord:
+    """Return the registration a stored inspection was judged against."""
+    return reg.bat_as_registered(conn, stored.reference_seq)
+
+
+def note_report(conn: sqlite3.Connection, stored: reg.Inspection, path: str) -> None:
+    """Record where the inspection's report was written."""
+    reg.set_report_path(conn, stored.id, path)
+
+
+def provenance(
+    conn: sqlite3.Connection | None = None, stored: reg.Inspection | None = None,
+    baseline_sha256: str | None = None, retest_sha256: str | None = None,
+) -> dict:
+    """Gather the facts a report prints to be verified.
+
+    Parameters
+    ----------
+    conn : sqlite3.Connection or None
+        The registry (for a stored inspection).
+    stored : Inspection or None
+        The stored inspection: its number, time and custody records (the verdict's and
+        the registration's).
+    baseline_sha256, retest_sha256 : str or None
+        The files' hashes of a stateless inspection.
+
+    Returns
+    -------
+    dict
+        The version, file hashes and, for a stored inspection, its records.
+    """
+    out = {"batlab_version": __version__, "baseline_sha256": baseline_sha256,
+           "retest_sha256": retest_sha256}
+    if stored is not None and conn is not None:
+        out.update({"inspection_id": stored.id, "inspected_at": stored.inspected_at,
+                    "baseline_sha256": stored.baseline_sha256,
+                    "retest_sha256": stored.retest_sha256,
+                    "verdict_record": stored.record_seq, "verdict_record_sha256":
+                    stored.record_sha256,
+                    "verdict_sha256": reg.custody_record(conn, stored.record_seq).content_sha256,
+                    "chain_head": reg.head(conn)})
+        if stored.reference_seq is not None:
+            ref = reg.custody_record(conn, stored.reference_seq)
+            out.update({"reference_record": ref.seq, "reference_record_sha256":
+                        ref.record_sha256})
+        if stored.inputs:
+            out["batlab_version"] = stored.inputs.get("batlab_version", __version__)
+    return out
+
+
+def report_inputs(result: InspectionResult, meta: dict, prov: dict) -> ReportInputs:
+    """Return a fresh inspection's report inputs (the verdict as it is stored).
+
+    Parameters
+    ----------
+    result : InspectionResult
+        The inspection.
+    meta : dict
+        The bat's meta.json.
+    prov : dict
+        Its provenance (``provenance``).
+
+    Returns
+    -------
+    ReportInputs
+        What the report is drawn from.
+    """
+    return ReportInputs(result.serial, result.profile, result.reference, result.baseline,
+                        result.retest, verdict_record(result.serial, result.verdict), meta, prov)
+
+
+def _stored_inspection(conn: sqlite3.Connection, serial: str,
+                       inspection_id: int | None) -> reg.Inspection:
+    """Find the bat's inspection ``inspection_id`` (None: its latest) that kept its files."""
+    rows = reg.history(conn, serial)
+    if not rows:
+        raise ValueError(f"bat {serial!r} has no inspection in the registry")
+    if inspection_id is None:
+        stored = rows[-1]
+    else:
+        match = [r for r in rows if r.id == inspection_id]
+        if not match:
+            raise ValueError(f"inspection #{inspection_id} is not one of bat {serial!r}'s "
+                             f"(its inspections: {', '.join(str(r.id) for r in rows)})")
+        stored = match[0]
+    if stored.reference_seq is None:
+        raise ValueError(f"inspection #{stored.id} of {serial!r} predates registry schema 3: "
+                         "its re-test file and model were not kept, its report cannot be "
+                         "rebuilt")
+    return stored
+
+
+def stored_report_inputs(
+    conn: sqlite3.Connection, serial: str, inspection_id: int | None = None,
+    progress: Progress = quiet,
+) -> ReportInputs:
+    """Rebuild a past inspection's report inputs from the registry alone.
+
+    The verdict as stored, the registration it was judged against (custody record, also
+    after ``register --replace``), and both test files read back (checksums verified) and
+    refitted for the figures.
+
+    Parameters
+    ----------
+    conn : sqlite3.Connection
+        The registry.
+    serial : str
+        The bat's serial number.
+    inspection_id : int or None
+        The inspection; None for the bat's latest.
+    progress : Progress
+        Receives one-line messages.
+
+    Returns
+    -------
+    ReportInputs
+        What the report is drawn from.
+    """
+    stored = _stored_inspection(conn, serial, inspection_id)
+    bat = reg.bat_as_registered(conn, stored.reference_seq)
+    base_name, base_bytes = reg.stored_file(conn, stored.baseline_sha256,
+                                            f"inspection #{stored.id} baseline")
+    re_name, re_bytes = reg.stored_file(conn, stored.retest_sha256,
+                                        f"inspection #{stored.id} re-test")
+    base_test = frf_from_bytes(base_bytes, bat.baseline_name or base_name)
+    re_test = frf_from_bytes(re_bytes, stored.retest_name or re_name)
+    base_modes = reg.decode_modes(bat.modes)
+    order = match_points(base_modes.x_m, point_positions_m(re_test), stored.retest_name)
+    weight_kg = registered_weight_kg(bat)
+    base_fit = fit_file(bat.baseline_name, base_test, weight_kg, None, progress).fit
+    retest = fit_file(stored.retest_name, re_test, weight_kg, order, progress)
+    profile = make_profile(bat.profile_x_m, bat.profile_diameter_m, f"registry bat {serial}")
+    return ReportInputs(
+        serial, profile, BatReference.from_dict(bat.reference),
+        FittedTest(bat.baseline_name, base_test, base_fit, base_modes), retest,
+        stored.verdict, bat.meta, provenance(conn, stored=stored))
+
+
+def history_table(conn: sqlite3.Connection, serial: str | None = None):
+    """Tabulate every inspection (of one bat), one row each, lab units: `batlab export`.
+
+    Parameters
+    ----------
+    conn : sqlite3.Connection
+        The registry.
+    serial : str or None
+        One bat's serial, or None for all bats.
+
+    Returns
+    -------
+    pandas.DataFrame
+        One row per inspection, the columns ``EXPORT_COLUMNS``.
+    """
+    import pandas as pd
+
+    from batlab.formatting import p_value
+
+    species = {b.serial: b.species for b in reg.list_bats(conn)}
+    rows = []
+    for i in reg.all_inspections(conn, serial):
+        v = i.verdict
+        region = v.get("region_in") or [None, None]
+        rows.append({
+            "serial": i.serial, "species": species.get(i.serial, ""), "inspection": i.id,
+            "inspected_at": i.inspected_at, "status": i.status, "altered": i.altered,
+            "region_start_in": region[0], "region_end_in": region[1],
+            "core_diameter_in": v.get("core_diameter_in"),
+            "fill_density_ratio": v.get("fill_density_ratio"),
+            "p_value": p_value(v),
+            "false_alarm_rate": v.get("false_alarm_rate"),
+            "reasons": "; ".join(v.get("reasons") or []),
+            "retest_file": i.retest_name, "retest_sha256": i.retest_sha256,
+            "baseline_sha256": i.baseline_sha256, "registration_record": i.reference_seq,
+            "verdict_record": i.record_seq, "verdict_record_sha256": i.record_sha256,
+            "report_path": i.report_path})
+    return pd.DataFrame(rows, columns=EXPORT_COLUMNS)
