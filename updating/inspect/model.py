@@ -26,6 +26,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from updating.inspect.segments import Segment, segment_mass_kg, segment_matrices
 from updating.model.assembly import (
     BatModel,
     assemble,
@@ -49,6 +50,9 @@ class ChangeParams:
     core: Core | None = None
     end_moisture_pt: tuple[float, float] = (0.0, 0.0)
     sensor_mass_change_kg: float = 0.0
+    segments: tuple[Segment, ...] = ()
+    """Local changes (``segments.Segment``): a legal grip substance on the handle, or an
+    alteration's added mass, lost diameter or generic change of mass and stiffness."""
 
 
 END_DECAY_M = 2.0 * 0.0254
@@ -163,13 +167,17 @@ class ChangePredictor:
         """Return the wood's mass with the changes ``p``, kg."""
         ws = self.system(p.core)
         _, M = ws.wood_matrices(p.end_moisture_pt)
-        return p.density_scale * ws.mass_kg(M)
+        added = segment_mass_kg(ws.model, p.segments) if p.segments else 0.0
+        return p.density_scale * ws.mass_kg(M) + added
 
     def __call__(self, p: ChangeParams) -> tuple[np.ndarray, np.ndarray]:
         """Return the frequencies, Hz, and shapes at the points of the bat changed by ``p``."""
         ws = self.system(p.core)
         K, M = ws.wood_matrices(p.end_moisture_pt)
         M = p.density_scale * M
+        local = segment_matrices(ws.model, p.segments)
+        if local is not None:  # after moisture's scale: it scales the wood, not a foreign mass
+            K, M = K + local[0], M + local[1]
         x = float(np.clip(self.sensor_x_m + p.sensor_shift_m, 0.0, self.profile.length_m))
         dofs, n = point_vector(ws.model, x)
         # the change may take the calibrated mass below 0 (calibration puts other physics
