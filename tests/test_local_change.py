@@ -46,9 +46,9 @@ def modes_with(model, segments):
 @settings(max_examples=25, deadline=None)
 def test_added_mass_is_on_the_scale_and_lowers_every_frequency(x0, ell, grams):
     model = cylinder()
-    seg = Segment(x0, x0 + ell, added_mass_kg=grams * 1e-3)  # what lies past the end is lost
-    on_bat = min(ell, model.node_x_m[-1] - x0) / ell
-    assert segment_mass_kg(model, [seg]) == pytest.approx(grams * 1e-3 * on_bat, rel=1e-9)
+    for surface in (False, True):  # the mass spreads over the part of the segment on the bat
+        seg = Segment(x0, x0 + ell, added_mass_kg=grams * 1e-3, mass_at_surface=surface)
+        assert segment_mass_kg(model, [seg]) == pytest.approx(grams * 1e-3, rel=1e-9)
     f0 = modes_with(model, []).freq_hz[2:]
     f1 = modes_with(model, [seg]).freq_hz[2:]
     assert np.all(f1 < f0)

@@ -19,7 +19,9 @@ sigma_w = ``WEIGHT_SIGMA_REL``. Parameters:
     null (what an unaltered bat does between tests, physically bounded, ``NullBounds``):
           x = [x0, 100 (s_rho - 1), sensor shift (in),
                end-grain moisture at the knob end (points), at the barrel end (points),
-               change of the accelerometer's mass (g), two-plane mix c]
+               change of the accelerometer's mass (g), two-plane mix c,
+               grip substance added on the handle (g), where it ends and starts (in from
+               the knob end)]
           with s_E = 1 + (x0 - 2 x1) / 100: moisture's stiffness coupled to its mass, x0 the
           temperature's share (``MOISTURE_COUPLING``)
     core: x = null + [plug (in), filled length (in), p = r b, q = (R - r) b]
@@ -46,6 +48,7 @@ import numpy as np
 
 from updating.inspect.details import PositionScan
 from updating.inspect.model import E_PER_POINT, MASS_PER_POINT, ChangeParams
+from updating.inspect.segments import Segment
 from updating.lsq import LsqSolution, solve_bounded
 from updating.lsq import covariance as lsq_covariance
 from updating.model.profile import Profile
@@ -54,10 +57,20 @@ from updating.model.units import IN_TO_M
 
 SigmaRel = float | np.ndarray
 """Relative shape noise: one level, or (m,) one per paired mode (``shape_noise``)."""
-N_NULL, N_CORE = 7, 4
+N_NULL, N_CORE = 10, 4
 NULL_NAMES = ("stiffness_beyond_moisture_pct", "density_pct", "sensor_shift_in",
               "knob_end_moisture_pt", "barrel_end_moisture_pt", "sensor_mass_change_g",
-              "plane_mix")
+              "plane_mix", "handle_substance_g", "handle_substance_to_in",
+              "handle_substance_from_in")
+HANDLE_MAX_G = 40.0
+"""Most grip substance considered on the handle between tests, g: tape 5-25 g, pine tar and
+spray 1-8 g (Rule 3.02(c) allows any amount within 18 in of the knob)."""
+HANDLE_MAX_IN, HANDLE_MIN_IN = 18.0, 4.0
+"""Reach of a legal grip substance from the knob end (Rule 3.02(c)), and the shortest reach
+fitted (a substance covers at least a hand's width)."""
+HANDLE_FROM_MAX_IN = 3.0
+"""Furthest from the knob end a grip substance is taken to start (tape and pine tar start
+0.5-2 in from the end, past the knob)."""
 R_MAX = 6.0  # densest fill considered, relative to the wood
 MIN_PLUG_IN, MIN_LENGTH_IN = 0.05, 2.0
 """The shortest filled length considered a core: end plugs are 2-4 in, corks 3-12 in. A
@@ -165,11 +178,14 @@ class NullBounds:
             s_lo, s_hi = t_lo - COUPLING_SLACK_PCT, t_hi + COUPLING_SLACK_PCT
         else:
             s_lo, s_hi = -5.5 + t_lo, 5.5 + t_hi
-        lo = np.array([s_lo, -3.0, -0.3, -2.5, -2.5, m_lo, -PLANE_MIX_MAX])
-        hi = np.array([s_hi, 3.0, 0.3, 2.5, 2.5, m_hi, PLANE_MIX_MAX])
-        center = np.array([0.0, 0.0, 0.0, 0.0, 0.0, m0, 0.0])
+        lo = np.array([s_lo, -3.0, -0.3, -2.5, -2.5, m_lo, -PLANE_MIX_MAX, 0.0,
+                       HANDLE_MIN_IN, 0.0])
+        hi = np.array([s_hi, 3.0, 0.3, 2.5, 2.5, m_hi, PLANE_MIX_MAX, HANDLE_MAX_G,
+                       HANDLE_MAX_IN, HANDLE_FROM_MAX_IN])
+        center = np.array([0.0, 0.0, 0.0, 0.0, 0.0, m0, 0.0, 0.0, 10.0, 1.0])
         sigma = np.array([np.inf, np.inf, PRIOR_SHIFT_IN, PRIOR_END_MOISTURE_PT,
-                          PRIOR_END_MOISTURE_PT, m_sig, PRIOR_PLANE_MIX])
+                          PRIOR_END_MOISTURE_PT, m_sig, PRIOR_PLANE_MIX, np.inf, np.inf,
+                          np.inf])
         return NullBounds(lo, hi, center, sigma)
 
     def widened(self) -> NullBounds:
@@ -189,8 +205,9 @@ class NullBounds:
         really want a nuisance beyond its physical bound.
         """
         mid, half = 0.5 * (self.lower + self.upper), 0.5 * (self.upper - self.lower)
-        return NullBounds(mid - factor * half, mid + factor * half, self.prior_center,
-                          self.prior_sigma)
+        lo, hi = mid - factor * half, mid + factor * half
+        lo[7:], hi[7:] = self.lower[7:], self.upper[7:]  # a grip substance stays one
+        return NullBounds(lo, hi, self.prior_center, self.prior_sigma)
 
     def prior_residual(self, x: np.ndarray) -> np.ndarray:
         """Return the priors' weighted residuals at ``x``."""
@@ -367,16 +384,46 @@ class ParamSpace:
         return {"core": self.core(*x[N_NULL:]), "sd": sd}
 
     def params(self, x: np.ndarray) -> ChangeParams:
-        """Return x as the predictor's parameters."""
+        """Return x as the predictor's parameters (null part, then the core's)."""
         core = None if x.size == N_NULL else self.core(*x[N_NULL:])
-        return ChangeParams(1 + (x[0] + MOISTURE_COUPLING * x[1]) / 100, 1 + x[1] / 100,
-                            self.sensor_mount_m + x[2] * IN_TO_M, core,
-                            (float(x[3]), float(x[4])), float(x[5]) * 1e-3)
+        return null_params(x, self.sensor_mount_m, core=core)
 
     @staticmethod
     def to_x(plug_in: float, length_in: float, b: float, r: float) -> np.ndarray:
         """Core part of x for plug, length (in), b = (d / 1 in)^2 and fill ratio r."""
         return np.array([plug_in, length_in, r * b, (R_MAX - r) * b])
+
+
+def handle_segment(x: np.ndarray) -> Segment | None:
+    """The grip substance of the null part x[:N_NULL] (a surface layer from its start near the
+    knob end to its reach), or None when there is none."""
+    mass_g, reach_in, from_in = float(x[7]), float(x[8]), float(x[9])
+    if mass_g <= 0.0:
+        return None
+    return Segment(from_in * IN_TO_M, reach_in * IN_TO_M, added_mass_kg=mass_g * 1e-3,
+                   mass_at_surface=True)
+
+
+def null_params(x: np.ndarray, sensor_mount_m: float, core: Core | None = None,
+                segments: tuple[Segment, ...] = ()) -> ChangeParams:
+    """The bat's state for the null part of x (module docstring) with a core or segments.
+
+    Parameters
+    ----------
+    x : ndarray
+        Parameter vector; its first ``N_NULL`` entries are read.
+    sensor_mount_m : float
+        Nominal move of the accelerometer between the tests, m.
+    core : Core, optional
+        An axial core (H1's core family).
+    segments : tuple of Segment
+        Local changes besides the grip substance (H1's segment families).
+    """
+    handle = handle_segment(x)
+    segs = ((handle,) if handle is not None else ()) + tuple(segments)
+    return ChangeParams(1 + (x[0] + MOISTURE_COUPLING * x[1]) / 100, 1 + x[1] / 100,
+                        sensor_mount_m + x[2] * IN_TO_M, core,
+                        (float(x[3]), float(x[4])), float(x[5]) * 1e-3, segs)
 
 
 def plane_shift(diff: Differences, x: np.ndarray) -> np.ndarray:
@@ -473,15 +520,34 @@ def fit_bounded(fun: Callable, x0: np.ndarray, lower: np.ndarray, upper: np.ndar
 
 def fit_null(predict, diff: Differences, space: ParamSpace, sigma_rel: SigmaRel,
              x0: np.ndarray | None = None) -> ChangeFit:
-    """Fit H0.
+    """Fit H0: what every bat does between tests.
 
-    What every bat does between tests: moisture (uniform and end grain), temperature,
-    the re-mounted or replaced accelerometer.
+    Moisture (uniform and end grain), temperature, the re-mounted or replaced accelerometer,
+    a grip substance on the handle. Without ``x0`` the fit starts from the priors' centres
+    (the grip substance from 1 in to 10 in) and, when it finds a substance of
+    ``HANDLE_RESTART_G`` or more, again with its reach at each of
+    ``HANDLE_REACH_STARTS_IN``: the reach is not identified while the mass is near 0, so
+    one start can stop at the wrong one.
     """
     fun = residual_function(predict, diff, space, sigma_rel)
     b = space.bounds
-    x0 = np.clip(0.0, b.lower, b.upper) if x0 is None else x0
-    return fit_bounded(fun, x0, b.lower, b.upper, space, diff)
+    if x0 is not None:
+        return fit_bounded(fun, x0, b.lower, b.upper, space, diff)
+    start = np.clip(np.where(np.isfinite(b.prior_center), b.prior_center, 0.0), b.lower,
+                    b.upper)
+    best = fit_bounded(fun, start, b.lower, b.upper, space, diff)
+    if best.x[7] >= HANDLE_RESTART_G:
+        for reach in HANDLE_REACH_STARTS_IN:
+            x = best.x.copy()
+            x[8] = reach
+            fit = fit_bounded(fun, x, b.lower, b.upper, space, diff)
+            best = fit if fit.rss < best.rss else best
+    return best
+
+
+HANDLE_RESTART_G = 0.5
+HANDLE_REACH_STARTS_IN = (6.0, 12.0, 17.5)
+"""When and where ``fit_null`` restarts the grip substance's reach."""
 
 
 SCAN_PLUGS_IN = (0.1, 1.0, 3.0)

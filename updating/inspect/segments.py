@@ -1,24 +1,28 @@
 """A local change of the bat over one stretch of its length: the physics of every alteration.
 
-A segment [x0, x1] (m from the knob end) changes each element e it covers, in the covered
-share w_e of the element's length:
+A segment [x0, x1] (m from the knob end) changes the section properties along it, and the
+changes are integrated exactly over the covered part of each element, with the element's own
+shape functions (Gauss-Legendre on the sub-interval [max(x0, x_e), min(x1, x_e+1)]):
 
-- non-structural mass (nails, wax, pine tar, tape): a mass ``added_mass_kg`` spread uniformly
-  along the segment, mu = m / (x1 - x0) per metre, added to the element's translational mass
-  as the fraction f_e = w_e L_e mu / m_e of its own consistent mass matrix (m_e = rho A_e L_e,
-  the element's wood mass); it adds no stiffness;
+    dK_e = int (dEI kappa kappa^T + dkGA gamma gamma^T) dx
+    dM_e = int (drhoA N_w N_w^T + drhoI N_theta N_theta^T) dx
+
+- non-structural mass (nails, wax, pine tar, tape): ``added_mass_kg`` spread along the
+  segment, uniformly for an insert on the axis, or per metre in proportion to D for a layer
+  of even thickness on the surface, which also adds the rotary inertia of a thin ring,
+  mu D^2 / 8 per metre; no stiffness;
 - a loss of outer diameter ``diameter_loss_m`` = delta (shaved, flattened, grooved): with
-  s_e = 1 - delta / D_e, translational mass and shear stiffness go with the area,
-  s_e^2 - 1, bending stiffness and rotary inertia with the second moment, s_e^4 - 1 (a loss of
-  1 % of the diameter takes 2 % of the mass and 4 % of the bending stiffness);
+  s = 1 - delta / D, rhoA and kGA scale by s^2, EI and rhoI by s^4 (1 % of the diameter takes
+  2 % of the mass and 4 % of the bending stiffness);
 - relative changes of the wood's mass, bending and shear stiffness (``mass_rel``,
-  ``bend_rel``, ``shear_rel``): the generic local change, alpha and beta of the paper's MSSO
-  element factors (K = K_S + sum beta_i k_i, M = M_S + sum alpha_i m_i).
+  ``bend_rel``, ``shear_rel``): the generic local change; over whole elements, alpha and
+  beta of the paper's MSSO element factors (K = K_S + sum beta_i k_i, M = M_S + sum alpha_i
+  m_i).
 
-    dK = sum_e w_e (beta_b,e k_bend,e + beta_s,e k_shear,e)
-    dM = sum_e (w_e alpha_e + f_e) m_trans,e + w_e alpha_rot,e m_rot,e
-
-The covered share is continuous in x0 and x1, so a fit can move the segment smoothly.
+The integration follows the segment's ends smoothly, so a fit can move them. It is the
+fast, element-wise counterpart of ``updating.model.local_change`` (which rebuilds a model's
+sections for the virtual rig); both give the same matrices on a mesh with nodes at the
+segment's ends (tests/test_local_change.py).
 Reference: ../../docs/inspection.md ("H1: a local change, then its kind").
 """
 
@@ -29,9 +33,13 @@ from dataclasses import dataclass
 import numpy as np
 
 from updating.model.assembly import BatModel, place
+from updating.model.element import ElementParts, element_parts
+from updating.model.sections import section_props
 
 MIN_DIAMETER_SHARE = 0.2
 """A diameter loss never takes a section below this share of its diameter."""
+N_GAUSS = 4
+"""Gauss points per covered element: exact for the cubic shape functions' products."""
 
 
 @dataclass(frozen=True)
@@ -49,6 +57,10 @@ class Segment:
     mass_rel, bend_rel, shear_rel : float
         Relative changes of the wood's mass (translational and rotary), bending stiffness
         and shear stiffness over the segment.
+    mass_at_surface : bool
+        The added mass is a layer on the surface (pine tar, tape, wax): its mass per metre
+        goes with the diameter D and it adds the rotary inertia of a thin ring, mu D^2 / 8
+        per metre; else an insert on the axis, uniform, with no rotary inertia.
     """
 
     x0_m: float
@@ -58,6 +70,7 @@ class Segment:
     mass_rel: float = 0.0
     bend_rel: float = 0.0
     shear_rel: float = 0.0
+    mass_at_surface: bool = False
 
 
 def coverage(node_x_m: np.ndarray, x0_m: float, x1_m: float) -> np.ndarray:
@@ -81,45 +94,56 @@ def element_masses_kg(model: BatModel) -> np.ndarray:
     return np.einsum("i,eij,j->e", t, model.parts.m_trans, t)
 
 
-def element_diameters_m(model: BatModel) -> np.ndarray:
-    """Outer diameter at each element's middle, m, (e,) (the model's profile)."""
-    mid = 0.5 * (model.node_x_m[:-1] + model.node_x_m[1:])
-    return np.asarray(model.profile.diameter_at(mid), dtype=float)
-
-
-def segment_factors(model: BatModel, seg: Segment) -> dict[str, np.ndarray]:
-    """Per-element factors of a segment: ``bend``, ``shear``, ``trans``, ``rot``, each (e,).
+def segment_parts(model: BatModel, seg: Segment) -> tuple[ElementParts, float]:
+    """The element parts of a segment's change, and its change of mass, kg.
 
     Parameters
     ----------
     model : BatModel
-        The wood model the segment changes (its profile gives the diameters).
+        The wood model the segment changes (its profile and material give the sections).
     seg : Segment
         The change.
 
     Returns
     -------
-    dict
-        Factors f such that dK = place(k_bend, bend) + place(k_shear, shear) and
-        dM = place(m_trans, trans) + place(m_rot, rot).
+    parts : ElementParts
+        dK and dM of each element in parts (bending, shear, translation, rotation).
+    mass_kg : float
+        int drhoA dx: the change of the bat's mass on a scale.
     """
-    w = coverage(model.node_x_m, seg.x0_m, seg.x1_m)
-    bend = w * seg.bend_rel
-    shear = w * seg.shear_rel
-    trans = w * seg.mass_rel
-    rot = w * seg.mass_rel
+    nodes = model.node_x_m
+    lo, hi = nodes[:-1], nodes[1:]
+    a, b = np.maximum(lo, seg.x0_m), np.minimum(hi, seg.x1_m)
+    elem = np.flatnonzero(b > a)
+    g, gw = np.polynomial.legendre.leggauss(N_GAUSS)
+    half = 0.5 * (b[elem] - a[elem])
+    x = ((a[elem] + half)[:, None] + half[:, None] * g[None, :]).ravel()
+    w = (half[:, None] * gw[None, :]).ravel()
+    elem = np.repeat(elem, N_GAUSS)
+    L = np.diff(nodes)
+    D = np.asarray(model.profile.diameter_at(x), dtype=float)
+    wood = section_props(D, model.material)
+    d_ei = seg.bend_rel * wood.ei
+    d_kga = seg.shear_rel * wood.kga
+    d_rhoa = seg.mass_rel * wood.rhoa
+    d_rhoi = seg.mass_rel * wood.rhoi
     if seg.diameter_loss_m:
-        s = np.clip(1.0 - seg.diameter_loss_m / element_diameters_m(model), MIN_DIAMETER_SHARE,
-                    None)
-        bend = bend + w * (s**4 - 1.0)
-        shear = shear + w * (s**2 - 1.0)
-        trans = trans + w * (s**2 - 1.0)
-        rot = rot + w * (s**4 - 1.0)
-    if seg.added_mass_kg:
-        length = seg.x1_m - seg.x0_m
-        mu = seg.added_mass_kg / length if length > 0 else 0.0
-        trans = trans + w * model.element_length_m * mu / element_masses_kg(model)
-    return {"bend": bend, "shear": shear, "trans": trans, "rot": rot}
+        s = np.clip(1.0 - seg.diameter_loss_m / D, MIN_DIAMETER_SHARE, None)
+        d_ei = d_ei + wood.ei * (s**4 - 1.0)
+        d_kga = d_kga + wood.kga * (s**2 - 1.0)
+        d_rhoa = d_rhoa + wood.rhoa * (s**2 - 1.0)
+        d_rhoi = d_rhoi + wood.rhoi * (s**4 - 1.0)
+    if seg.added_mass_kg and x.size:
+        shape = D if seg.mass_at_surface else np.ones_like(D)
+        mu = seg.added_mass_kg * shape / float(np.sum(w * shape))
+        d_rhoa = d_rhoa + mu
+        if seg.mass_at_surface:
+            d_rhoi = d_rhoi + mu * D**2 / 8
+    if not model.rotary_inertia:
+        d_rhoi = np.zeros_like(d_rhoi)
+    parts = element_parts(elem, (x - nodes[elem]) / L[elem], w, d_ei, d_kga, d_rhoa, d_rhoi,
+                          L, model.phi)
+    return parts, float(np.sum(w * d_rhoa))
 
 
 def segment_matrices(model: BatModel, segments) -> tuple[np.ndarray, np.ndarray] | None:
@@ -135,17 +159,15 @@ def segment_matrices(model: BatModel, segments) -> tuple[np.ndarray, np.ndarray]
     segs = tuple(segments)
     if not segs:
         return None
-    total = {k: np.zeros(model.n_elements) for k in ("bend", "shear", "trans", "rot")}
+    dK = np.zeros((model.n_dof, model.n_dof))
+    dM = np.zeros_like(dK)
     for seg in segs:
-        for k, v in segment_factors(model, seg).items():
-            total[k] += v
-    p = model.parts
-    dK = place(model, p.k_bend, total["bend"]) + place(model, p.k_shear, total["shear"])
-    dM = place(model, p.m_trans, total["trans"]) + place(model, p.m_rot, total["rot"])
+        p, _ = segment_parts(model, seg)
+        dK += place(model, p.k_bend) + place(model, p.k_shear)
+        dM += place(model, p.m_trans) + place(model, p.m_rot)
     return dK, dM
 
 
 def segment_mass_kg(model: BatModel, segments) -> float:
     """Change of the bat's mass on a scale from the segments, kg (added and removed)."""
-    m_el = element_masses_kg(model)
-    return float(sum(np.sum(segment_factors(model, s)["trans"] * m_el) for s in segments))
+    return float(sum(segment_parts(model, s)[1] for s in segments))

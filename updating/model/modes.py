@@ -46,13 +46,21 @@ def rigid_body_shapes(node_x_m: np.ndarray, M: np.ndarray) -> np.ndarray:
     return np.linalg.solve(L, R.T).T
 
 
+DENSE_MAX_FLOPS = 4e6
+"""Size n^2 m up to which ``column_quadratic_forms`` multiplies densely (about 1 ms)."""
+
+
 def column_quadratic_forms(A: np.ndarray, V: np.ndarray) -> np.ndarray:
     """Compute diag(V^T A V), (m,), for a banded A (n, n) and V (n, m).
 
     A is read as a sparse matrix, so the cost is O(nnz(A) m + n^2) instead of the dense
     product's O(n^2 m) -- for all modes of a fine mesh (m = n) that is the difference between
-    a fraction of the eigen-solution's time and as much again.
+    a fraction of the eigen-solution's time and as much again. Small problems (n^2 m below
+    ``DENSE_MAX_FLOPS``) take the dense product: building the sparse matrix costs more there
+    than it saves.
     """
+    if A.shape[0] * V.shape[0] * V.shape[1] <= DENSE_MAX_FLOPS:
+        return np.einsum("ij,ij->j", V, A @ V)
     return np.einsum("ij,ij->j", V, scipy.sparse.csr_array(A) @ V)
 
 

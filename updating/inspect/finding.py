@@ -1,0 +1,130 @@
+"""What changed, in the rulebook's words: the kind of a local change and its reading.
+
+The families fitted beside the generic local change (``local_change``) say what the change
+is by its physics (../../docs/inspection.md, "The kinds and their signatures"):
+
+- a core (``hypotheses.fit_core``), from the barrel end: ``core``, "filled" ("hollowed" when
+  its fill is under ``HOLLOW_MAX_FILL`` of the wood's density);
+- added mass within 18 in of the knob: ``handle_substance``, "grip substance (3.02(c))",
+  legal;
+- added mass from within ``HANDLE_START_MAX_IN`` of the knob past 18 in:
+  ``handle_substance``, not legal as it is [1];
+- added mass elsewhere, up to ``INSERT_MAX_IN`` long: ``inserted_mass``, "nailed"; longer:
+  ``surface_coating``, "covered with a substance";
+- a diameter loss ``GROOVE_MAX_IN`` long or more: ``material_removed``, "flat-surfaced";
+  shorter: "grooved";
+- none of them as well as the generic change: ``local_change``, "altered or tampered with".
+
+[1] not an alteration: the bat must be cleaned before play, the verdict stays not altered.
+
+A family is chosen by Akaike's criterion on the weighted residual, RSS / s^2 + 2 k (k its
+parameters, s^2 the generic fit's residual variance per datum, at least 1); the generic
+change is named only when every kind is worse than it by more than ``KIND_MARGIN``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+RULE_MAX_HANDLE_IN = 18.0
+"""Rule 3.02(c): the handle, for not more than 18 in from its end, may be treated for grip."""
+HANDLE_SLACK_IN = 0.5
+"""A grip substance's fitted reach may pass 18 in by this much before it is said to."""
+HANDLE_START_MAX_IN = 8.0
+"""Added mass that starts this close to the knob and reaches past 18 in is a grip substance
+spread too far (clean the bat), not a coat of the barrel (which starts past the handle)."""
+INSERT_MAX_IN = 4.0
+"""Longest stretch of added mass read as an insert (nails 2-3.5 in) rather than a coat."""
+GROOVE_MAX_IN = 2.0
+"""Shortest stretch of lost diameter read as flat-surfaced rather than grooved."""
+HOLLOW_MAX_FILL = 0.1
+"""A core whose fill is lighter than this share of the wood is read as hollowed."""
+KIND_MARGIN = 10.0
+"""Akaike score by which every kind must trail the generic change for ``local_change``."""
+
+RULES = {
+    "filled": "filled",
+    "hollowed": "hollowed",
+    "nailed": "nailed",
+    "flat-surfaced": "flat-surfaced",
+    "grooved": "grooved",
+    "coated": "covered with a substance",
+    "grip": "grip substance (3.02(c))",
+    "grip_past": "grip substance past 18 in (3.02(c))",
+    "other": "altered or tampered with",
+}
+"""The rulebook's words for each finding (contract ``finding.rule``)."""
+
+
+@dataclass(frozen=True)
+class Finding:
+    """What changed between the tests, in the rulebook's words.
+
+    Parameters
+    ----------
+    kind : str
+        ``core``, ``inserted_mass``, ``material_removed``, ``surface_coating``,
+        ``handle_substance`` or ``local_change``.
+    legal : bool
+        True only for a grip substance within 18 in of the knob (Rule 3.02(c)).
+    region_m : tuple of float
+        Where, m from the knob end.
+    rule : str
+        The rule's word (``RULES``).
+    reading : dict
+        The kind's numbers, SI (``added_mass_kg``, ``diameter_lost_m``, ``removed_mass_kg``,
+        ``core_diameter_m``, ``fill_density_ratio``, ``mass_change_rel``,
+        ``stiffness_change_rel``).
+    uncertainty : dict
+        Their standard uncertainties (1 sigma), same keys and units, and the region's
+        (``region_start_m``).
+    family : str
+        The fitted family it was read from.
+    """
+
+    kind: str
+    legal: bool
+    region_m: tuple[float, float]
+    rule: str
+    reading: dict = field(default_factory=dict)
+    uncertainty: dict = field(default_factory=dict)
+    family: str = ""
+
+    @property
+    def past_handle(self) -> bool:
+        """A grip substance that reaches past 18 in (clean the bat; not an alteration)."""
+        return self.kind == "handle_substance" and not self.legal
+
+
+def added_mass_kind(region_in: tuple[float, float]) -> tuple[str, str, bool]:
+    """(kind, rule key, legal) of an added mass over ``region_in`` (in from the knob end)."""
+    start_in, end_in = region_in
+    if end_in <= RULE_MAX_HANDLE_IN + HANDLE_SLACK_IN:
+        return "handle_substance", "grip", True
+    if start_in <= HANDLE_START_MAX_IN:
+        return "handle_substance", "grip_past", False
+    if end_in - start_in <= INSERT_MAX_IN:
+        return "inserted_mass", "nailed", False
+    return "surface_coating", "coated", False
+
+
+def diameter_loss_rule(region_in: tuple[float, float]) -> str:
+    """Rule key of a diameter loss over ``region_in``: flat-surfaced, or grooved when short."""
+    return "flat-surfaced" if region_in[1] - region_in[0] >= GROOVE_MAX_IN else "grooved"
+
+
+def core_rule(fill_density_ratio: float) -> str:
+    """Rule key of a core: hollowed when (nearly) empty, else filled."""
+    return "hollowed" if fill_density_ratio < HOLLOW_MAX_FILL else "filled"
+
+
+def akaike(rss: float, n_params: int, s2: float) -> float:
+    """Akaike's score of a fit: RSS / s^2 + 2 k."""
+    return rss / s2 + 2.0 * n_params
+
+
+def choose_family(scores: dict[str, float], generic_score: float) -> str:
+    """The family with the lowest score, or ``local_change`` when every one trails the
+    generic change by more than ``KIND_MARGIN``."""
+    best = min(scores, key=scores.get)
+    return "local_change" if scores[best] - generic_score > KIND_MARGIN else best

@@ -1,0 +1,187 @@
+"""The kind of a significant local change: every family fitted, the best one read.
+
+Once the generic local change (``local_change.fit_segment``, family ``local_change``) is
+significant, the families that are alterations or legal changes are fitted on the same data
+and the same null: a core bored from the barrel end (``hypotheses.fit_core``), an added mass
+and a loss of diameter (``local_change``), each started from its own scan and from the
+generic change's stretch. The family with the best Akaike score gives the finding
+(``finding``), read with standard uncertainties from its Jacobian.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from updating.inspect.finding import (
+    RULES,
+    Finding,
+    added_mass_kind,
+    akaike,
+    choose_family,
+    core_rule,
+    diameter_loss_rule,
+)
+from updating.inspect.hypotheses import (
+    N_CORE,
+    N_NULL,
+    ChangeFit,
+    Differences,
+    ParamSpace,
+    SigmaRel,
+    covariance,
+    fit_core,
+)
+from updating.inspect.local_change import (
+    N_SEGMENT,
+    SegmentSpace,
+    distinct_best,
+    fit_segment,
+    segment_scan,
+    start_from,
+)
+from updating.inspect.segments import segment_mass_kg
+from updating.model.units import IN_TO_M
+
+KIND_FAMILIES = ("core", "added_mass", "diameter_loss")
+N_PARAMS = {"core": N_CORE, "added_mass": 3, "diameter_loss": 3, "local_change": N_SEGMENT}
+
+
+@dataclass(frozen=True)
+class KindFits:
+    """The families fitted to a significant change and the one chosen.
+
+    Parameters
+    ----------
+    fits : dict
+        Family name -> its ``ChangeFit`` (``core``, ``added_mass``, ``diameter_loss``,
+        ``local_change``).
+    scores : dict
+        Family name -> Akaike score (``finding.akaike``).
+    family : str
+        The family chosen.
+    finding : Finding
+        What it reads.
+    fit : ChangeFit
+        The chosen family's fit.
+    cov : ndarray
+        Its parameters' covariance.
+    """
+
+    fits: dict
+    scores: dict
+    family: str
+    finding: Finding
+    fit: ChangeFit
+    cov: np.ndarray
+
+
+def segment_space(space: ParamSpace, family: str) -> SegmentSpace:
+    """The segment family ``family`` on the null of a core's parameter space."""
+    return SegmentSpace(space.profile, space.bounds, family, space.sensor_mount_m)
+
+
+def fit_families(predict, diff: Differences, space: ParamSpace, sigma_rel: SigmaRel,
+                 null: ChangeFit, generic: ChangeFit) -> dict[str, ChangeFit]:
+    """Fit the core, added-mass and diameter-loss families (module docstring).
+
+    Parameters
+    ----------
+    predict : ChangePredictor
+        The bat's change predictor.
+    diff : Differences
+        The measured changes.
+    space : ParamSpace
+        The core family's space (its null bounds serve every family).
+    sigma_rel : float or ndarray
+        Relative shape noise per mode.
+    null, generic : ChangeFit
+        The null fit and the generic local change's fit.
+
+    Returns
+    -------
+    dict
+        Family name -> fit, with the generic change under ``local_change``.
+    """
+    fits = {"local_change": generic}
+    fits["core"], _ = fit_core(predict, diff, space, sigma_rel, null)
+    gspace = segment_space(space, "local_change")
+    for family in ("added_mass", "diameter_loss"):
+        fspace = segment_space(space, family)
+        starts = [start_from(generic, gspace, fspace, predict)]
+        starts += distinct_best(segment_scan(predict, diff, fspace, sigma_rel, null), 1)
+        fits[family] = fit_segment(predict, diff, fspace, sigma_rel, null, starts=starts)
+    return fits
+
+
+def segment_reading(fit: ChangeFit, fspace: SegmentSpace, cov: np.ndarray,
+                    predict) -> tuple[dict, dict]:
+    """(reading, uncertainty) of a segment family's fit, SI (``finding.Finding``)."""
+    x = fit.x
+    sd = np.sqrt(np.clip(np.diag(cov), 0.0, None))
+    unc = {"region_start_m": float(sd[N_NULL]) * IN_TO_M}
+    if fspace.family == "added_mass":
+        return ({"added_mass_kg": float(x[N_NULL + 2]) * 1e-3},
+                dict(unc, added_mass_kg=float(sd[N_NULL + 2]) * 1e-3))
+    if fspace.family == "diameter_loss":
+        loss_in = float(x[N_NULL + 2])
+        removed = -segment_mass_kg(predict.system().model, (fspace.segment(x),))
+        rel = float(sd[N_NULL + 2]) / loss_in if loss_in > 0 else 0.0
+        return ({"diameter_lost_m": loss_in * IN_TO_M, "removed_mass_kg": removed},
+                dict(unc, diameter_lost_m=float(sd[N_NULL + 2]) * IN_TO_M,
+                     removed_mass_kg=abs(removed) * rel))
+    return ({"mass_change_rel": float(x[N_NULL + 2]), "stiffness_change_rel": float(x[N_NULL + 3])},
+            dict(unc, mass_change_rel=float(sd[N_NULL + 2]),
+                 stiffness_change_rel=float(sd[N_NULL + 3])))
+
+
+def read_finding(family: str, fit: ChangeFit, space: ParamSpace, cov: np.ndarray,
+                 predict) -> Finding:
+    """The finding of one family's fit: kind, rule, region, reading and uncertainty."""
+    length_m = space.profile.length_m
+    if family == "core":
+        r = space.reading(fit.x, cov)
+        core = r["core"]
+        region = core.interval_m(length_m)
+        reading = {"core_diameter_m": core.diameter_m,
+                   "fill_density_ratio": core.mean_fill_density_ratio}
+        unc = {k: r["sd"][k] for k in ("region_start_m", "core_diameter_m",
+                                        "fill_density_ratio")}
+        rule = core_rule(core.mean_fill_density_ratio)
+        return Finding("core", False, region, RULES[rule], reading, unc, family)
+    fspace = segment_space(space, family)
+    region = fspace.interval_m(fit.x)
+    reading, unc = segment_reading(fit, fspace, cov, predict)
+    region_in = (region[0] / IN_TO_M, region[1] / IN_TO_M)
+    if family == "added_mass":
+        kind, rule, legal = added_mass_kind(region_in)
+        return Finding(kind, legal, region, RULES[rule], reading, unc, family)
+    if family == "diameter_loss":
+        return Finding("material_removed", False, region, RULES[diameter_loss_rule(region_in)],
+                       reading, unc, family)
+    return Finding("local_change", False, region, RULES["other"], reading, unc, family)
+
+
+def classify(predict, diff: Differences, space: ParamSpace, sigma_rel: SigmaRel,
+             null: ChangeFit, generic: ChangeFit) -> KindFits:
+    """Fit every family and read the best one's finding (module docstring).
+
+    The residual variance per datum of the generic fit (at least 1) scales every family's
+    Akaike score, so that the comparison does not depend on how well the weights were
+    guessed.
+    """
+    fits = fit_families(predict, diff, space, sigma_rel, null, generic)
+    n = diff.n_data
+    s2 = max(generic.rss / max(n - N_NULL - N_SEGMENT, 1), 1.0)
+    scores = {f: akaike(fits[f].rss, N_NULL + N_PARAMS[f], s2) for f in fits}
+    family = choose_family({f: scores[f] for f in KIND_FAMILIES}, scores["local_change"])
+    fit = fits[family]
+    cov = covariance(fit, max(n - N_NULL - N_PARAMS[family], 1))
+    finding = read_finding(family, fit, space, cov, predict)
+    return KindFits(fits, scores, family, finding, fit, cov)
+
+
+def with_region(finding: Finding, region_m: tuple[float, float]) -> Finding:
+    """The same finding over another region (a reading refined elsewhere)."""
+    return replace(finding, region_m=region_m)
