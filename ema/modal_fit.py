@@ -47,6 +47,7 @@ import numpy as np
 from ema.io.frf_data import FrfTest
 from ema.mode_checks import CLOSE_PAIR, ClosePair, close_pairs, mode_warnings
 from ema.poles.autopoles import auto_poles
+from ema.poles.local_support import MAX_SHIFT, MIN_MPC, line_weight, local_support
 from ema.poles.lscf import PoleSweep
 from ema.poles.mif import PeakPick, pick_peaks, receptance_power, sum_mif
 from ema.poles.refine import refine_poles
@@ -64,6 +65,7 @@ from ema.shapes.scaling import fix_sign, mass_normalised_shapes, unscaled_shapes
 
 METHODS = ("lscf", "peak")
 MIN_SNR = 10.0
+MIN_GLOBAL_SNR = 1.0  # below: the band fit does not see the mode; no second look at its peak
 
 
 @dataclass(frozen=True)
@@ -106,6 +108,7 @@ class ModalFit:
         warnings: per mode, what its numbers cannot be trusted for (``ema.mode_checks``).
         close_pairs: neighbouring modes closer than 6.5 % (``ema.mode_checks``).
         notes: fit-level notes (band clipped, no driving point, why nothing was found).
+        decisions: per mode, why it was kept (its support, ``_support_decisions``).
     """
 
     freq_hz: np.ndarray
@@ -144,6 +147,7 @@ class ModalFit:
     warnings: tuple[tuple[str, ...], ...] = ()
     close_pairs: tuple[ClosePair, ...] = ()
     notes: tuple[str, ...] = ()
+    decisions: tuple[str, ...] = ()
 
 
 @dataclass(frozen=True)
@@ -171,6 +175,7 @@ class _Poles:
     sweep: PoleSweep | None
     stability: Stability | None
     rejected: list[Rejection]
+    why: tuple[str, ...] = ()
 
     @property
     def pole(self) -> np.ndarray:
@@ -344,48 +349,106 @@ def support_threshold(damping_ratio: np.ndarray, min_snr: float = MIN_SNR) -> np
     return min_snr / np.sqrt(np.maximum(1.0, np.asarray(damping_ratio, float) / 0.01))
 
 
+def _with_extra(
+    freq: np.ndarray, h_flat: np.ndarray, sel: np.ndarray, p: _Poles, quantity: str,
+    band: tuple[float, float], lower: bool,
+) -> tuple[LsfdResult, np.ndarray]:
+    """Step 2: LSFD residues, with the computational poles when they lower a real misfit by 5 %.
+
+    Returns the fit and the computational poles used (empty when they did not help).
+    """
+    fit = lsfd(freq, h_flat, p.pole, quantity, band, lower=lower)
+    extra = p.extra
+    if extra.size:  # computational poles only when they explain the band edges better
+        with_extra = lsfd(freq, h_flat, np.r_[p.pole, extra], quantity, band, lower=lower)
+        base = _misfit(fit, h_flat[sel])
+        better = _misfit(with_extra, h_flat[sel]) < 0.95 * base
+        if better and base > 1e-4 * np.linalg.norm(h_flat[sel]):
+            return with_extra, extra
+    return fit, extra[:0]
+
+
+def _support_decisions(
+    test: FrfTest, fit: LsfdResult, sel: np.ndarray, p: _Poles, min_snr: float
+) -> tuple[np.ndarray, list[str], list[Rejection]]:
+    """Step 3: which modes the data support, and why each was kept or dropped.
+
+    A mode is kept when its contribution at resonance stands ``support_threshold`` above the
+    misfit of the band's synthesis around it; failing that, when it at least stands above that
+    misfit (``MIN_GLOBAL_SNR``: the band fit sees it, but the misfit may not be its own) and,
+    fitted on its own peak (``ema.poles.local_support``: coherence-weighted, pole refined),
+    its evidence over its half-power band stands that far above the local misfit, its residues are collinear in phase (MPC >= ``MIN_MPC``) and the
+    refined frequency stays within a half-power half-width.
+
+    Returns
+    -------
+    keep : ndarray
+        (m,) bool, the modes kept.
+    why : list of str
+        For each kept mode, the reason.
+    rejected : list of Rejection
+        The dropped ones (reason ``support``).
+    """
+    h_flat = test.frf.reshape(test.freq_hz.size, -1)
+    signal, noise = _support(fit, h_flat[sel], p.pole, test.quantity)
+    need = support_threshold(p.damping_ratio, min_snr)
+    keep = signal > need * noise
+    weight = line_weight(test.coherence)
+    why, rejected = [], []
+    for r in range(p.freq_hz.size):
+        ratio = signal[r] / max(noise[r], 1e-300)
+        glob = f"contribution at resonance {ratio:.3g} x the band fit's misfit (needs {need[r]:.3g})"
+        if keep[r] or ratio < MIN_GLOBAL_SNR:
+            if keep[r]:
+                why.append(glob)
+            else:
+                rejected.append(Rejection(float(p.freq_hz[r]), float(p.damping_ratio[r]),
+                                          "support", glob))
+            continue
+        loc = local_support(test.freq_hz, h_flat, test.quantity, float(p.freq_hz[r]),
+                            float(p.damping_ratio[r]), p.pole[keep], weight)
+        need_loc = float(support_threshold(loc.damping_ratio, min_snr))
+        own = (f"on its own peak {loc.snr:.3g} x the local misfit, {loc.evidence:.3g} over its "
+               f"half-power band (needs {need_loc:.3g}), MPC {loc.mpc:.2f}, refined "
+               f"{loc.freq_hz:.5g} Hz")
+        kept_hz = p.freq_hz[keep]
+        half = max(float(p.damping_ratio[r]), 0.5 * (test.freq_hz[1] - test.freq_hz[0])
+                   / loc.freq_hz) * loc.freq_hz
+        distinct = not np.any(np.abs(kept_hz - loc.freq_hz) <= half)
+        own += "" if distinct else ", the peak of a kept mode"
+        if loc.evidence > need_loc and loc.mpc >= MIN_MPC and loc.shift <= MAX_SHIFT and distinct:
+            keep[r] = True
+            why.append(f"{glob}; kept {own}")
+        else:
+            rejected.append(Rejection(float(p.freq_hz[r]), float(p.damping_ratio[r]),
+                                      "support", f"{glob}; {own}"))
+    return keep, why, rejected
+
+
 def _residues(
     test: FrfTest, band: tuple[float, float], sel: np.ndarray, p: _Poles, lower: bool,
     min_snr: float, refine: bool,
 ) -> tuple[_Poles, LsfdResult]:
-    """Steps 2-3 (and the optional refinement): LSFD residues with the computational poles
-    when they lower a real misfit by 5 %, then modes without support dropped (reported)."""
+    """Run steps 2-3 and the optional refinement.
+
+    LSFD residues (``_with_extra``), then the modes without support dropped (reported as
+    rejections) and the residues re-estimated without them.
+    """
     freq = test.freq_hz
     h_flat = test.frf.reshape(freq.size, -1)
-    fit = lsfd(freq, h_flat, p.pole, test.quantity, band, lower=lower)
-    extra = p.extra
-    if extra.size:  # computational poles only when they explain the band edges better
-        with_extra = lsfd(freq, h_flat, np.r_[p.pole, extra], test.quantity, band, lower=lower)
-        base = _misfit(fit, h_flat[sel])
-        better = _misfit(with_extra, h_flat[sel]) < 0.95 * base
-        if better and base > 1e-4 * np.linalg.norm(h_flat[sel]):
-            fit = with_extra
-        else:
-            extra = extra[:0]
-    signal, noise = _support(fit, h_flat[sel], p.pole, test.quantity)
-    need = support_threshold(p.damping_ratio, min_snr)
-    keep = signal > need * noise
-    rejected = list(p.rejected)
-    if not keep.all():
-        rejected += [
-            Rejection(float(p.freq_hz[r]), float(p.damping_ratio[r]), "support",
-                      f"contribution at resonance {signal[r] / max(noise[r], 1e-300):.3g} x the "
-                      f"local misfit (needs {need[r]:.3g})")
-            for r in np.flatnonzero(~keep)
-        ]
-        p = _Poles(p.freq_hz[keep], p.damping_ratio[keep], p.freq_std_hz[keep],
-                   p.damping_std[keep], p.count[keep], extra, p.sweep, p.stability,
-                   rejected)
+    fit, extra = _with_extra(freq, h_flat, sel, p, test.quantity, band, lower)
+    keep, why, dropped = _support_decisions(test, fit, sel, p, min_snr)
+    p = _Poles(p.freq_hz[keep], p.damping_ratio[keep], p.freq_std_hz[keep],
+               p.damping_std[keep], p.count[keep], extra, p.sweep, p.stability,
+               list(p.rejected) + dropped, tuple(why))
+    if dropped:
         fit = lsfd(freq, h_flat, np.concatenate([p.pole, extra]), test.quantity, band,
                    lower=lower)
-    else:
-        p = _Poles(p.freq_hz, p.damping_ratio, p.freq_std_hz, p.damping_std, p.count, extra,
-                   p.sweep, p.stability, rejected)
     if refine and p.freq_hz.size:
         ref = refine_poles(freq, h_flat, p.freq_hz, p.damping_ratio, test.quantity, band,
                            lower=lower, extra_poles=extra)
         p = _Poles(ref.freq_hz, ref.damping_ratio, ref.freq_std_hz, ref.damping_std, p.count,
-                   ref.extra_pole, p.sweep, p.stability, p.rejected)
+                   ref.extra_pole, p.sweep, p.stability, p.rejected, p.why)
         fit = lsfd(freq, h_flat, np.r_[p.pole, p.extra], test.quantity, band, lower=lower)
     return p, fit
 
@@ -559,4 +622,5 @@ def fit_test(
         warnings=tuple(tuple(w) for w, e in zip(warn, el, strict=True) if e),
         close_pairs=tuple(close_pairs(p.freq_hz[el], zr[el], real[:, el])),
         notes=tuple(notes),
+        decisions=tuple(w for w, e in zip(p.why, el, strict=True) if e),
     )

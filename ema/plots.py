@@ -43,14 +43,21 @@ def plot_stabilisation(fit: ModalFit, path: str | os.PathLike) -> Path:
         ax.plot(sw.freq_hz[all_], sw.order[all_], "o", color="tab:green", ms=3,
                 label="stable in f, zeta, shape")
         ax.set_ylabel("model order")
-    for f in fit.freq_hz:
-        ax.axvline(f, color="tab:red", lw=0.8, alpha=0.6)
+    for f, why in zip(fit.freq_hz, fit.decisions or [""] * fit.freq_hz.size, strict=True):
+        ax.axvline(f, color="tab:red", lw=0.8, alpha=0.6, ls="--" if "own peak" in why else "-")
+    lo, hi = fit.band_hz
+    for r in fit.rejected:  # why each candidate was dropped, written along its line
+        if lo <= r.freq_hz <= hi:
+            ax.axvline(r.freq_hz, color="0.5", lw=0.6, ls=":")
+            ax.text(r.freq_hz, 0.98, r.reason, transform=ax.get_xaxis_transform(), rotation=90,
+                    va="top", ha="right", fontsize=6, color="0.35")
     ax.set_xlabel("frequency, Hz")
-    ax.set_xlim(*fit.band_hz)
+    ax.set_xlim(lo, hi)
     ax2 = ax.twinx()
     ax2.semilogy(fit.band_freq_hz, fit.mif, color="k", lw=0.8, label="sum MIF")
     ax2.set_ylabel("sum MIF, sum |H|^2")
-    ax.set_title(f"Stabilisation diagram ({fit.method}); selected modes in red")
+    ax.set_title(f"Stabilisation diagram ({fit.method}); modes in red (dashed: kept on their own "
+                 "peak), rejected candidates dotted with the reason")
     ax.legend(loc="upper left", fontsize=8)
     return _save(fig, Path(path))
 

@@ -70,6 +70,7 @@ def lsfd(
     band_hz: tuple[float, float],
     lower: bool = True,
     upper: bool = True,
+    weight: np.ndarray | None = None,
 ) -> LsfdResult:
     """Residues of the poles in every FRF column of frf (F, n_frf) by linear least squares.
 
@@ -94,6 +95,9 @@ def lsfd(
     basis = np.concatenate([modes.reshape(f.size, 2 * m), res], axis=1)  # (F, 2m + 4)
     a = np.concatenate([basis.real, basis.imag], axis=0)
     y = np.concatenate([h.real, h.imag], axis=0)
+    if weight is not None:  # weighted least squares: rows scaled by sqrt(weight) per line
+        root = np.sqrt(np.tile(np.asarray(weight, dtype=float)[sel], 2))[:, None]
+        a, y = a * root, y * root
     scale = np.linalg.norm(a, axis=0)
     scale = np.where(scale > 0, scale, 1.0)
     used = np.linalg.norm(a, axis=0) > 0
