@@ -1,5 +1,8 @@
-"""Plots of a modal fit (matplotlib, Agg): stabilisation diagram over the MIF, measured vs
-synthesised FRFs, AutoMAC. Each function writes one PNG atomically and returns its path."""
+"""Plots of a modal fit (matplotlib, Agg).
+
+Stabilisation diagram over the MIF, measured vs synthesised FRFs, AutoMAC. Each function writes
+one PNG atomically and returns its path.
+"""
 
 from __future__ import annotations
 

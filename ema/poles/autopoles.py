@@ -44,9 +44,12 @@ class AutoPoles:
 def sub_bands(
     band_hz: tuple[float, float], overlap: float = 0.25, shift: float = 1.0
 ) -> list[tuple[tuple[float, float], tuple[float, float]]]:
-    """[(core, fitted band), ...] covering band_hz (see module docstring); ``shift`` multiplies
+    """Cut band_hz into [(core, fitted band), ...] (see module docstring).
+
+    ``shift`` multiplies
     the inner core edges (the second partition uses sqrt 2: its core centres sit on the first
-    partition's core edges)."""
+    partition's core edges).
+    """
     lo, hi = band_hz
     edges = [lo, max(2 * lo, lo + 80.0) * shift]
     while edges[-1] < hi:
@@ -62,6 +65,7 @@ def sub_bands(
 
 
 def take(sel: SelectedPoles, keep: np.ndarray) -> SelectedPoles:
+    """Return the selected poles where ``keep`` (a mask or indices) holds."""
     return SelectedPoles(
         freq_hz=sel.freq_hz[keep],
         damping_ratio=sel.damping_ratio[keep],
@@ -92,8 +96,10 @@ def _concat(parts: list[SelectedPoles], n_out: int) -> SelectedPoles:
 
 
 def _distinct(poles: np.ndarray, taken: np.ndarray, tol: float = 0.005) -> np.ndarray:
-    """Poles not within tol (relative |d lambda| / |lambda|) of ``taken`` or of each other:
-    near-copies would make collinear LSFD columns."""
+    """Return the poles not within tol (relative |d lambda| / |lambda|) of ``taken``.
+
+    Nor within tol of each other: near-copies would make collinear LSFD columns.
+    """
     out: list[complex] = []
     for lam in poles[np.argsort(np.abs(poles))]:
         ref = np.r_[taken, out]

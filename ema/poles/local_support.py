@@ -36,6 +36,7 @@ from ema.shapes.lsfd import QUANTITY_POWER, lsfd
 WINDOW = 8.0  # half-power half-widths on each side of the pole
 MIN_HALF_WIDTH = 0.005  # of the frequency: the window is at least +-4 % wide
 MIN_MPC = 0.9  # a kept mode's residues must be this collinear in phase
+MIN_LINES = 3  # a kept peak spans at least this many lines of its half-power band
 MAX_SHIFT = 1.0  # the refined frequency within this many half-power half-widths
 _OUTSIDE = 1e300  # cost outside those bounds (finite: the simplex compares costs)
 
@@ -52,6 +53,9 @@ class LocalSupport:
         The same summed in quadrature over the lines of its half-power band (a matched
         filter: a peak resolved over k lines stands out sqrt(k) times more clearly than one
         line of it; one line at least).
+    lines : int
+        Lines in the refined pole's half-power band (a peak over fewer than ``MIN_LINES``
+        cannot be told from a noise spike by its shape).
     freq_hz : float
         Refined natural frequency, Hz.
     damping_ratio : float
@@ -65,6 +69,7 @@ class LocalSupport:
 
     snr: float
     evidence: float
+    lines: int
     freq_hz: float
     damping_ratio: float
     mpc: float
@@ -156,6 +161,7 @@ def local_support(
     in_hp = np.abs(freq_hz[sel] - best[0]) <= best[1] * best[0]
     evidence = np.sqrt(power[in_hp].sum()) if in_hp.any() else np.sqrt(power.max())
     return LocalSupport(snr=float(np.sqrt(power.max())), evidence=float(evidence),
+                        lines=int(in_hp.sum()),
                         freq_hz=float(best[0]),
                         damping_ratio=float(best[1]), mpc=float(mpc(a[:, None])[0]),
                         shift=float(abs(best[0] - mode_hz) / max(zeta * mode_hz, z_min * mode_hz)))

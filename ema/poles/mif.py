@@ -37,8 +37,10 @@ def sum_mif(frf: np.ndarray) -> np.ndarray:
 
 
 def receptance_power(freq_hz: np.ndarray, power: np.ndarray, quantity: str) -> np.ndarray:
-    """A power MIF of accelerance/mobility divided by w^4 / w^2: the receptance power sum,
-    whose inverse is the parabola about each resonance that ``pick_peaks`` fits."""
+    """Divide a power MIF of accelerance/mobility by w^4 / w^2: the receptance power sum.
+
+    Its inverse is the parabola about each resonance that ``pick_peaks`` fits.
+    """
     q = {"receptance": 0, "mobility": 1, "accelerance": 2}[quantity]
     w = 2 * np.pi * np.asarray(freq_hz, dtype=float)
     with np.errstate(divide="ignore"):

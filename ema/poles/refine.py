@@ -37,7 +37,7 @@ class RefinedPoles:
 
 
 def _poles(theta: np.ndarray) -> np.ndarray:
-    """theta = (ln f_r, logit zeta_r): any real theta is a stable underdamped pole."""
+    """Theta = (ln f_r, logit zeta_r): any real theta is a stable underdamped pole."""
     m = theta.size // 2
     wn = 2 * np.pi * np.exp(theta[:m])
     z = _zeta(theta[m:])

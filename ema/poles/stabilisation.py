@@ -43,6 +43,7 @@ class Stability:
 
     @property
     def all(self) -> np.ndarray:
+        """Return the poles stable in frequency, damping and shape."""
         return self.freq & self.damping & self.shape
 
 
@@ -50,12 +51,18 @@ class Stability:
 class SelectedPoles:
     """Automatically selected physical poles, ascending in frequency.
 
-    Attributes:
-        freq_hz, damping_ratio: (m,) median over the cluster.
-        freq_std_hz, damping_std: (m,) standard deviation over the cluster.
-        pole: (m,) lambda = -zeta w_n + i w_n sqrt(1 - zeta^2), rad/s.
-        count: (m,) number of model orders at which the mode is stable.
-        shape: (m, l) shape estimate of the cluster member nearest the median.
+    Attributes
+    ----------
+    freq_hz, damping_ratio
+        (m,) median over the cluster.
+    freq_std_hz, damping_std
+        (m,) standard deviation over the cluster.
+    pole
+        (m,) lambda = -zeta w_n + i w_n sqrt(1 - zeta^2), rad/s.
+    count
+        (m,) number of model orders at which the mode is stable.
+    shape
+        (m, l) shape estimate of the cluster member nearest the median.
     """
 
     freq_hz: np.ndarray

@@ -32,12 +32,18 @@ QUANTITY_POWER = {"receptance": 0, "mobility": 1, "accelerance": 2}
 class LsfdResult:
     """Residues and residual terms of every FRF column, and the synthesised FRFs.
 
-    Attributes:
-        residue: (n_frf, m) complex A_r (receptance pole-residue form).
-        lower: (n_frf, 2) real (L0, L1): mass line 1/kg and its 1/w^4 correction.
-        upper: (n_frf, 2) real (U0, U1): residual flexibility m/N and its w^2 term.
-        freq_hz: (F_band,) the lines fitted.
-        synth: (F_band, n_frf) synthesised FRFs on those lines.
+    Attributes
+    ----------
+    residue
+        (n_frf, m) complex A_r (receptance pole-residue form).
+    lower
+        (n_frf, 2) real (L0, L1): mass line 1/kg and its 1/w^4 correction.
+    upper
+        (n_frf, 2) real (U0, U1): residual flexibility m/N and its w^2 term.
+    freq_hz
+        (F_band,) the lines fitted.
+    synth
+        (F_band, n_frf) synthesised FRFs on those lines.
     """
 
     residue: np.ndarray
@@ -74,13 +80,28 @@ def lsfd(
 ) -> LsfdResult:
     """Residues of the poles in every FRF column of frf (F, n_frf) by linear least squares.
 
-    Args:
-        freq_hz: (F,) lines, Hz (lines at 0 Hz are never used).
-        frf: (F, n_frf) complex FRFs of ``quantity``.
-        poles: (m,) continuous poles in the upper half-plane, rad/s.
-        quantity: "receptance", "mobility" or "accelerance".
-        band_hz: (lo, hi) lines used.
-        lower, upper: include the lower (L0, L1) and upper (U0, U1) residual terms.
+    Parameters
+    ----------
+    freq_hz
+        (F,) lines, Hz (lines at 0 Hz are never used).
+    frf
+        (F, n_frf) complex FRFs of ``quantity``.
+    poles
+        (m,) continuous poles in the upper half-plane, rad/s.
+    quantity
+        "receptance", "mobility" or "accelerance".
+    band_hz
+        (lo, hi) lines used.
+    lower, upper
+        include the lower (L0, L1) and upper (U0, U1) residual terms.
+    weight
+        (F,) optional weight of each line (weighted least squares, e.g. the inverse variance
+        of an H1 estimate, ``ema.poles.local_support.line_weight``); None: all alike.
+
+    Returns
+    -------
+    LsfdResult
+        Residues, residual terms and the synthesis on the band's lines.
     """
     if quantity not in QUANTITY_POWER:
         raise ValueError(f"unknown FRF quantity {quantity!r}")

@@ -1,6 +1,6 @@
 """Modal assurance criterion (Allemang and Brown, 1982).
 
-    MAC(a_r, b_s) = |a_r^H b_s|^2 / ((a_r^H a_r) (b_s^H b_s))
+MAC(a_r, b_s) = |a_r^H b_s|^2 / ((a_r^H a_r) (b_s^H b_s))
 """
 
 from __future__ import annotations

@@ -65,7 +65,7 @@ def rigid_body_from_modes(shapes: np.ndarray, x_m: np.ndarray) -> RigidBody:
 def rigid_body_from_mass_line(
     mass_line: np.ndarray, x_m: np.ndarray, x_drive_m: float, known_mass_kg: float | None = None
 ) -> RigidBody:
-    """What one driving-point row of the mass line (1/kg at x_m) says about the rigid body."""
+    """Return what one driving-point row of the mass line (1/kg at x_m) says of the rigid body."""
     a = np.asarray(mass_line, dtype=float)
     x = np.asarray(x_m, dtype=float)
     if np.unique(x).size < 2:  # one node (a single FRF): a(x_d) only, no slope
@@ -99,12 +99,15 @@ def low_band_mass_line(
     freq_hz: np.ndarray, frf: np.ndarray, poles: np.ndarray, quantity: str, lo_hz: float,
     driving_column: int,
 ) -> MassLineEstimate | None:
-    """Mass line of every FRF column of ``frf`` (F, n_frf) below the second bending mode
-    (module docstring); None when the test has fewer than two elastic modes or too few lines.
+    """Estimate the mass line of every FRF column of ``frf`` (F, n_frf).
+
+    From the band below the second bending mode (module docstring); None when the test has fewer
+    than two elastic modes or too few lines.
 
     ``poles``: the elastic modes' continuous poles (rad/s), ``lo_hz`` the fitted band's
     start (above the suspension modes), ``driving_column`` the driving-point FRF's column
-    (its L1 / L0 gives the suspension frequency)."""
+    (its L1 / L0 gives the suspension frequency).
+    """
     poles = np.asarray(poles, dtype=complex)
     f_r = np.abs(poles) / (2 * np.pi)
     order = np.sort(f_r)
