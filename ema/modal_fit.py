@@ -71,6 +71,7 @@ from ema.shapes.scaling import fix_sign, mass_normalised_shapes, unscaled_shapes
 
 METHODS = ("lscf", "peak")
 MIN_SNR = 10.0
+MIN_POINTS = 3  # FRFs a second look needs: with fewer, a shape's phase spread says nothing
 PEAK_SHARE = 0.75  # of the support threshold that a rescued mode's highest line needs
 MIN_GLOBAL_SNR = 1.0  # below: the band fit does not see the mode; no second look at its peak
 
@@ -225,7 +226,20 @@ class _Poles:
 
 
 def default_band(freq_hz: np.ndarray, low_hz: float = 20.0) -> tuple[float, float]:
-    """(max(low_hz, first nonzero line), last line)."""
+    """Return the default band: from max(low_hz, first nonzero line) to the last line.
+
+    Parameters
+    ----------
+    freq_hz : ndarray
+        (F,) the test's lines, Hz.
+    low_hz : float
+        Lowest start, Hz (above the suspension modes).
+
+    Returns
+    -------
+    tuple of float
+        (lo, hi), Hz.
+    """
     f = np.asarray(freq_hz, dtype=float)
     return float(max(low_hz, f[f > 0][0])), float(f[-1])
 
@@ -408,12 +422,24 @@ def _support(
 
 
 def support_threshold(damping_ratio: np.ndarray, min_snr: float = MIN_SNR) -> np.ndarray:
-    """Support a mode needs: min_snr / sqrt(max(1, zeta / 1 %)).
+    """Return the support a mode needs: min_snr / sqrt(max(1, zeta / 1 %)).
 
     The local misfit of a heavily damped mode holds more than noise: FRFs whose peak moves
     ~2 % between the points leave a systematic misfit over its wide half-power band that a
     common-pole model cannot remove (at 5 % damping the threshold is 4.5, at 1 % and below
     ``min_snr``).
+
+    Parameters
+    ----------
+    damping_ratio : ndarray
+        (m,) the modes' damping ratios.
+    min_snr : float
+        The threshold of a lightly damped mode.
+
+    Returns
+    -------
+    ndarray
+        (m,) contribution at resonance over local misfit that each mode needs.
     """
     return min_snr / np.sqrt(np.maximum(1.0, np.asarray(damping_ratio, float) / 0.01))
 
@@ -444,11 +470,14 @@ def _support_decisions(
 
     A mode is kept when its contribution at resonance stands ``support_threshold`` above the
     misfit of the band's synthesis around it; failing that, when it at least stands above that
-    misfit (``MIN_GLOBAL_SNR``: the band fit sees it, but the misfit may not be its own) and,
+    misfit (``MIN_GLOBAL_SNR``: the band fit sees it, but the misfit may not be its own), the
+    test has ``MIN_POINTS`` FRFs or more (a shape to judge across the points) and,
     fitted on its own peak (``ema.poles.local_support``: coherence-weighted, pole refined),
     its evidence over its half-power band stands that far above the local misfit and its
     highest line ``PEAK_SHARE`` of that (a peak a person sees, over several lines), its residues
-    are collinear in phase (MPC >= ``MIN_MPC``), its half-power band spans ``MIN_LINES``
+    are collinear in phase (MPC >= ``MIN_MPC``; the local fit also holds the other candidates
+    and the poles rejected for stability, so that a neighbour or a force null next to the
+    peak is modelled, not counted as misfit), its half-power band spans ``MIN_LINES``
     lines or more, the refined frequency stays within a half-power half-width and is not the
     peak of a mode already kept.
 
@@ -466,12 +495,14 @@ def _support_decisions(
     need = support_threshold(p.damping_ratio, min_snr)
     keep = signal > need * noise
     weight = line_weight(test.coherence)
+    seen = _poles(*np.array([(r.damping_ratio, r.freq_hz) for r in p.rejected
+                             if r.reason == "stability"]).reshape(-1, 2).T)
     why, rejected = [], []
     for r in range(p.freq_hz.size):
         ratio = signal[r] / max(noise[r], 1e-300)
         glob = (f"contribution at resonance {ratio:.3g} x the band fit's misfit "
                 f"(needs {need[r]:.3g})")
-        if keep[r] or ratio < MIN_GLOBAL_SNR:
+        if keep[r] or ratio < MIN_GLOBAL_SNR or h_flat.shape[1] < MIN_POINTS:
             if keep[r]:
                 why.append(glob)
             else:
@@ -479,7 +510,7 @@ def _support_decisions(
                                           "support", glob))
             continue
         loc = local_support(test.freq_hz, h_flat, test.quantity, float(p.freq_hz[r]),
-                            float(p.damping_ratio[r]), p.pole[keep], weight)
+                            float(p.damping_ratio[r]), np.r_[np.delete(p.pole, r), seen], weight)
         own = (f"on its own peak {loc.snr:.3g} x the local misfit (needs "
                f"{PEAK_SHARE * need[r]:.3g}), {loc.evidence:.3g} over its half-power band "
                f"(needs {need[r]:.3g}), MPC {loc.mpc:.2f}, refined {loc.freq_hz:.5g} Hz")

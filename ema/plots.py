@@ -32,7 +32,23 @@ def _save(fig, path: Path) -> Path:
 
 
 def plot_stabilisation(fit: ModalFit, path: str | os.PathLike) -> Path:
-    """Poles over model order (stable in f, zeta and shape: filled; f only: small) on the MIF."""
+    """Plot the poles over model order on the sum MIF, with the modes and the rejections.
+
+    Stable in f, zeta and shape: filled; in f only: small crosses. Modes are red lines (dashed
+    when kept on their own peak), rejected candidates dotted grey lines labelled with the reason.
+
+    Parameters
+    ----------
+    fit : ModalFit
+        The fit to draw.
+    path : str or os.PathLike
+        PNG written (atomically).
+
+    Returns
+    -------
+    Path
+        The path written.
+    """
     plt = _figure()
     fig, ax = plt.subplots(figsize=(11, 5.5))
     if fit.sweep is not None and fit.stability is not None:
@@ -67,9 +83,23 @@ def plot_stabilisation(fit: ModalFit, path: str | os.PathLike) -> Path:
 
 def plot_synthesis(fit: ModalFit, measured: np.ndarray, path: str | os.PathLike,
                    n_frfs: int = 4) -> Path:
-    """Magnitude of measured vs synthesised FRFs: the driving point and the worst-fitted ones.
+    """Plot measured vs synthesised FRF magnitudes: the driving point and the worst fits.
 
-    ``measured`` is the test's FRF array on ``fit.band_freq_hz`` (F_band, n_resp, n_ref).
+    Parameters
+    ----------
+    fit : ModalFit
+        The fit to draw.
+    measured : ndarray
+        The test's FRFs on ``fit.band_freq_hz``, (F_band, n_resp, n_ref).
+    path : str or os.PathLike
+        PNG written (atomically).
+    n_frfs : int
+        FRFs drawn.
+
+    Returns
+    -------
+    Path
+        The path written.
     """
     plt = _figure()
     h = np.asarray(measured).reshape(fit.band_freq_hz.size, -1)
@@ -94,7 +124,20 @@ def plot_synthesis(fit: ModalFit, measured: np.ndarray, path: str | os.PathLike,
 
 
 def plot_auto_mac(fit: ModalFit, path: str | os.PathLike) -> Path:
-    """AutoMAC of the fitted (real) shapes."""
+    """Plot the AutoMAC of the fitted (real) shapes.
+
+    Parameters
+    ----------
+    fit : ModalFit
+        The fit to draw.
+    path : str or os.PathLike
+        PNG written (atomically).
+
+    Returns
+    -------
+    Path
+        The path written.
+    """
     plt = _figure()
     m = auto_mac(fit.real_shapes)
     fig, ax = plt.subplots(figsize=(5.5, 4.8))
@@ -112,7 +155,22 @@ def plot_auto_mac(fit: ModalFit, path: str | os.PathLike) -> Path:
 
 
 def plot_fit(fit: ModalFit, measured: np.ndarray, out_dir: str | os.PathLike) -> list[Path]:
-    """All three plots into out_dir (created): stabilisation.png, synthesis.png, automac.png."""
+    """Write all three plots into out_dir (created).
+
+    Parameters
+    ----------
+    fit : ModalFit
+        The fit to draw.
+    measured : ndarray
+        The test's FRFs on ``fit.band_freq_hz``, (F_band, n_resp, n_ref).
+    out_dir : str or os.PathLike
+        Directory for stabilisation.png, synthesis.png and automac.png.
+
+    Returns
+    -------
+    list of Path
+        The three paths.
+    """
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     return [

@@ -31,7 +31,7 @@ import numpy as np
 from scipy.optimize import minimize
 
 from ema.shapes.complexity import mpc
-from ema.shapes.lsfd import QUANTITY_POWER, lsfd
+from ema.shapes.lsfd import QUANTITY_POWER, LsfdResult, lsfd
 
 WINDOW = 8.0  # half-power half-widths on each side of the pole
 MIN_HALF_WIDTH = 0.005  # of the frequency: the window is at least +-4 % wide
@@ -136,32 +136,33 @@ def local_support(
     sel = (freq_hz >= win[0]) & (freq_hz <= win[1])
     w = np.ones(sel.sum()) if weight is None else weight[sel]
     h = frf[sel]
-
-    def fit(x: np.ndarray):
-        return lsfd(freq_hz, frf, np.r_[_pole(x[0], x[1]), near], quantity, win, weight=weight)
-
     z_min = 0.5 * (freq_hz[1] - freq_hz[0]) / mode_hz  # no sharper than the lines resolve
+    width = max(zeta, z_min) * mode_hz  # the stabilised pole's half-power half-width, Hz
 
-    reach = MAX_SHIFT * max(zeta, z_min) * mode_hz  # the refined pole stays this near
+    def fit(x: np.ndarray) -> LsfdResult:  # x: (shift in half-widths, log damping change)
+        pole = _pole(mode_hz + x[0] * width, zeta * np.exp(x[1]))
+        return lsfd(freq_hz, frf, np.r_[pole, near], quantity, win, weight=weight)
+
+    scale = float(np.sum(w[:, None] * np.abs(h) ** 2)) or 1.0
 
     def cost(x: np.ndarray) -> float:
-        if not (z_min <= x[1] < 0.5 and abs(x[0] - mode_hz) <= reach):
+        if not (abs(x[0]) <= MAX_SHIFT and z_min <= zeta * np.exp(x[1]) < 0.5):
             return _OUTSIDE
-        return float(np.sum(w[:, None] * np.abs(h - fit(x).synth) ** 2))
+        return float(np.sum(w[:, None] * np.abs(h - fit(x).synth) ** 2)) / scale
 
-    best = minimize(cost, np.array([mode_hz, zeta]), method="Nelder-Mead",
-                    options={"xatol": 1e-4 * half, "fatol": 1e-12, "maxiter": 400}).x
-    res = fit(best)
-    lam = _pole(best[0], best[1])
+    simplex = np.array([[0.0, 0.0], [0.3, 0.0], [0.0, 0.3]])
+    x = minimize(cost, simplex[0], method="Nelder-Mead", options={
+        "initial_simplex": simplex, "xatol": 1e-3, "fatol": 1e-6, "maxiter": 200}).x
+    res = fit(x)
+    f_r, z_r = mode_hz + x[0] * width, zeta * np.exp(x[1])
+    lam = _pole(f_r, z_r)
     s = 2j * np.pi * freq_hz[sel][:, None]
-    a = res.residue[:, 0][None, :]
-    term = s ** QUANTITY_POWER[quantity] * (a / (s - lam) + np.conj(a) / (s - np.conj(lam)))
+    a = res.residue[:, :1]  # (n_frf, 1): the mode's residues across the FRFs
+    term = s ** QUANTITY_POWER[quantity] * (a.T / (s - lam) + np.conj(a.T) / (s - np.conj(lam)))
     misfit = np.sqrt(np.sum(w[:, None] * np.abs(h - res.synth) ** 2) / (w.sum() * h.shape[1]))
     power = np.mean(np.abs(term) ** 2, axis=1) / max(misfit, 1e-300) ** 2  # (lines,)
-    in_hp = np.abs(freq_hz[sel] - best[0]) <= best[1] * best[0]
+    in_hp = np.abs(freq_hz[sel] - f_r) <= z_r * f_r
     evidence = np.sqrt(power[in_hp].sum()) if in_hp.any() else np.sqrt(power.max())
     return LocalSupport(snr=float(np.sqrt(power.max())), evidence=float(evidence),
-                        lines=int(in_hp.sum()),
-                        freq_hz=float(best[0]),
-                        damping_ratio=float(best[1]), mpc=float(mpc(a[:, None])[0]),
-                        shift=float(abs(best[0] - mode_hz) / max(zeta * mode_hz, z_min * mode_hz)))
+                        lines=int(in_hp.sum()), freq_hz=float(f_r), damping_ratio=float(z_r),
+                        mpc=float(mpc(a)[0]), shift=float(abs(x[0])))
