@@ -106,7 +106,10 @@ def run_sdypy(test: FrfTest, peaks_hz: np.ndarray, order: int, band: tuple[float
         warnings.simplefilter("ignore")
         m.get_poles(show_progress=False)
         m.select_closest_poles(list(peaks_hz))
-        m.get_constants(whose_poles="own")
+        try:
+            m.get_constants(whose_poles="own")
+        except np.linalg.LinAlgError:  # its LSFD fails (SVD did not converge): nothing found
+            return np.zeros(0), np.zeros(0), np.zeros((0, 0))
     f, z, a = np.asarray(m.nat_freq), np.asarray(m.nat_xi), np.asarray(m.A)
     a = a.reshape(-1, f.size)
     keep = f > 0  # 0 Hz: no stable pole near the frequency asked
