@@ -47,7 +47,26 @@ def mode_warnings(
     coherence: np.ndarray | None = None,
     coherence_freq_hz: np.ndarray | None = None,
 ) -> list[list[str]]:
-    """Warnings per mode (module docstring); coherence (F, ...) on coherence_freq_hz (F,)."""
+    """Return the warnings of each mode (module docstring).
+
+    Parameters
+    ----------
+    freq_hz : ndarray
+        (m,) natural frequencies, Hz.
+    damping_ratio : ndarray
+        (m,) fitted damping ratios (exponential window included).
+    df_hz : float
+        Line spacing, Hz.
+    coherence : ndarray, optional
+        (F, ...) ordinary coherence on ``coherence_freq_hz``.
+    coherence_freq_hz : ndarray, optional
+        (F,) lines of ``coherence``, Hz.
+
+    Returns
+    -------
+    list of list of str
+        Per mode, what its numbers cannot be trusted for.
+    """
     out: list[list[str]] = []
     for f, z in zip(np.asarray(freq_hz, float), np.asarray(damping_ratio, float), strict=True):
         w: list[str] = []
@@ -72,7 +91,22 @@ def mode_warnings(
 def close_pairs(
     freq_hz: np.ndarray, damping_ratio: np.ndarray, shapes: np.ndarray
 ) -> list[ClosePair]:
-    """Neighbouring modes closer than ``CLOSE_PAIR`` relative in frequency."""
+    """Return the neighbouring modes closer than ``CLOSE_PAIR`` relative in frequency.
+
+    Parameters
+    ----------
+    freq_hz : ndarray
+        (m,) natural frequencies, ascending, Hz.
+    damping_ratio : ndarray
+        (m,) damping ratios.
+    shapes : ndarray
+        (n, m) real shapes (for the pair's MAC).
+
+    Returns
+    -------
+    list of ClosePair
+        Each pair with its separation, modal overlap and MAC.
+    """
     f = np.asarray(freq_hz, float)
     z = np.asarray(damping_ratio, float)
     pairs = []

@@ -1,5 +1,8 @@
-"""Plots of a modal fit (matplotlib, Agg): stabilisation diagram over the MIF, measured vs
-synthesised FRFs, AutoMAC. Each function writes one PNG atomically and returns its path."""
+"""Plots of a modal fit (matplotlib, Agg).
+
+Stabilisation diagram over the MIF, measured vs synthesised FRFs, AutoMAC. Each function writes
+one PNG atomically and returns its path.
+"""
 
 from __future__ import annotations
 
@@ -29,7 +32,23 @@ def _save(fig, path: Path) -> Path:
 
 
 def plot_stabilisation(fit: ModalFit, path: str | os.PathLike) -> Path:
-    """Poles over model order (stable in f, zeta and shape: filled; f only: small) on the MIF."""
+    """Plot the poles over model order on the sum MIF, with the modes and the rejections.
+
+    Stable in f, zeta and shape: filled; in f only: small crosses. Modes are red lines (dashed
+    when kept on their own peak), rejected candidates dotted grey lines labelled with the reason.
+
+    Parameters
+    ----------
+    fit : ModalFit
+        The fit to draw.
+    path : str or os.PathLike
+        PNG written (atomically).
+
+    Returns
+    -------
+    Path
+        The path written.
+    """
     plt = _figure()
     fig, ax = plt.subplots(figsize=(11, 5.5))
     if fit.sweep is not None and fit.stability is not None:
@@ -43,23 +62,44 @@ def plot_stabilisation(fit: ModalFit, path: str | os.PathLike) -> Path:
         ax.plot(sw.freq_hz[all_], sw.order[all_], "o", color="tab:green", ms=3,
                 label="stable in f, zeta, shape")
         ax.set_ylabel("model order")
-    for f in fit.freq_hz:
-        ax.axvline(f, color="tab:red", lw=0.8, alpha=0.6)
+    for f, why in zip(fit.freq_hz, fit.decisions or [""] * fit.freq_hz.size, strict=True):
+        ax.axvline(f, color="tab:red", lw=0.8, alpha=0.6, ls="--" if "own peak" in why else "-")
+    lo, hi = fit.band_hz
+    for r in fit.rejected:  # why each candidate was dropped, written along its line
+        if lo <= r.freq_hz <= hi:
+            ax.axvline(r.freq_hz, color="0.5", lw=0.6, ls=":")
+            ax.text(r.freq_hz, 0.98, r.reason, transform=ax.get_xaxis_transform(), rotation=90,
+                    va="top", ha="right", fontsize=6, color="0.35")
     ax.set_xlabel("frequency, Hz")
-    ax.set_xlim(*fit.band_hz)
+    ax.set_xlim(lo, hi)
     ax2 = ax.twinx()
     ax2.semilogy(fit.band_freq_hz, fit.mif, color="k", lw=0.8, label="sum MIF")
     ax2.set_ylabel("sum MIF, sum |H|^2")
-    ax.set_title(f"Stabilisation diagram ({fit.method}); selected modes in red")
+    ax.set_title(f"Stabilisation diagram ({fit.method}); modes in red (dashed: kept on their own "
+                 "peak), rejected candidates dotted with the reason")
     ax.legend(loc="upper left", fontsize=8)
     return _save(fig, Path(path))
 
 
 def plot_synthesis(fit: ModalFit, measured: np.ndarray, path: str | os.PathLike,
                    n_frfs: int = 4) -> Path:
-    """Magnitude of measured vs synthesised FRFs: the driving point and the worst-fitted ones.
+    """Plot measured vs synthesised FRF magnitudes: the driving point and the worst fits.
 
-    ``measured`` is the test's FRF array on ``fit.band_freq_hz`` (F_band, n_resp, n_ref).
+    Parameters
+    ----------
+    fit : ModalFit
+        The fit to draw.
+    measured : ndarray
+        The test's FRFs on ``fit.band_freq_hz``, (F_band, n_resp, n_ref).
+    path : str or os.PathLike
+        PNG written (atomically).
+    n_frfs : int
+        FRFs drawn.
+
+    Returns
+    -------
+    Path
+        The path written.
     """
     plt = _figure()
     h = np.asarray(measured).reshape(fit.band_freq_hz.size, -1)
@@ -84,7 +124,20 @@ def plot_synthesis(fit: ModalFit, measured: np.ndarray, path: str | os.PathLike,
 
 
 def plot_auto_mac(fit: ModalFit, path: str | os.PathLike) -> Path:
-    """AutoMAC of the fitted (real) shapes."""
+    """Plot the AutoMAC of the fitted (real) shapes.
+
+    Parameters
+    ----------
+    fit : ModalFit
+        The fit to draw.
+    path : str or os.PathLike
+        PNG written (atomically).
+
+    Returns
+    -------
+    Path
+        The path written.
+    """
     plt = _figure()
     m = auto_mac(fit.real_shapes)
     fig, ax = plt.subplots(figsize=(5.5, 4.8))
@@ -102,7 +155,22 @@ def plot_auto_mac(fit: ModalFit, path: str | os.PathLike) -> Path:
 
 
 def plot_fit(fit: ModalFit, measured: np.ndarray, out_dir: str | os.PathLike) -> list[Path]:
-    """All three plots into out_dir (created): stabilisation.png, synthesis.png, automac.png."""
+    """Write all three plots into out_dir (created).
+
+    Parameters
+    ----------
+    fit : ModalFit
+        The fit to draw.
+    measured : ndarray
+        The test's FRFs on ``fit.band_freq_hz``, (F_band, n_resp, n_ref).
+    out_dir : str or os.PathLike
+        Directory for stabilisation.png, synthesis.png and automac.png.
+
+    Returns
+    -------
+    list of Path
+        The three paths.
+    """
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     return [

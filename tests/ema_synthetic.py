@@ -139,3 +139,38 @@ def make_inconsistent_test(
     test = FrfTest(freq, h, nodes[[d]], nodes,
                    {int(k): float(v) for k, v in zip(nodes, x, strict=True)})
     return test, f, z
+
+
+def make_character_test(
+    seed: int, freq_hz: np.ndarray, zeta: np.ndarray, gain: np.ndarray, shift: float = 0.0,
+    n_points: int = 12, noise: float = 0.01, coherence_dip_hz: float | None = None,
+) -> FrfTest:
+    """A roving-hammer accelerance test of given modes, to 3200 Hz at 1 Hz, with coherence.
+
+    Shapes are cosines of rising order scaled by ``gain`` (a weak mode: small gain); each FRF's
+    natural frequencies are scaled by its own 1 + shift u, u uniform in -1/2..1/2 (peaks that
+    move between the points); complex noise of ``noise`` x each FRF's RMS. The coherence is
+    0.995 except, with ``coherence_dip_hz``, a null of the force spectrum there: +-8 lines where
+    the FRF is noise of the FRF's own size and the coherence falls to 0.3.
+    """
+    rng = np.random.default_rng(seed)
+    f, z, g = (np.asarray(v, dtype=float) for v in (freq_hz, zeta, gain))
+    x = np.linspace(0.02, 0.84, n_points)
+    shapes = np.stack([g[i] * 1.3 * np.cos((i + 1.5) * np.pi * x / 0.86 + 0.2)
+                       for i in range(f.size)], 1)
+    freq = np.arange(0.0, 3200.5, 1.0)
+    d = n_points - 2
+    cols = [ModalModel(f * (1 + shift * rng.uniform(-0.5, 0.5)), z, shapes, x).accelerance(
+        freq, [d], [j]) for j in range(n_points)]
+    h = np.concatenate(cols, axis=2)
+    rms = np.sqrt(np.mean(np.abs(h) ** 2, axis=0, keepdims=True))
+    white = rng.standard_normal(h.shape) + 1j * rng.standard_normal(h.shape)
+    h = h + noise * rms * white / np.sqrt(2)
+    coh = np.full(h.shape, 0.995)
+    if coherence_dip_hz is not None:
+        dip = np.abs(freq - coherence_dip_hz) <= 8
+        h[dip] = np.abs(h[dip]) * (rng.standard_normal(h[dip].shape) * 0.5 + 0.1)
+        coh[dip] = 0.3
+    nodes = np.arange(1, n_points + 1)
+    return FrfTest(freq, h, nodes[[d]], nodes,
+                   {int(k): float(v) for k, v in zip(nodes, x, strict=True)}, coherence=coh)

@@ -87,6 +87,12 @@ def summary(fit) -> dict:
             for r in fit.rejected
         ],
         "notes": list(fit.notes),
+        "decisions": [  # every candidate: kept (a mode) or dropped, and why
+            {"frequency_hz": float(f), "kept": True,
+             "reason": "own_peak" if "own peak" in why else "support", "detail": why}
+            for f, why in zip(fit.freq_hz, fit.decisions, strict=False)
+        ] + [{"frequency_hz": r.freq_hz, "kept": False, "reason": r.reason, "detail": r.detail}
+             for r in fit.rejected],
         "synthesis_error": {
             "total": fit.synthesis_error_total,
             "per_frf": [float(v) for v in fit.synthesis_error.ravel()],

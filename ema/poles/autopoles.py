@@ -44,9 +44,23 @@ class AutoPoles:
 def sub_bands(
     band_hz: tuple[float, float], overlap: float = 0.25, shift: float = 1.0
 ) -> list[tuple[tuple[float, float], tuple[float, float]]]:
-    """[(core, fitted band), ...] covering band_hz (see module docstring); ``shift`` multiplies
-    the inner core edges (the second partition uses sqrt 2: its core centres sit on the first
-    partition's core edges)."""
+    """Cut band_hz into [(core, fitted band), ...] (see module docstring).
+
+    Parameters
+    ----------
+    band_hz : tuple of float
+        (lo, hi) band, Hz.
+    overlap : float
+        Each core is widened by this fraction of its width on both sides.
+    shift : float
+        Multiplies the inner core edges (the second partition uses sqrt 2: its core centres sit
+        on the first partition's core edges).
+
+    Returns
+    -------
+    list of tuple
+        ((core lo, core hi), (fitted lo, fitted hi)) per sub-band, Hz.
+    """
     lo, hi = band_hz
     edges = [lo, max(2 * lo, lo + 80.0) * shift]
     while edges[-1] < hi:
@@ -62,6 +76,20 @@ def sub_bands(
 
 
 def take(sel: SelectedPoles, keep: np.ndarray) -> SelectedPoles:
+    """Return the selected poles where ``keep`` holds.
+
+    Parameters
+    ----------
+    sel : SelectedPoles
+        The poles.
+    keep : ndarray
+        A boolean mask or indices.
+
+    Returns
+    -------
+    SelectedPoles
+        The poles kept.
+    """
     return SelectedPoles(
         freq_hz=sel.freq_hz[keep],
         damping_ratio=sel.damping_ratio[keep],
@@ -92,8 +120,10 @@ def _concat(parts: list[SelectedPoles], n_out: int) -> SelectedPoles:
 
 
 def _distinct(poles: np.ndarray, taken: np.ndarray, tol: float = 0.005) -> np.ndarray:
-    """Poles not within tol (relative |d lambda| / |lambda|) of ``taken`` or of each other:
-    near-copies would make collinear LSFD columns."""
+    """Return the poles not within tol (relative |d lambda| / |lambda|) of ``taken``.
+
+    Nor within tol of each other: near-copies would make collinear LSFD columns.
+    """
     out: list[complex] = []
     for lam in poles[np.argsort(np.abs(poles))]:
         ref = np.r_[taken, out]
@@ -110,7 +140,7 @@ def auto_poles(
     dup_tol: float = 0.003,
     order_step: int = 1,
 ) -> AutoPoles:
-    """Physical poles in band_hz of frf (F, l, m) (polyreference orientation), automatically.
+    """Select the physical poles in band_hz of frf automatically.
 
     Two partitions into sub-bands are fitted, the second with its core edges shifted by
     sqrt 2 (``sub_bands``): a mode near a core edge of one (where it is fitted off-centre and
@@ -119,6 +149,27 @@ def auto_poles(
     the same mode), so which modes are found depends much less on where the band starts and
     ends: a mode found in a sub-band is found in the full band. The stabilisation data and
     computational poles are the first partition's.
+
+    Parameters
+    ----------
+    freq_hz : ndarray
+        (F,) lines, Hz.
+    frf : ndarray
+        (F, l, m) FRFs in the polyreference orientation.
+    band_hz : tuple of float
+        (lo, hi) band, Hz.
+    max_order : int
+        Highest LSCF order per sub-band.
+    dup_tol : float
+        Relative frequency within which two sub-bands' modes are one.
+    order_step : int
+        Fit every order_step-th order.
+
+    Returns
+    -------
+    AutoPoles
+        The modes, the poles just outside the band, computational poles, the stabilisation
+        data and the rejections.
     """
     one = _partition_poles(freq_hz, frf, band_hz, max_order, dup_tol, order_step, 1.0)
     two = _partition_poles(freq_hz, frf, band_hz, max_order, dup_tol, order_step, np.sqrt(2))
@@ -241,12 +292,24 @@ def _partition_poles(
 
 
 def merge_overlapping(sel: SelectedPoles) -> tuple[SelectedPoles, list[Rejection]]:
-    """One mode where two selected poles sit inside one half-power width.
+    """Keep one mode where two selected poles sit inside one half-power width.
 
     Two poles closer than zeta f / ``MERGE_OVERLAP`` (modal overlap above 1.4, zeta f the
     mean half-power half-width) cannot be told apart from one mode whose peak moves between
     the FRFs (inconsistent data) or a pair the data do not resolve: the pole stable at more
     orders is kept, the other reported as ``merged``.
+
+    Parameters
+    ----------
+    sel : SelectedPoles
+        The selected poles, ascending in frequency.
+
+    Returns
+    -------
+    SelectedPoles
+        The poles kept.
+    list of Rejection
+        The merged ones.
     """
     keep = np.ones(sel.freq_hz.size, dtype=bool)
     out: list[Rejection] = []

@@ -30,14 +30,41 @@ class PeakPick:
 
 
 def sum_mif(frf: np.ndarray) -> np.ndarray:
-    """Power sum over all FRFs: frf (F, ...) -> (F,)."""
+    """Return the power sum over all FRFs.
+
+    Parameters
+    ----------
+    frf : ndarray
+        (F, ...) FRFs.
+
+    Returns
+    -------
+    ndarray
+        (F,) sum of |H|^2 over the FRFs.
+    """
     h = np.asarray(frf)
     return np.sum(np.abs(h.reshape(h.shape[0], -1)) ** 2, axis=1)
 
 
 def receptance_power(freq_hz: np.ndarray, power: np.ndarray, quantity: str) -> np.ndarray:
-    """A power MIF of accelerance/mobility divided by w^4 / w^2: the receptance power sum,
-    whose inverse is the parabola about each resonance that ``pick_peaks`` fits."""
+    """Divide a power MIF of accelerance/mobility by w^4 / w^2: the receptance power sum.
+
+    Its inverse is the parabola about each resonance that ``pick_peaks`` fits.
+
+    Parameters
+    ----------
+    freq_hz : ndarray
+        (F,) lines, Hz.
+    power : ndarray
+        (F,) power MIF of ``quantity``.
+    quantity : str
+        "receptance", "mobility" or "accelerance".
+
+    Returns
+    -------
+    ndarray
+        (F,) receptance-equivalent power (0 at 0 Hz).
+    """
     q = {"receptance": 0, "mobility": 1, "accelerance": 2}[quantity]
     w = 2 * np.pi * np.asarray(freq_hz, dtype=float)
     with np.errstate(divide="ignore"):
@@ -45,7 +72,18 @@ def receptance_power(freq_hz: np.ndarray, power: np.ndarray, quantity: str) -> n
 
 
 def cmif(frf: np.ndarray) -> np.ndarray:
-    """Singular values of each line's FRF matrix: frf (F, n_resp, n_ref) -> (F, min(...))."""
+    """Return the singular values of each line's FRF matrix.
+
+    Parameters
+    ----------
+    frf : ndarray
+        (F, n_resp, n_ref) FRFs.
+
+    Returns
+    -------
+    ndarray
+        (F, min(n_resp, n_ref)) singular values, descending.
+    """
     return np.linalg.svd(np.asarray(frf, dtype=complex), compute_uv=False)
 
 
@@ -55,7 +93,26 @@ def pick_peaks(
     band_hz: tuple[float, float],
     min_prominence: float = 4.0,
 ) -> PeakPick:
-    """Peaks of a receptance power MIF in the band with half-power damping (module docstring)."""
+    """Pick the peaks of a receptance power MIF in the band, with half-power damping.
+
+    See the module docstring for the parabola fitted to 1 / MIF about each peak.
+
+    Parameters
+    ----------
+    freq_hz : ndarray
+        (F,) lines, Hz.
+    mif : ndarray
+        (F,) receptance power MIF (``receptance_power``).
+    band_hz : tuple of float
+        (lo, hi) band, Hz.
+    min_prominence : float
+        A peak must stand this many times above its surroundings.
+
+    Returns
+    -------
+    PeakPick
+        Frequencies, damping ratios and heights of the peaks.
+    """
     from scipy.signal import find_peaks  # here: scipy.signal costs 0.2-0.4 s to import
 
     freq_hz = np.asarray(freq_hz, dtype=float)

@@ -37,7 +37,7 @@ class RefinedPoles:
 
 
 def _poles(theta: np.ndarray) -> np.ndarray:
-    """theta = (ln f_r, logit zeta_r): any real theta is a stable underdamped pole."""
+    """Theta = (ln f_r, logit zeta_r): any real theta is a stable underdamped pole."""
     m = theta.size // 2
     wn = 2 * np.pi * np.exp(theta[:m])
     z = _zeta(theta[m:])
@@ -64,10 +64,37 @@ def refine_poles(
     window: float = 10.0,
     max_nfev: int = 30,
 ) -> RefinedPoles:
-    """Refine (f_r, zeta_r) of all modes together against the FRFs frf (F, n_frf).
+    """Refine (f_r, zeta_r) of all modes together against the FRFs by maximum likelihood.
 
-    ``extra_poles`` (computational poles of cut modes) are refined with them and returned in
-    ``extra_pole``; their damping must be positive.
+    The residues are eliminated (variable projection, see the module docstring); ``extra_poles``
+    (computational poles of cut modes) are refined with them and returned in ``extra_pole``;
+    their damping must be positive.
+
+    Parameters
+    ----------
+    freq_hz : ndarray
+        (F,) lines, Hz.
+    frf : ndarray
+        (F, n_frf) complex FRFs of ``quantity``.
+    freq0_hz, damping0 : ndarray
+        (m,) starting natural frequencies (Hz) and damping ratios.
+    quantity : str
+        "receptance", "mobility" or "accelerance".
+    band_hz : tuple of float
+        (lo, hi) lines used, Hz.
+    lower : bool
+        Include the lower residual terms.
+    extra_poles : ndarray, optional
+        (k,) computational poles, rad/s.
+    window : float
+        Half-power half-widths about each mode whose lines weigh in.
+    max_nfev : int
+        Most function evaluations of the least-squares solver.
+
+    Returns
+    -------
+    RefinedPoles
+        The refined poles and their least-squares standard deviations.
     """
     freq_hz = np.asarray(freq_hz, dtype=float)
     frf = np.asarray(frf, dtype=complex).reshape(freq_hz.size, -1)

@@ -17,8 +17,11 @@ REASONS = ("stability", "complexity", "band_edge", "support", "merged")
 
 @dataclass(frozen=True)
 class Rejection:
-    """One rejected candidate: its frequency (Hz), damping ratio, reason and a short detail;
-    ``stable_orders``: model orders at which it was stable (0 when not from a sweep)."""
+    """One rejected candidate.
+
+    Its frequency (Hz), damping ratio, reason and a short detail; ``stable_orders``: model
+    orders at which it was stable (0 when not from a sweep).
+    """
 
     freq_hz: float
     damping_ratio: float

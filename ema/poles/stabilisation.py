@@ -42,6 +42,7 @@ class Stability:
 
     @property
     def all(self) -> np.ndarray:
+        """Return the poles stable in frequency, damping and shape."""
         return self.freq & self.damping & self.shape
 
 
@@ -49,12 +50,18 @@ class Stability:
 class SelectedPoles:
     """Automatically selected physical poles, ascending in frequency.
 
-    Attributes:
-        freq_hz, damping_ratio: (m,) median over the cluster.
-        freq_std_hz, damping_std: (m,) standard deviation over the cluster.
-        pole: (m,) lambda = -zeta w_n + i w_n sqrt(1 - zeta^2), rad/s.
-        count: (m,) number of model orders at which the mode is stable.
-        shape: (m, l) shape estimate of the cluster member nearest the median.
+    Attributes
+    ----------
+    freq_hz, damping_ratio
+        (m,) median over the cluster.
+    freq_std_hz, damping_std
+        (m,) standard deviation over the cluster.
+    pole
+        (m,) lambda = -zeta w_n + i w_n sqrt(1 - zeta^2), rad/s.
+    count
+        (m,) number of model orders at which the mode is stable.
+    shape
+        (m, l) shape estimate of the cluster member nearest the median.
     """
 
     freq_hz: np.ndarray
@@ -69,11 +76,27 @@ class SelectedPoles:
 def stability(
     sweep: PoleSweep, tol_freq: float = 0.01, tol_damping: float = 0.05, min_mac: float = 0.95
 ) -> Stability:
-    """Stability flags of every pole against the poles of the previous order of the sweep.
+    """Flag every pole's stability against the poles of the previous order of the sweep.
 
     The tolerances scale with the pole's damping zeta (capped at 10 %): frequency
     max(tol_freq, zeta / 2) (half the half-power half-width), damping tol_damping x
     max(1, zeta / 1 %) relative.
+
+    Parameters
+    ----------
+    sweep : PoleSweep
+        The poles of every order.
+    tol_freq : float
+        Relative frequency tolerance of a lightly damped pole.
+    tol_damping : float
+        Relative damping tolerance of a lightly damped pole.
+    min_mac : float
+        Least MAC between the shape estimates.
+
+    Returns
+    -------
+    Stability
+        Flags per pole: stable in frequency, damping and shape.
     """
     n = sweep.pole.size
     fs, ds, ss = (np.zeros(n, dtype=bool) for _ in range(3))
@@ -140,8 +163,34 @@ def select_poles(
 
     Poles are candidates inside ``freq_range_hz`` (default: the sweep's band). The cluster
     frequency tolerance widens with the damping: max(tol_cluster_freq, zeta_ij / 2) with
-    zeta_ij the pair's mean damping. Returns the modes and, for every cluster of at least two
-    stable poles that is not a mode, why (``ema.poles.rejected``).
+    zeta_ij the pair's mean damping.
+
+    Parameters
+    ----------
+    sweep : PoleSweep
+        The poles of every order.
+    stab : Stability
+        Their stability flags (``stability``).
+    max_damping : float
+        Clusters more damped are not modes.
+    min_mac : float
+        Least MAC within a cluster.
+    tol_cluster_freq : float
+        Relative frequency tolerance of a cluster (lightly damped).
+    min_fraction : float
+        Fraction of the orders at which a mode must be stable.
+    min_mpc : float
+        Least modal phase collinearity of its shape estimate.
+    freq_range_hz : tuple of float, optional
+        (lo, hi) where candidates are taken, Hz.
+
+    Returns
+    -------
+    SelectedPoles
+        The modes.
+    list of Rejection
+        Every cluster of at least two stable poles that is not a mode, with why
+        (``ema.poles.rejected``).
     """
     from scipy.cluster.hierarchy import fcluster, linkage  # here: 0.1-0.2 s to import
 

@@ -30,7 +30,18 @@ def _principal(psi: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 
 def mpc(psi: np.ndarray) -> np.ndarray:
-    """Modal phase collinearity of each column of psi (n, r): (r,), 0..1."""
+    """Return the modal phase collinearity of each column of psi.
+
+    Parameters
+    ----------
+    psi : ndarray
+        (n, r) complex shapes.
+
+    Returns
+    -------
+    ndarray
+        (r,) MPC, 0..1 (1: the entries lie on one line in the complex plane, a real mode).
+    """
     psi = np.asarray(psi, dtype=complex).reshape(np.shape(psi)[0], -1)
     val, _ = _principal(psi)
     tot = val[:, 1] + val[:, 0]
@@ -38,7 +49,18 @@ def mpc(psi: np.ndarray) -> np.ndarray:
 
 
 def mpd(psi: np.ndarray) -> np.ndarray:
-    """Mean phase deviation of each column of psi (n, r) from its principal line, degrees."""
+    """Return the mean phase deviation of each column of psi from its principal line.
+
+    Parameters
+    ----------
+    psi : ndarray
+        (n, r) complex shapes.
+
+    Returns
+    -------
+    ndarray
+        (r,) MPD, degrees (0: a real mode).
+    """
     psi = np.asarray(psi, dtype=complex).reshape(np.shape(psi)[0], -1)
     _, u = _principal(psi)
     amp = np.abs(psi)
@@ -49,9 +71,19 @@ def mpd(psi: np.ndarray) -> np.ndarray:
 
 
 def real_modes(psi: np.ndarray) -> np.ndarray:
-    """Nearest real vectors of the columns of psi (n, r): Re(psi exp(-i theta)), (n, r) float.
+    """Return the nearest real vectors of the columns of psi: Re(psi exp(-i theta)).
 
     The sign is arbitrary here; callers fix it (``ema.shapes.scaling.fix_sign``).
+
+    Parameters
+    ----------
+    psi : ndarray
+        (n, r) complex shapes.
+
+    Returns
+    -------
+    ndarray
+        (n, r) real shapes, same scale.
     """
     psi = np.asarray(psi, dtype=complex).reshape(np.shape(psi)[0], -1)
     _, u = _principal(psi)

@@ -32,12 +32,18 @@ QUANTITY_POWER = {"receptance": 0, "mobility": 1, "accelerance": 2}
 class LsfdResult:
     """Residues and residual terms of every FRF column, and the synthesised FRFs.
 
-    Attributes:
-        residue: (n_frf, m) complex A_r (receptance pole-residue form).
-        lower: (n_frf, 2) real (L0, L1): mass line 1/kg and its 1/w^4 correction.
-        upper: (n_frf, 2) real (U0, U1): residual flexibility m/N and its w^2 term.
-        freq_hz: (F_band,) the lines fitted.
-        synth: (F_band, n_frf) synthesised FRFs on those lines.
+    Attributes
+    ----------
+    residue
+        (n_frf, m) complex A_r (receptance pole-residue form).
+    lower
+        (n_frf, 2) real (L0, L1): mass line 1/kg and its 1/w^4 correction.
+    upper
+        (n_frf, 2) real (U0, U1): residual flexibility m/N and its w^2 term.
+    freq_hz
+        (F_band,) the lines fitted.
+    synth
+        (F_band, n_frf) synthesised FRFs on those lines.
     """
 
     residue: np.ndarray
@@ -70,16 +76,32 @@ def lsfd(
     band_hz: tuple[float, float],
     lower: bool = True,
     upper: bool = True,
+    weight: np.ndarray | None = None,
 ) -> LsfdResult:
     """Residues of the poles in every FRF column of frf (F, n_frf) by linear least squares.
 
-    Args:
-        freq_hz: (F,) lines, Hz (lines at 0 Hz are never used).
-        frf: (F, n_frf) complex FRFs of ``quantity``.
-        poles: (m,) continuous poles in the upper half-plane, rad/s.
-        quantity: "receptance", "mobility" or "accelerance".
-        band_hz: (lo, hi) lines used.
-        lower, upper: include the lower (L0, L1) and upper (U0, U1) residual terms.
+    Parameters
+    ----------
+    freq_hz
+        (F,) lines, Hz (lines at 0 Hz are never used).
+    frf
+        (F, n_frf) complex FRFs of ``quantity``.
+    poles
+        (m,) continuous poles in the upper half-plane, rad/s.
+    quantity
+        "receptance", "mobility" or "accelerance".
+    band_hz
+        (lo, hi) lines used.
+    lower, upper
+        include the lower (L0, L1) and upper (U0, U1) residual terms.
+    weight
+        (F,) optional weight of each line (weighted least squares, e.g. the inverse variance
+        of an H1 estimate, ``ema.poles.local_support.line_weight``); None: all alike.
+
+    Returns
+    -------
+    LsfdResult
+        Residues, residual terms and the synthesis on the band's lines.
     """
     if quantity not in QUANTITY_POWER:
         raise ValueError(f"unknown FRF quantity {quantity!r}")
@@ -94,6 +116,9 @@ def lsfd(
     basis = np.concatenate([modes.reshape(f.size, 2 * m), res], axis=1)  # (F, 2m + 4)
     a = np.concatenate([basis.real, basis.imag], axis=0)
     y = np.concatenate([h.real, h.imag], axis=0)
+    if weight is not None:  # weighted least squares: rows scaled by sqrt(weight) per line
+        root = np.sqrt(np.tile(np.asarray(weight, dtype=float)[sel], 2))[:, None]
+        a, y = a * root, y * root
     scale = np.linalg.norm(a, axis=0)
     scale = np.where(scale > 0, scale, 1.0)
     used = np.linalg.norm(a, axis=0) > 0

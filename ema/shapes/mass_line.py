@@ -49,7 +49,20 @@ class RigidBody:
 
 
 def rigid_body_from_modes(shapes: np.ndarray, x_m: np.ndarray) -> RigidBody:
-    """Mass, centre of mass and pitch inertia from >= 2 mass-normalised rigid-body shapes (n, s)."""
+    """Return mass, centre of mass and pitch inertia from the rigid-body shapes.
+
+    Parameters
+    ----------
+    shapes : ndarray
+        (n, s) >= 2 mass-normalised rigid-body (suspension) shapes, 1/sqrt(kg).
+    x_m : ndarray
+        (n,) node positions, m.
+
+    Returns
+    -------
+    RigidBody
+        Mass (kg), centre of mass (m) and pitch inertia (kg m^2).
+    """
     phi = np.asarray(shapes, dtype=float).reshape(np.shape(shapes)[0], -1)
     x = np.asarray(x_m, dtype=float)
     g = phi @ phi.T
@@ -65,7 +78,24 @@ def rigid_body_from_modes(shapes: np.ndarray, x_m: np.ndarray) -> RigidBody:
 def rigid_body_from_mass_line(
     mass_line: np.ndarray, x_m: np.ndarray, x_drive_m: float, known_mass_kg: float | None = None
 ) -> RigidBody:
-    """What one driving-point row of the mass line (1/kg at x_m) says about the rigid body."""
+    """Return what one driving-point row of the mass line says of the rigid body.
+
+    Parameters
+    ----------
+    mass_line : ndarray
+        (n,) lower residual L0 of the FRFs sharing the driving point, 1/kg.
+    x_m : ndarray
+        (n,) node positions, m.
+    x_drive_m : float
+        Driving point position, m.
+    known_mass_kg : float, optional
+        The mass, kg, when known (then the centre of mass and inertia follow).
+
+    Returns
+    -------
+    RigidBody
+        What the row determines (see the module docstring); None where it cannot.
+    """
     a = np.asarray(mass_line, dtype=float)
     x = np.asarray(x_m, dtype=float)
     if np.unique(x).size < 2:  # one node (a single FRF): a(x_d) only, no slope
@@ -99,12 +129,30 @@ def low_band_mass_line(
     freq_hz: np.ndarray, frf: np.ndarray, poles: np.ndarray, quantity: str, lo_hz: float,
     driving_column: int,
 ) -> MassLineEstimate | None:
-    """Mass line of every FRF column of ``frf`` (F, n_frf) below the second bending mode
-    (module docstring); None when the test has fewer than two elastic modes or too few lines.
+    """Estimate the mass line of every FRF column from the band below the second bending mode.
 
-    ``poles``: the elastic modes' continuous poles (rad/s), ``lo_hz`` the fitted band's
-    start (above the suspension modes), ``driving_column`` the driving-point FRF's column
-    (its L1 / L0 gives the suspension frequency)."""
+    See the module docstring.
+
+    Parameters
+    ----------
+    freq_hz : ndarray
+        (F,) lines, Hz.
+    frf : ndarray
+        (F, n_frf) FRFs of ``quantity``.
+    poles : ndarray
+        (m,) the elastic modes' continuous poles, rad/s.
+    quantity : str
+        "receptance", "mobility" or "accelerance".
+    lo_hz : float
+        The fitted band's start (above the suspension modes), Hz.
+    driving_column : int
+        The driving-point FRF's column (its L1 / L0 gives the suspension frequency).
+
+    Returns
+    -------
+    MassLineEstimate or None
+        None when the test has fewer than two elastic modes or too few lines.
+    """
     poles = np.asarray(poles, dtype=complex)
     f_r = np.abs(poles) / (2 * np.pi)
     order = np.sort(f_r)

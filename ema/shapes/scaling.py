@@ -24,16 +24,41 @@ import numpy as np
 
 
 def modal_constants(residue: np.ndarray, poles: np.ndarray) -> np.ndarray:
-    """Real-mode-convention modal constants rA = 2 i w_d A for residues (..., m), 1/kg."""
+    """Return the real-mode-convention modal constants rA = 2 i w_d A.
+
+    Parameters
+    ----------
+    residue : ndarray
+        (..., m) residues A (receptance pole-residue form).
+    poles : ndarray
+        (m,) continuous poles, rad/s.
+
+    Returns
+    -------
+    ndarray
+        (..., m) modal constants, 1/kg.
+    """
     return 2j * np.asarray(poles).imag * np.asarray(residue)
 
 
 def mass_normalised_shapes(
     residue_row: np.ndarray, poles: np.ndarray, driving_index: int
 ) -> np.ndarray:
-    """Mass-normalised complex shapes (n, m) from the residues (n, m) of one driving-point row.
+    """Return mass-normalised complex shapes from the residues of one driving-point row.
 
-    ``residue_row[k, r]`` is the residue of mode r in H_dk (or H_kd); ``driving_index`` is k = d.
+    Parameters
+    ----------
+    residue_row : ndarray
+        (n, m) residues: ``residue_row[k, r]`` is that of mode r in H_dk (or H_kd).
+    poles : ndarray
+        (m,) continuous poles, rad/s.
+    driving_index : int
+        k = d, the driving point's row.
+
+    Returns
+    -------
+    ndarray
+        (n, m) complex shapes, 1/sqrt(kg).
     """
     ra = modal_constants(residue_row, poles)
     phi_d = np.sqrt(ra[driving_index])
@@ -41,10 +66,22 @@ def mass_normalised_shapes(
 
 
 def unscaled_shapes(residue_row: np.ndarray, poles: np.ndarray) -> np.ndarray:
-    """Shapes (n, m) known up to a factor, from one row of residues without its driving point.
+    """Return shapes known up to a factor, from one row of residues without its driving point.
 
     rA_jk = phi_j phi_k along k is the shape times phi_j (unknown): each column is divided by
     its largest-magnitude entry (that entry becomes 1).
+
+    Parameters
+    ----------
+    residue_row : ndarray
+        (n, m) residues of one row.
+    poles : ndarray
+        (m,) continuous poles, rad/s.
+
+    Returns
+    -------
+    ndarray
+        (n, m) complex shapes, largest entry 1.
     """
     ra = modal_constants(residue_row, poles)
     if ra.size == 0:
@@ -60,6 +97,20 @@ def fix_sign(
 
     When the driving point is (near) a node of the mode (|phi_d| < min_relative max|phi|), or
     there is none (``driving_index`` None), the largest-magnitude entry is made positive.
+
+    Parameters
+    ----------
+    shapes : ndarray
+        (n, m) real shapes.
+    driving_index : int or None
+        The driving point's row.
+    min_relative : float
+        Below this fraction of the largest entry the driving point counts as a node.
+
+    Returns
+    -------
+    ndarray
+        (n, m) the shapes with their signs fixed.
     """
     s = np.array(shapes, dtype=float, copy=True)
     if s.size == 0:
