@@ -74,6 +74,44 @@ def _num(v) -> float | None:
     return None if v is None or not math.isfinite(float(v)) else float(v)
 
 
+def _lab_units(values: dict) -> dict:
+    """SI readings in the contract's units: *_m -> *_in, *_kg -> *_g, *_rel -> *_pct."""
+    out = {}
+    for key, v in values.items():
+        if key.endswith("_m"):
+            out[key[:-2] + "_in"] = round(float(v) / IN_TO_M, 4)
+        elif key.endswith("_kg"):
+            out[key[:-3] + "_g"] = round(1e3 * float(v), 2)
+        elif key.endswith("_rel"):
+            out[key[:-4] + "_pct"] = round(100 * float(v), 2)
+        else:
+            out[key] = _num(v)
+    return out
+
+
+def finding_dict(finding) -> dict | None:
+    """Write a verdict's finding as the contract fixes it (None when nothing was found).
+
+    Parameters
+    ----------
+    finding : updating.inspect.finding.Finding or None
+        What changed, SI.
+
+    Returns
+    -------
+    dict or None
+        ``kind``, ``legal``, ``region_in``, ``rule``, ``reading`` and ``uncertainty`` (1
+        sigma) in the lab's units (in, g, %).
+    """
+    if finding is None:
+        return None
+    a, b = finding.region_m
+    return {"kind": finding.kind, "legal": bool(finding.legal),
+            "region_in": [_in(a), _in(b)], "rule": finding.rule,
+            "reading": _lab_units(finding.reading),
+            "uncertainty": _lab_units(finding.uncertainty)}
+
+
 def contract_dict(serial: str, verdict: Verdict) -> dict:
     """Write the verdict as docs/contract.md fixes it.
 
@@ -109,6 +147,7 @@ def contract_dict(serial: str, verdict: Verdict) -> dict:
         "region_in": None if region is None else [_in(region[0]), _in(region[1])],
         "core_diameter_in": None if core is None else round(float(core) / IN_TO_M, 4),
         "fill_density_ratio": _num(fill),
+        "finding": finding_dict(verdict.finding),
         "elements": elements,
         "confidence": _num(verdict.confidence),
         "false_alarm_rate": _num(verdict.false_alarm_rate),

@@ -1,22 +1,30 @@
 """The inspection's decision: its gates, and its rules read top to bottom (docs/inspection.md).
 
-The evidence (``Evidence``) comes from the nested test of H1 (drift and a core) against H0
-(drift alone) and from the checks made on them (``updating.inspect.run``). The first rule
-of ``RULES`` whose condition holds gives the outcome and its reasons:
+The evidence (``Evidence``) comes from the nested test of H1 (drift and a local change
+anywhere) against H0 (drift, with a grip substance on the handle) and, when the change is
+significant, from the kind its physics fits best (``kinds.classify``: a core, added mass, a
+lost diameter; ``finding``). The first rule of ``RULES`` whose condition holds gives the
+outcome and its reasons:
 
 =====================  ==============================================  ============
 rule                   when                                            altered
 =====================  ==============================================  ============
 another bat            a uniform change beyond physical bounds         None
-                       explains the change as well as the core does
-core                   significant, practical core, no confusable      True
-                       nuisance at its bound (or the core beats drift
-                       three times beyond the bounds)
-core or drift          significant, practical core, a confusable       None
-                       nuisance at its bound
+                       explains the change as well as a local one
+grip substance         significant, a substance on the handle within   False
+                       18 in of the knob (Rule 3.02(c): legal)
+grip past 18 in        significant, a grip substance reaching past     False
+                       18 in (clean the bat; not an alteration)
+alteration             significant, a kind of alteration large enough  True
+                       for its kind (``kind_supported``), no
+                       confusable nuisance at its bound (or it beats
+                       drift three times beyond the bounds)
+alteration or drift    the same, a confusable nuisance at its bound    None
+unexplained change     significant, local, but no kind fits it         None
 weight                 significant, weight changed beyond moisture     None
-thin core              significant (no practical core)                 False
+small change           significant, below its kind's gate              False
 drift beyond bounds    a nuisance the data want beyond its bound       None
+grip (in H0)           a grip substance read by H0 (legal)             False
 drift                  otherwise                                       False
 =====================  ==============================================  ============
 """
@@ -27,6 +35,9 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
+
+from updating.inspect.finding import Finding
+from updating.model.units import IN_TO_M
 
 F_FLOOR = 10.0
 """Calibrated floor on F: on nuisance-rich clean bats (end-grain moisture, billet gradients,
@@ -55,6 +66,16 @@ at its physical bound cannot be told from that drift. (A uniform scale at its bo
 a core only says the core model is not the alteration's exact shape.)"""
 
 
+MIN_ADDED_MASS_G = 3.0
+"""Added mass (an insert, a coat), less two standard uncertainties, that an alteration needs:
+about one nail; a clean bat's accelerometer, cable and dirt move a few tenths of a gram."""
+MIN_DIAMETER_LOST_IN = 0.01
+"""Outer diameter lost, less two standard uncertainties, that an alteration needs (caliper
+noise and sanding are thousandths of an inch)."""
+GRIP_MIN_G = 1.0
+"""A grip substance read by H0 (less two standard uncertainties) that is reported."""
+
+
 def is_significant(F: float, p_value: float, false_alarm: float) -> bool:
     """Tell whether the nested test rejects drift alone: p below the level and F at its floor.
 
@@ -73,9 +94,38 @@ def is_significant(F: float, p_value: float, false_alarm: float) -> bool:
     return p_value < false_alarm and F >= F_FLOOR
 
 
+def kind_supported(finding: Finding | None) -> bool:
+    """Tell whether a finding is large enough for its kind to be an alteration.
+
+    A core's diameter, an insert's or a coat's mass and a lost diameter must each exceed
+    their gate (``MIN_CORE_DIAMETER_IN``, ``MIN_ADDED_MASS_G``, ``MIN_DIAMETER_LOST_IN``) by
+    two standard uncertainties; a grip substance and a change no kind explains never are.
+
+    Parameters
+    ----------
+    finding : Finding or None
+        What the change's physics fits best.
+
+    Returns
+    -------
+    bool
+    """
+    if finding is None or finding.kind in ("handle_substance", "local_change"):
+        return False
+    r, u = finding.reading, finding.uncertainty
+    if finding.kind == "core":
+        low = r["core_diameter_m"] - 2 * u.get("core_diameter_m", np.inf)
+        return low / IN_TO_M >= MIN_CORE_DIAMETER_IN
+    if finding.kind in ("inserted_mass", "surface_coating"):
+        low = r["added_mass_kg"] - 2 * u.get("added_mass_kg", np.inf)
+        return 1e3 * low >= MIN_ADDED_MASS_G
+    low = r["diameter_lost_m"] - 2 * u.get("diameter_lost_m", np.inf)
+    return low / IN_TO_M >= MIN_DIAMETER_LOST_IN
+
+
 @dataclass(frozen=True)
 class Evidence:
-    """What the decision reads: the test, the candidate core and the checks on both fits.
+    """What the decision reads: the test, the finding and the checks on the fits.
 
     Attributes
     ----------
@@ -83,19 +133,22 @@ class Evidence:
         The nested test (H1 against H0).
     significant : bool
         ``is_significant`` of the two.
-    core_text : str
-        The candidate core in words (diameter, where, fill ratio).
-    d_in, d_low_in : float
-        The candidate core's diameter and its diameter less two standard uncertainties, in.
+    finding : Finding or None
+        The kind the change fits best, when significant.
+    finding_text : str
+        The finding in words (where, how much).
     held_null, held_core : tuple of str
-        Nuisances H0 holds at their physical bounds; the ``CONFUSABLE`` ones H1 holds there.
+        Nuisances H0 holds at their physical bounds; the ``CONFUSABLE`` ones the finding's
+        fit holds there.
     dlnw : float or None
         ln(W_retest / W_registered), None when either weight is unknown.
+    grip : Finding or None
+        A legal grip substance H0 read on the handle (``GRIP_MIN_G`` or more), else None.
     uniform : tuple of float or None
         (stiffness %, density %) of a uniform change beyond the bounds that explains the
-        change as well as the core (another bat), else None.
+        change as well as the local one (another bat), else None.
     F_wide : float or None
-        F of the core against drift three times beyond the bounds when it stays
+        F of the local change against drift three times beyond the bounds when it stays
         significant, else None.
     drift_beyond_bounds : bool
         The data want H0's held nuisances beyond their bounds (evaluated only when the
@@ -105,20 +158,25 @@ class Evidence:
     F: float
     p_value: float
     significant: bool
-    core_text: str
-    d_in: float
-    d_low_in: float
+    finding: Finding | None
+    finding_text: str
     held_null: tuple[str, ...]
     held_core: tuple[str, ...]
     dlnw: float | None
+    grip: Finding | None = None
     uniform: tuple[float, float] | None = None
     F_wide: float | None = None
     drift_beyond_bounds: bool = False
 
     @property
-    def practical(self) -> bool:
-        """Whether the core, less two standard uncertainties, reaches the physical floor."""
-        return self.d_low_in >= MIN_CORE_DIAMETER_IN
+    def supported(self) -> bool:
+        """Whether the finding is an alteration large enough for its kind."""
+        return kind_supported(self.finding)
+
+    @property
+    def kind(self) -> str | None:
+        """The finding's kind, or None."""
+        return None if self.finding is None else self.finding.kind
 
     @property
     def weight_note(self) -> str:
@@ -135,35 +193,49 @@ def _another_bat(e: Evidence) -> list[str]:
             "registered baseline is its own"]
 
 
-def _core(e: Evidence) -> list[str]:
+def _grip(e: Evidence) -> list[str]:
+    return [f"{e.finding_text}: a grip substance, legal under Rule 3.02(c); no alteration "
+            f"(F = {e.F:.1f}){e.weight_note}"]
+
+
+def _grip_past(e: Evidence) -> list[str]:
+    return [f"{e.finding_text}: a grip substance that reaches past 18 in from the knob; the "
+            "bat must be cleaned before play (Rule 3.02(c)), which is not an alteration"]
+
+
+def _altered(e: Evidence) -> list[str]:
     beyond = "" if not e.held_core else (
         f"; with {', '.join(e.held_core)} at its physical bound, but no drift even three "
         f"times beyond the physical bounds explains it (F = {e.F_wide:.1f})")
-    return [f"the change between the tests is not one moisture, temperature or the "
-            f"accelerometer can make (F = {e.F:.1f}, p = {e.p_value:.1e}){e.weight_note}"
-            f"{beyond}", f"it fits {e.core_text}"]
+    return [f"the change between the tests is not one moisture, temperature, the "
+            f"accelerometer or a grip can make (F = {e.F:.1f}, p = {e.p_value:.1e})"
+            f"{e.weight_note}{beyond}", f"it fits {e.finding_text}"]
 
 
-def _core_or_drift(e: Evidence) -> list[str]:
-    return [f"the change between the tests fits {e.core_text}, but only with "
+def _altered_or_drift(e: Evidence) -> list[str]:
+    return [f"the change between the tests fits {e.finding_text}, but only with "
             f"{', '.join(e.held_core)} at its physical bound: an alteration and that drift "
             "cannot be told apart; weigh the bat, give retest.json (weight, "
             "accelerometer mass, temperature) and re-test after a week at the "
             "baseline's conditions"]
 
 
+def _unexplained(e: Evidence) -> list[str]:
+    return [f"the tests differ locally beyond noise (F = {e.F:.1f}, {e.finding_text}), but "
+            "not as any alteration or legal change does: look the bat over (cracks, "
+            "repairs, something attached), check the accelerometer's mounting and re-test"]
+
+
 def _weight(e: Evidence) -> list[str]:
     return [f"the weight changed by {100 * np.expm1(e.dlnw):+.1f} %, more than moisture "
-            f"does, and the tests differ (F = {e.F:.1f}), but not as a core would (the "
-            f"best is {e.d_in:.2f} in across, at least {max(e.d_low_in, 0):.2f} in at 2 "
-            "sigma): check that the re-test is of this bat and re-weigh it"]
+            f"does, and the tests differ (F = {e.F:.1f}), but no alteration surely explains "
+            f"it (best: {e.finding_text}): check that the re-test is of this bat and "
+            "re-weigh it"]
 
 
-def _thin_core(e: Evidence) -> list[str]:
-    return [f"the tests differ beyond noise (F = {e.F:.1f}) but only as a core "
-            f"{e.d_in:.2f} in across would (at least {max(e.d_low_in, 0):.2f} in at 2 "
-            f"sigma), not surely a practical core ({MIN_CORE_DIAMETER_IN} in)"
-            f"{e.weight_note}"]
+def _small(e: Evidence) -> list[str]:
+    return [f"the tests differ beyond noise (F = {e.F:.1f}) but only as {e.finding_text} "
+            "would, too small to be surely an alteration of that kind" f"{e.weight_note}"]
 
 
 def _drift_beyond_bounds(e: Evidence) -> list[str]:
@@ -173,8 +245,16 @@ def _drift_beyond_bounds(e: Evidence) -> list[str]:
 
 
 def _drift(e: Evidence) -> list[str]:
+    grip = "" if e.grip is None else (
+        f"; {grip_text(e.grip)}: a grip substance, legal under Rule 3.02(c)")
     return [f"the change between the tests is what moisture, temperature and the "
-            f"accelerometer make (F = {e.F:.2f}, p = {e.p_value:.2f}){e.weight_note}"]
+            f"accelerometer make (F = {e.F:.2f}, p = {e.p_value:.2f}){e.weight_note}{grip}"]
+
+
+def grip_text(f: Finding) -> str:
+    """A grip substance in words: about N g added on the handle, a-b in."""
+    a, b = (v / IN_TO_M for v in f.region_m)
+    return f"about {1e3 * f.reading['added_mass_kg']:.0f} g added on the handle, {a:.0f}-{b:.0f} in"
 
 
 @dataclass(frozen=True)
@@ -201,12 +281,19 @@ class Rule:
 
 RULES = (
     Rule("another bat", lambda e: e.uniform is not None, None, _another_bat),
-    Rule("core", lambda e: e.significant and e.practical
-         and (not e.held_core or e.F_wide is not None), True, _core),
-    Rule("core or drift", lambda e: e.significant and e.practical, None, _core_or_drift),
+    Rule("grip substance", lambda e: e.significant and e.kind == "handle_substance"
+         and e.finding.legal, False, _grip),
+    Rule("grip past 18 in", lambda e: e.significant and e.kind == "handle_substance",
+         False, _grip_past),
+    Rule("alteration", lambda e: e.significant and e.supported
+         and (not e.held_core or e.F_wide is not None), True, _altered),
+    Rule("alteration or drift", lambda e: e.significant and e.supported, None,
+         _altered_or_drift),
+    Rule("unexplained change", lambda e: e.significant and e.kind == "local_change", None,
+         _unexplained),
     Rule("weight", lambda e: e.significant and e.dlnw is not None
          and abs(e.dlnw) > WEIGHT_DRIFT_MAX, None, _weight),
-    Rule("thin core", lambda e: e.significant, False, _thin_core),
+    Rule("small change", lambda e: e.significant, False, _small),
     Rule("drift beyond bounds", lambda e: e.drift_beyond_bounds, None, _drift_beyond_bounds),
     Rule("drift", lambda e: True, False, _drift),
 )

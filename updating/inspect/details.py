@@ -244,6 +244,10 @@ class FitEvidence:
     empty_m
         The reading's empty stretch of the hole behind the plug (a partial fill), m; 0 when the
         hole reads as filled to the plug.
+    local_change
+        H1's generic local change (start, length in inches; relative mass and stiffness).
+    kind_scores
+        Akaike score of each kind's fit, when the change was significant.
     """
 
     statistic: str
@@ -269,6 +273,8 @@ class FitEvidence:
     plug_m: float
     fill_modulus_ratio: float
     empty_m: float = 0.0
+    local_change: dict[str, float] = field(default_factory=dict)
+    kind_scores: dict[str, float] = field(default_factory=dict)
 
 
 @dataclass(frozen=True)
@@ -329,7 +335,8 @@ class InspectionDetails:
             "position_scan": f.position_scan.to_json_dict(),
             "msso": f.msso.to_json_dict(),
             "plug_m": f.plug_m, "fill_modulus_ratio": f.fill_modulus_ratio,
-            "empty_m": f.empty_m, "time_s": self.time_s,
+            "empty_m": f.empty_m, "local_change": dict(f.local_change),
+            "kind_scores": dict(f.kind_scores), "time_s": self.time_s,
         }
 
     @classmethod
@@ -368,7 +375,9 @@ class InspectionDetails:
             position_scan=PositionScan.from_json_dict(d.get("position_scan")),
             msso=ElementMap.from_json_dict(d.get("msso"), x0_m, x1_m),
             plug_m=_num(d.get("plug_m")), fill_modulus_ratio=_num(d.get("fill_modulus_ratio")),
-            empty_m=_num(d.get("empty_m")))
+            empty_m=_num(d.get("empty_m")),
+            local_change=dict(d.get("local_change") or {}),
+            kind_scores=dict(d.get("kind_scores") or {}))
         return cls(n_modes, time_s, fit)
 
 

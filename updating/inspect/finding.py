@@ -128,3 +128,35 @@ def choose_family(scores: dict[str, float], generic_score: float) -> str:
     generic change by more than ``KIND_MARGIN``."""
     best = min(scores, key=scores.get)
     return "local_change" if scores[best] - generic_score > KIND_MARGIN else best
+
+
+def describe(f: Finding) -> str:
+    """Say a finding in the lab's words: what, how much and where (inches from the knob).
+
+    Parameters
+    ----------
+    f : Finding
+        The finding.
+
+    Returns
+    -------
+    str
+        E.g. "about 18 g of metal in 29.2-32.5 in from the knob end (nailed)".
+    """
+    a, b = (v / 0.0254 for v in f.region_m)
+    where = f"{a:.1f}-{b:.1f} in from the knob end"
+    r = f.reading
+    if f.kind == "core":
+        return (f"a core {r['core_diameter_m'] / 0.0254:.2f} in across at {where}, fill/wood "
+                f"density {r['fill_density_ratio']:.2f} ({f.rule})")
+    if f.kind == "inserted_mass":
+        return f"about {1e3 * r['added_mass_kg']:.0f} g of metal in {where} ({f.rule})"
+    if f.kind == "surface_coating":
+        return f"about {1e3 * r['added_mass_kg']:.0f} g of a substance over {where} ({f.rule})"
+    if f.kind == "handle_substance":
+        return f"about {1e3 * r['added_mass_kg']:.0f} g added on the handle, {a:.0f}-{b:.0f} in"
+    if f.kind == "material_removed":
+        return (f"{r['diameter_lost_m'] / 0.0254:.3f} in of diameter removed over {where}, "
+                f"about {1e3 * r['removed_mass_kg']:.0f} g of wood ({f.rule})")
+    return (f"a local change of mass {100 * r['mass_change_rel']:+.0f} % and bending stiffness "
+            f"{100 * r['stiffness_change_rel']:+.0f} % over {where}")

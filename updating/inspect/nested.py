@@ -14,13 +14,14 @@ import numpy as np
 from scipy.stats import chi2
 from scipy.stats import f as f_dist
 
-from updating.inspect.decision import CONFUSABLE, Evidence, is_significant
+from updating.inspect.decision import CONFUSABLE, GRIP_MIN_G, Evidence, is_significant
 from updating.inspect.details import (
     PositionScan,
 )
+from updating.inspect.finding import RULES, Finding, describe
 from updating.inspect.hypotheses import (
+    HANDLE_MAX_IN,
     MAX_NFEV_CORE,
-    N_CORE,
     N_NULL,
     ChangeFit,
     Differences,
@@ -28,11 +29,12 @@ from updating.inspect.hypotheses import (
     ParamSpace,
     covariance,
     fit_bounded,
-    fit_core,
     fit_null,
     residual_function,
     shape_noise,
 )
+from updating.inspect.kinds import N_PARAMS, KindFits, classify, segment_space
+from updating.inspect.local_change import N_SEGMENT, fit_segment
 from updating.inspect.model import ChangePredictor
 from updating.model.units import IN_TO_M
 
@@ -41,37 +43,58 @@ INITIAL_SHAPE_NOISE = 0.01
 
 @dataclass(frozen=True)
 class Hypotheses:
-    """H0 and H1 fitted.
+    """H0 and H1 fitted, with the shape noise they were weighted with.
 
-    H0 and H1 fitted, with the shape noise they were weighted with ((m,), one relative
-    level per paired mode, ``fit.shape_noise``).
+    Attributes
+    ----------
+    null : ChangeFit
+        H0: what an unaltered bat does between tests (grip substance included).
+    full : ChangeFit
+        H1: H0 and a local change anywhere along the bat: the best of the generic change
+        and the kinds' families (``kinds``), each of at most ``N_SEGMENT`` parameters.
+    sigma_rel : numpy.ndarray
+        (m,) relative shape noise per paired mode (``hypotheses.shape_noise``).
+    scan : PositionScan
+        The core family's position scan (empty: not recorded).
+    kinds : KindFits
+        Every family fitted on the same null and noise (``kinds.classify``); ``full`` is
+        the one with the lowest residual.
     """
 
     null: ChangeFit
     full: ChangeFit
     sigma_rel: np.ndarray
     scan: PositionScan
+    kinds: KindFits
 
 
 def fit_hypotheses(predict: ChangePredictor, diff: Differences, space: ParamSpace,
                    n_starts: int) -> Hypotheses:
-    """Fit H0 and H1 with each mode's shape noise.
+    """Fit H0 and H1 (a local change of any kind) with each mode's shape noise.
 
-    Shape noise of each mode from the null fit, then from the core fit (both refitted
-    with it).
+    Shape noise of each mode from the null fit, then from the generic local change's fit
+    (both refitted with it); then every kind's family on that null and noise.
     """
+    gspace = segment_space(space, "local_change")
     null = fit_null(predict, diff, space, INITIAL_SHAPE_NOISE)
     sigma = shape_noise(null, diff, INITIAL_SHAPE_NOISE, N_NULL)
     null = fit_null(predict, diff, space, sigma, x0=null.x)
-    full, scan = fit_core(predict, diff, space, sigma, null, n_starts)
-    sigma = shape_noise(full, diff, sigma, N_NULL + N_CORE)
+    full = fit_segment(predict, diff, gspace, sigma, null, n_starts)
+    sigma = shape_noise(full, diff, sigma, N_NULL + N_SEGMENT)
     null = fit_null(predict, diff, space, sigma, x0=null.x)
-    full, _ = fit_core(predict, diff, space, sigma, null, x0=full.x)
-    if null.rss < full.rss:  # H1 contains H0 (p = q = 0): restart H1 from there
-        x0 = np.concatenate([null.x, full.x[N_NULL:N_NULL + 2], [0.0, 0.0]])
-        full = fit_bounded(residual_function(predict, diff, space, sigma), x0, space.lower(),
-                           space.upper(), space, diff, MAX_NFEV_CORE)
-    return Hypotheses(null, full, sigma, scan)
+    starts = [full.x, np.concatenate([null.x, full.x[N_NULL:]])]
+    full = fit_segment(predict, diff, gspace, sigma, null, starts=starts)
+    kinds = classify(predict, diff, space, sigma, null, full)
+    best = min(kinds.fits, key=lambda k: kinds.fits[k].rss)
+    # the noise from the best family's residual (the generic change may fit an alteration of
+    # a known kind less well, and its residual would read as noise), both hypotheses refitted
+    sigma = shape_noise(kinds.fits[best], diff, sigma, N_NULL + N_PARAMS[best])
+    null = fit_null(predict, diff, space, sigma, x0=null.x)
+    fspace = space if best == "core" else segment_space(space, best)
+    fun = residual_function(predict, diff, fspace, sigma)
+    x0 = kinds.fits[best].x
+    full = fit_bounded(fun, x0, fspace.lower(), fspace.upper(), fspace, diff, MAX_NFEV_CORE)
+    return Hypotheses(null, full, sigma, PositionScan(), kinds)
 
 
 def nested_f(rss_null: float, rss_core: float, q: int, dof: int) -> tuple[float, float]:
@@ -126,8 +149,8 @@ def nested_test(diff: Differences, hyp: Hypotheses) -> NestedTest:
     NestedTest
         F, p and what they were computed from.
     """
-    n, q = diff.n_data, N_CORE
-    dof = max(n - (N_NULL + N_CORE), 1)
+    n, q = diff.n_data, N_SEGMENT
+    dof = max(n - (N_NULL + N_SEGMENT), 1)
     rss0, rss1 = hyp.null.rss, min(hyp.full.rss, hyp.null.rss)
     F, p_value = nested_f(rss0, rss1, q, dof)
     return NestedTest(F, p_value, q, dof, n, rss0, rss1)
@@ -185,14 +208,56 @@ def _core_beyond_drift(predict, diff, space, hyp: Hypotheses, q: int, dof: int,
     return F if is_significant(F, p, false_alarm) else None
 
 
+def _grip_in_null(null: ChangeFit, n: int) -> Finding | None:
+    """The grip substance H0 read on the handle, when at least ``GRIP_MIN_G`` at 2 sigma."""
+    sd = float(np.sqrt(max(covariance(null, max(n - N_NULL, 1))[7, 7], 0.0)))
+    mass_g = float(null.x[7])
+    if mass_g - 2 * sd < GRIP_MIN_G:
+        return None
+    region = (float(null.x[9]) * IN_TO_M, float(null.x[8]) * IN_TO_M)
+    return Finding("handle_substance", True, region, RULES["grip"],
+                   {"added_mass_kg": mass_g * 1e-3}, {"added_mass_kg": sd * 1e-3},
+                   "null")
+
+
+def _as_grip(finding: Finding, null: ChangeFit, grip: Finding | None) -> Finding:
+    """Read a finding on the handle, or just past it, as the grip substance it is.
+
+    A change within 18 in of the knob (any family) while H0 reads a grip substance there is
+    that substance laid unevenly: legal. Added mass that starts at most ``GRIP_PAST_IN``
+    past 18 in while H0's substance reaches its 18 in bound is the substance spread past
+    the rule: the bat must be cleaned, not an alteration.
+    """
+    start_in, end_in = (v / IN_TO_M for v in finding.region_m)
+    reach_held = null.x[8] >= HANDLE_MAX_IN - 0.1 and null.x[7] >= GRIP_MIN_G
+    if grip is not None and end_in <= HANDLE_MAX_IN + 0.5:
+        total = grip.reading["added_mass_kg"] + finding.reading.get("added_mass_kg", 0.0)
+        return replace(grip, region_m=(min(grip.region_m[0], finding.region_m[0]),
+                                       max(grip.region_m[1], finding.region_m[1])),
+                       reading={"added_mass_kg": total})
+    if finding.family == "added_mass" and reach_held and start_in <= HANDLE_MAX_IN + GRIP_PAST_IN:
+        total = float(null.x[7]) * 1e-3 + finding.reading["added_mass_kg"]
+        return replace(finding, kind="handle_substance", legal=False,
+                       rule=RULES["grip_past"],
+                       region_m=(float(null.x[9]) * IN_TO_M, finding.region_m[1]),
+                       reading={"added_mass_kg": total})
+    return finding
+
+
+GRIP_PAST_IN = 4.0
+"""How far past 18 in added mass may start and still be H0's grip substance spread on."""
+
+
 def weigh_evidence(predict: ChangePredictor, diff: Differences, space: ParamSpace,
                    hyp: Hypotheses, test: NestedTest, false_alarm: float,
-                   dlnw: float | None) -> tuple[Evidence, dict]:
+                   dlnw: float | None) -> tuple[Evidence, KindFits | None]:
     """Gather what the decision reads, running only the checks its rules need.
 
-    The uniform explanation is tried when the change is significant; drift three times
-    beyond the bounds when a practical core needs a confusable nuisance at its bound; the
-    relaxed bounds when the change is not significant and H0 holds a nuisance at a bound.
+    When the change is significant, every kind is fitted and the best read
+    (``kinds.classify``) and a uniform explanation is tried; drift three times beyond the
+    bounds when an alteration large enough for its kind needs a confusable nuisance at its
+    bound; the relaxed bounds when the change is not significant and H0 holds a nuisance at
+    a bound.
 
     Parameters
     ----------
@@ -215,30 +280,30 @@ def weigh_evidence(predict: ChangePredictor, diff: Differences, space: ParamSpac
     -------
     evidence : Evidence
         The decision's input.
-    candidate : dict
-        The H1 core's reading with its standard uncertainties (``ParamSpace.reading``).
+    kinds : KindFits or None
+        Every kind's fit and the finding, when the change is significant.
     """
-    full, length_m = hyp.full, space.profile.length_m
-    candidate = space.reading(full.x, covariance(full, test.dof))
-    c = full.params.core
-    d_in = c.diameter_m / IN_TO_M
-    start_in, end_in = (v / IN_TO_M for v in c.interval_m(length_m))
+    significant = is_significant(test.F, test.p_value, false_alarm)
+    grip = _grip_in_null(hyp.null, test.n)
+    kinds = finding = None
+    held_core: tuple[str, ...] = ()
+    if significant:
+        kinds = hyp.kinds
+        finding = _as_grip(kinds.finding, hyp.null, grip)
+        held_core = tuple(h for h in NullBounds.held(kinds.fit) if h in CONFUSABLE)
     evidence = Evidence(
-        F=test.F, p_value=test.p_value,
-        significant=is_significant(test.F, test.p_value, false_alarm),
-        core_text=(f"a core {d_in:.2f} in across at {start_in:.1f}-{end_in:.1f} in from the "
-                   f"knob end, fill/wood density {c.fill_density_ratio:.2f}"),
-        d_in=d_in, d_low_in=d_in - 2 * candidate["sd"]["core_diameter_m"] / IN_TO_M,
-        held_null=tuple(NullBounds.held(hyp.null)),
-        held_core=tuple(h for h in NullBounds.held(full) if h in CONFUSABLE), dlnw=dlnw)
-    if evidence.significant:
+        F=test.F, p_value=test.p_value, significant=significant, finding=finding,
+        finding_text="" if finding is None else describe(finding),
+        held_null=tuple(NullBounds.held(hyp.null)), held_core=held_core, dlnw=dlnw,
+        grip=grip)
+    if significant:
         uniform = _uniform_explanation(predict, diff, space, hyp, test.q, test.dof,
                                        false_alarm)
         evidence = replace(evidence, uniform=uniform)
-        if evidence.practical and evidence.held_core and uniform is None:
+        if evidence.supported and evidence.held_core and uniform is None:
             evidence = replace(evidence, F_wide=_core_beyond_drift(
                 predict, diff, space, hyp, test.q, test.dof, false_alarm))
     elif evidence.held_null:
         evidence = replace(evidence, drift_beyond_bounds=_bounds_matter(
             predict, diff, space, hyp, test.n))
-    return evidence, candidate
+    return evidence, kinds

@@ -32,6 +32,7 @@ from updating.inspect.hypotheses import (
     fit_partial,
     plane_shift,
 )
+from updating.inspect.kinds import KindFits
 from updating.inspect.model import ChangePredictor
 from updating.inspect.msso_map import msso_map
 from updating.inspect.nested import Hypotheses, NestedTest
@@ -100,7 +101,7 @@ class Reading:
 
 
 def read_fit(predict: ChangePredictor, diff: Differences, space: ParamSpace, hyp: Hypotheses,
-             test: NestedTest, altered: bool | None, candidate: dict) -> Reading:
+             test: NestedTest, altered: bool | None, kinds: KindFits | None) -> Reading:
     """Choose the fit the verdict reports (module docstring, step 5).
 
     Parameters
@@ -109,22 +110,24 @@ def read_fit(predict: ChangePredictor, diff: Differences, space: ParamSpace, hyp
         As for ``weigh_evidence``.
     altered : bool or None
         The decision.
-    candidate : dict
-        The H1 core's reading (``weigh_evidence``).
+    kinds : KindFits or None
+        Every kind's fit, when the change was significant (``weigh_evidence``).
 
     Returns
     -------
     Reading
-        H1's core, re-read with part of its hole possibly empty when its fill is light, when
-        altered; else H0 with the core's candidate kept for the record.
+        When altered, the finding's fit: a core re-read with part of its hole possibly
+        empty when its fill is light; else H0 (and H1, the generic change, for the record).
     """
-    full = hyp.full
-    if not altered:
-        return Reading(hyp.null, full, covariance(hyp.null, max(test.n - N_NULL, 1)),
-                       candidate["sd"])
-    if full.params.core.fill_density_ratio >= 1.0:
-        return Reading(full, full, covariance(full, test.dof), candidate["sd"])
-    fit, cov, sd, reason = _light_fill_reading(predict, diff, space, hyp.sigma_rel, full,
+    if not altered or kinds is None:
+        return Reading(hyp.null, hyp.full, covariance(hyp.null, max(test.n - N_NULL, 1)), {})
+    fit = kinds.fit
+    if kinds.family != "core":
+        return Reading(fit, fit, kinds.cov, {})
+    sd = space.reading(fit.x, kinds.cov)["sd"]
+    if fit.params.core.fill_density_ratio >= 1.0:
+        return Reading(fit, fit, kinds.cov, sd)
+    fit, cov, sd, reason = _light_fill_reading(predict, diff, space, hyp.sigma_rel, fit,
                                                test.n - (N_NULL + N_CORE) - 1,
                                                space.profile.length_m)
     return Reading(fit, fit, cov, sd, reason)
@@ -170,8 +173,9 @@ def mode_pairs(predict: ChangePredictor, diff: Differences, pairs: RetestPairs,
 
 
 def fit_evidence(diff: Differences, space: ParamSpace, hyp: Hypotheses, test: NestedTest,
-                 evidence: Evidence, reading: Reading, candidate: dict, altered: bool | None,
-                 beta_shear: np.ndarray, offset_m: float, msso: ElementMap) -> FitEvidence:
+                 evidence: Evidence, reading: Reading, kinds: KindFits | None,
+                 altered: bool | None, beta_shear: np.ndarray, offset_m: float,
+                 msso: ElementMap) -> FitEvidence:
     """Record the evidence of a test made (``details.FitEvidence``).
 
     Parameters
@@ -182,8 +186,8 @@ def fit_evidence(diff: Differences, space: ParamSpace, hyp: Hypotheses, test: Ne
         What the decision read.
     reading : Reading
         The reported fit.
-    candidate : dict
-        The H1 core's reading.
+    kinds : KindFits or None
+        Every kind's fit (the core family's is the candidate core), when significant.
     altered : bool or None
         The decision.
     beta_shear : numpy.ndarray
@@ -198,11 +202,19 @@ def fit_evidence(diff: Differences, space: ParamSpace, hyp: Hypotheses, test: Ne
     FitEvidence
         The record the verdict's details carry.
     """
-    null, full = hyp.null, hyp.full
-    c = full.params.core
-    region_c = c.interval_m(space.profile.length_m)
+    null, full = hyp.null, hyp.kinds.fits["local_change"]
+    candidate, plug_m = CoreCandidate.from_json_dict(None), float("nan")
+    if hyp.kinds is not None:
+        core_fit = hyp.kinds.fits["core"]
+        c = core_fit.params.core
+        sd = space.reading(core_fit.x, covariance(core_fit, test.dof))["sd"]
+        region_c = c.interval_m(space.profile.length_m)
+        candidate = CoreCandidate((float(region_c[0]), float(region_c[1])), c.diameter_m,
+                                  c.fill_density_ratio, sd)
+        plug_m = c.plug_m
+    core = reading.core_fit.params.core
     return FitEvidence(
-        statistic="F (drift+core vs drift-only, nested least squares)",
+        statistic="F (drift + a local change vs drift alone, nested least squares)",
         dof=(test.q, test.dof), p_value=test.p_value, rss_null=test.rss_null,
         rss_core=test.rss_core, n_data=test.n,
         shape_noise_rel=tuple(hyp.sigma_rel.tolist()),
@@ -210,17 +222,20 @@ def fit_evidence(diff: Differences, space: ParamSpace, hyp: Hypotheses, test: Ne
         null_fit=dict(zip(NULL_NAMES, map(float, null.x), strict=True)),
         null_at_bound=evidence.held_null, core_fit_at_bound=evidence.held_core,
         weight_change_rel=None if evidence.dlnw is None else float(np.expm1(evidence.dlnw)),
-        element_source=("physical core fit (element-averaged section ratios)" if altered
+        element_source=(f"the finding's fit ({kinds.family})" if altered and kinds
                         else "drift-only model (no local change)"),
         element_beta_shear=tuple(beta_shear.tolist()),
-        candidate_core=CoreCandidate((float(region_c[0]), float(region_c[1])), c.diameter_m,
-                                     c.fill_density_ratio, candidate["sd"]),
+        candidate_core=candidate,
         core_fit_moisture={"stiffness_scale": float(full.params.stiffness_scale),
                            "density_scale": float(full.params.density_scale)},
         sensor_shift_m=float(reading.fit.params.sensor_shift_m - space.sensor_mount_m),
         baseline_sensor_offset_m=offset_m, position_scan=hyp.scan, msso=msso,
-        plug_m=c.plug_m, fill_modulus_ratio=space.fill_modulus_ratio,
-        empty_m=reading.core_fit.params.core.empty_m if altered else 0.0)
+        plug_m=plug_m, fill_modulus_ratio=space.fill_modulus_ratio,
+        empty_m=core.empty_m if altered and core is not None else 0.0,
+        local_change=dict(zip(("start_in", "length_in", "mass_change_rel",
+                               "stiffness_change_rel"), map(float, full.x[N_NULL:]),
+                              strict=True)),
+        kind_scores={} if kinds is None else {k: float(v) for k, v in kinds.scores.items()})
 
 
 def element_map(profile, reference, baseline, retest, pairs: RetestPairs, drift, offset,

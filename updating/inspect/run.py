@@ -42,8 +42,9 @@ import numpy as np
 
 from updating.correlate.measured import MeasuredModes
 from updating.inspect.changes import comparability_reasons, differences, pair_tests
-from updating.inspect.decision import decide
+from updating.inspect.decision import Evidence, decide
 from updating.inspect.details import InspectionDetails
+from updating.inspect.finding import Finding
 from updating.inspect.hypotheses import NullBounds, ParamSpace
 from updating.inspect.model import ChangePredictor, baseline_sensor_offset
 from updating.inspect.nested import fit_hypotheses, nested_test, weigh_evidence
@@ -56,6 +57,7 @@ from updating.inspect.reading import (
     regions_agree,
 )
 from updating.inspect.retest_meta import RetestConditions
+from updating.inspect.segments import element_factors
 from updating.inspect.verdict import Verdict
 from updating.model.profile import Profile
 from updating.model.reference import BatReference
@@ -100,13 +102,13 @@ def _null_bounds(cond: RetestConditions, baseline_temperature_c: float | None,
     return NullBounds.physical(dm, dT)
 
 
-def _uncertainty(reading: Reading, with_core: bool) -> dict[str, float]:
-    """Return the standard uncertainties of the reported drift (and core, ``with_core``), SI."""
+def _uncertainty(reading: Reading, finding: Finding | None) -> dict[str, float]:
+    """Return the standard uncertainties of the reported drift and finding, SI."""
     sd = np.sqrt(np.clip(np.diag(reading.covariance), 0.0, None))
     out = {"stiffness_scale": sd[0] / 100, "density_scale": sd[1] / 100,
            "sensor_shift_m": sd[2] * IN_TO_M}
-    if with_core:
-        out.update(reading.core_sd)
+    if finding is not None:
+        out.update(finding.uncertainty)
     return {k: float(v) for k, v in out.items()}
 
 
@@ -186,22 +188,23 @@ def inspect_retest(
                        fill_modulus_ratio, float(retest.sensor_x_m - baseline.sensor_x_m))
     hyp = fit_hypotheses(predict, diff, space, n_starts)
     test = nested_test(diff, hyp)
-    evidence, candidate = weigh_evidence(predict, diff, space, hyp, test, false_alarm, dlnw)
+    evidence, kinds = weigh_evidence(predict, diff, space, hyp, test, false_alarm, dlnw)
     altered, reasons = decide(evidence)
-    reading = read_fit(predict, diff, space, hyp, test, altered, candidate)
+    reading = read_fit(predict, diff, space, hyp, test, altered, kinds)
     if reading.reason is not None:
         reasons[-1] = reading.reason
-    core = reading.core_fit.params.core if altered else None
-    factors = core_element_factors(predict.system().model, core)
+    finding = reported_finding(evidence, altered, reading, profile.length_m)
+    core = reading.core_fit.params.core if altered and finding.kind == "core" else None
+    factors = element_factors(predict.system().model, reading.fit.params if altered else None)
     # 6. the MSSO map, with the accepted model's drift (when there is a core, the null fit's
     # uniform scales absorb part of it and the map would show that as a change of the bat)
     ps = reading.fit.params
     msso = element_map(profile, reference, baseline, retest, pairs, ps, offset,
-                        hyp.sigma_rel, diff.sigma_lnf)
-    region = None if core is None else core.interval_m(profile.length_m)
+                       hyp.sigma_rel, diff.sigma_lnf)
+    region = finding.region_m if altered else None
     if msso.result is not None:
         msso = replace(msso, agrees_with_fit=regions_agree(msso.region_m, region))
-    record = fit_evidence(diff, space, hyp, test, evidence, reading, candidate, altered,
+    record = fit_evidence(diff, space, hyp, test, evidence, reading, kinds, altered,
                           factors.beta_shear, offset, msso)
     return Verdict(
         altered=altered, confidence=1.0 - test.p_value, false_alarm_rate=false_alarm,
@@ -209,14 +212,36 @@ def inspect_retest(
         region_m=None if region is None else (float(region[0]), float(region[1])),
         core_diameter_m=None if core is None else float(core.diameter_m),
         fill_density_ratio=None if core is None else float(core.mean_fill_density_ratio),
-        uncertainty=_uncertainty(reading, core is not None),
+        uncertainty=_uncertainty(reading, finding if altered else None),
         element_x0_m=factors.x0_m, element_x1_m=factors.x1_m,
         alpha=factors.alpha, beta=factors.beta,
         moisture={"stiffness_scale": float(ps.stiffness_scale),
                   "density_scale": float(ps.density_scale)},
         modes=mode_pairs(predict, diff, pairs, baseline, retest, hyp.null, reading.core_fit),
         details=InspectionDetails(pairs.n, time.perf_counter() - t0, record),
-        reasons=tuple(reasons))
+        reasons=tuple(reasons), finding=finding if finding.kind else None)
+
+
+def reported_finding(evidence: Evidence, altered: bool | None, reading: Reading,
+                     length_m: float) -> Finding:
+    """Return the finding the verdict reports (an empty ``Finding`` when there is none).
+
+    An alteration's finding (a core re-read from the reported fit, its light fill averaged
+    over the hole); a grip substance, legal or spread past 18 in; what an inconclusive
+    verdict could not tell apart; else the grip substance H0 read, if any.
+    """
+    f = evidence.finding
+    if altered and f is not None and f.kind == "core":
+        c = reading.core_fit.params.core
+        return replace(f, region_m=c.interval_m(length_m),
+                       reading={"core_diameter_m": c.diameter_m,
+                                "fill_density_ratio": c.mean_fill_density_ratio},
+                       uncertainty={**f.uncertainty, **reading.core_sd})
+    if f is not None and (altered or f.kind == "handle_substance" or altered is None):
+        return f
+    if altered is False and evidence.grip is not None:
+        return evidence.grip
+    return Finding("", False, (0.0, 0.0), "")
 
 
 def inspect(profile: Profile, reference: BatReference, baseline: MeasuredModes,

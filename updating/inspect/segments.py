@@ -35,6 +35,7 @@ import numpy as np
 from updating.model.assembly import BatModel, place
 from updating.model.element import ElementParts, element_parts
 from updating.model.sections import section_props
+from updating.msso.core_elements import CoreFactors, core_element_factors
 
 MIN_DIAMETER_SHARE = 0.2
 """A diameter loss never takes a section below this share of its diameter."""
@@ -171,3 +172,45 @@ def segment_matrices(model: BatModel, segments) -> tuple[np.ndarray, np.ndarray]
 def segment_mass_kg(model: BatModel, segments) -> float:
     """Change of the bat's mass on a scale from the segments, kg (added and removed)."""
     return float(sum(segment_parts(model, s)[1] for s in segments))
+
+
+def element_factors(model: BatModel, params) -> CoreFactors:
+    """Element mass and stiffness factors of a fitted state's local changes (MSSO's alpha, beta).
+
+    A core's factors (``core_element_factors``) plus each segment's: the change of each
+    element's translational mass, alpha_e = t^T dm_e t / t^T m_e t, and of its bending and
+    shear stiffness, beta_e = <dk_e, k_e> / <k_e, k_e> (Frobenius), which is the factor itself
+    where the change covers the whole element.
+
+    Parameters
+    ----------
+    model : BatModel
+        The wood model (the reference mesh at the test points).
+    params : ChangeParams or None
+        The fitted state, or None for no change.
+
+    Returns
+    -------
+    CoreFactors
+        Element ends and factors, (e,) each.
+    """
+    core = None if params is None else params.core
+    out = core_element_factors(model, core)
+    if params is None or not params.segments:
+        return out
+    t = np.array([1.0, 0.0, 1.0, 0.0])
+    p = model.parts
+    alpha, beta, beta_s = out.alpha.copy(), out.beta.copy(), out.beta_shear.copy()
+    for seg in params.segments:
+        d, _ = segment_parts(model, seg)
+        alpha += np.einsum("i,eij,j->e", t, d.m_trans, t) / element_masses_kg(model)
+        beta += _frobenius_ratio(d.k_bend, p.k_bend)
+        beta_s += _frobenius_ratio(d.k_shear, p.k_shear)
+    return CoreFactors(out.x0_m, out.x1_m, alpha, beta, beta_s)
+
+
+def _frobenius_ratio(d: np.ndarray, k: np.ndarray) -> np.ndarray:
+    """<d_e, k_e> / <k_e, k_e> per element (0 where k_e vanishes)."""
+    num = np.einsum("eij,eij->e", d, k)
+    den = np.einsum("eij,eij->e", k, k)
+    return np.divide(num, den, out=np.zeros_like(num), where=den > 0)

@@ -8,6 +8,7 @@ from enum import Enum
 import numpy as np
 
 from updating.inspect.details import InspectionDetails, ModePair
+from updating.inspect.finding import Finding
 
 
 class Status(str, Enum):
@@ -70,6 +71,7 @@ class Verdict:
     modes: tuple[ModePair, ...] = ()
     details: InspectionDetails | None = None
     reasons: tuple[str, ...] = ()
+    finding: Finding | None = None
 
     @property
     def status(self) -> Status:
