@@ -4,7 +4,7 @@ For each kind (clean bats, the legal grips, pine tar past 18 in, nails, shaved, 
 and grooved barrels, wax coats, and core kinds of ``updating.simulate.alterations``), N
 realistic bats (``updating.simulate.field_fleet.draw_case``, every nuisance at random) are
 written as the lab's files and inspected through the real command in this process
-(``batlab inspect ... --json``, ``benchmarks/fleet_runner.py``), with retest.json and,
+(``batlab inspect ... --json``, ``batlab.fleet.runner``), with retest.json and,
 for the first ``--without`` of them, the same bats without it. One JSON line per bat on
 stdout (kind, truth, status, reasons, region_in, finding, time); progress and a table per
 kind on stderr: altered / not_altered / inconclusive, the region's start within 1.5 in of
@@ -26,12 +26,12 @@ import tempfile
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
-sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 import numpy as np  # noqa: E402
-from fleet_runner import inspect_args, pool_map, timed, verdict_row  # noqa: E402
 
+from batlab.fleet.runner import inspect_args, pool_map, timed  # noqa: E402
 from updating.simulate.field_fleet import draw_case, write_case  # noqa: E402
+from updating.simulate.scoring import verdict_row  # noqa: E402
 
 KINDS = ("none", "pine_tar", "grip_tape", "spray", "tar_past_18", "nails", "shaved",
          "flattened", "grooved", "wax", "cork", "neutral", "empty")
@@ -51,7 +51,7 @@ def one(job: tuple[str, int, bool]) -> dict:
     Returns
     -------
     dict
-        ``fleet_runner.verdict_row`` plus with_meta, finding, region_ok and kind_ok.
+        ``updating.simulate.scoring.verdict_row`` plus with_meta, finding, region_ok and kind_ok.
     """
     kind, seed, with_meta = job
     try:
