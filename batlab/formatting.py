@@ -73,6 +73,9 @@ def readable(out: dict) -> str:
     if chance:
         fa = out.get("false_alarm_rate")
         lines.append(f"  {chance}" + (f" (called altered below p = {fa:g})" if fa else ""))
+    words = finding_words(out.get("finding"))
+    if words:
+        lines.append(f"  finding: {words}")
     if status == "altered":
         if out.get("region_in"):
             a, b = out["region_in"]
@@ -87,3 +90,49 @@ def readable(out: dict) -> str:
         lines.append(f"  {len(els)} elements; largest change at {big['x0_in']:.1f}-"
                      f"{big['x1_in']:.1f} in: alpha {big['alpha']:+.4f}, beta {big['beta']:+.4f}")
     return "\n".join(lines)
+
+
+def finding_words(finding: dict | None, length_in: float | None = None) -> str | None:
+    """Say a finding in the rule's words: "nailed: about 18 g of metal in 29.2-32.5 in ...".
+
+    Parameters
+    ----------
+    finding : dict or None
+        The contract's ``finding`` (inches, grams).
+    length_in : float or None
+        The bat's length, to say "the last N in of the barrel" when the finding reaches the
+        barrel end.
+
+    Returns
+    -------
+    str or None
+        One clause, None when nothing was found.
+    """
+    if not finding:
+        return None
+    a, b = finding["region_in"]
+    r = finding.get("reading") or {}
+    where = f"{a:.1f}-{b:.1f} in from the knob end"
+    if length_in is not None and length_in - b < 1.5 and finding["kind"] != "handle_substance":
+        where = f"the last {length_in - a:.0f} in of the barrel ({a:.1f}-{b:.1f} in)"
+    kind, rule = finding["kind"], finding["rule"]
+    if kind == "core":
+        fill = r.get("fill_density_ratio")
+        what = f"a bore about {r.get('core_diameter_in', float('nan')):.2f} in across"
+        if fill is not None:
+            what += (", left hollow" if fill < 0.05 else
+                     f", filled with material about {fill:.2f} times as dense as the wood")
+        return f"{rule}: {what}, in {where}"
+    if kind == "inserted_mass":
+        return f"{rule}: about {r.get('added_mass_g', 0):.0f} g of metal in {where}"
+    if kind == "surface_coating":
+        return f"{rule}: about {r.get('added_mass_g', 0):.0f} g of a substance over {where}"
+    if kind == "material_removed":
+        return (f"{rule}: about {r.get('diameter_lost_in', 0):.3f} in of the diameter removed "
+                f"over {where}")
+    if kind == "handle_substance":
+        text = f"about {r.get('added_mass_g', 0):.0f} g added on the handle, {a:.0f}-{b:.0f} in"
+        if finding.get("legal"):
+            return text + ": grip substance, legal under Rule 3.02(c)"
+        return text + ": a grip substance past 18 in; the bat must be cleaned before play"
+    return f"a local change no alteration explains, over {where}"

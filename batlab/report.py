@@ -24,7 +24,7 @@ from pathlib import Path
 
 import numpy as np
 
-from batlab.formatting import chance_words, p_value, status_of
+from batlab.formatting import chance_words, finding_words, p_value, status_of
 from batlab.pipeline.records import ReportInputs, jsonable
 from batlab.registry import now_utc
 from batlab.report_check import seal_page
@@ -294,9 +294,12 @@ def headline(r: ReportInputs) -> str:
                 ". The bat is not called altered.")
     if status == "altered":
         text = f"Bat {serial} has been altered"
+        words = finding_words(v.get("finding"), r.profile.length_m / IN_TO_M)
         region, core, fill = v.get("region_in"), v.get("core_diameter_in"), \
             v.get("fill_density_ratio")
-        if region:
+        if words:
+            text += f" ({words})"
+        elif region:
             size = f"a bore about {core:.2f} in across " if core else "a change "
             text += f": {size}from {region[0]:.1f} to {region[1]:.1f} in from the knob end"
             if fill is not None:
@@ -313,6 +316,9 @@ def headline(r: ReportInputs) -> str:
         return text
     text = (f"Bat {serial} shows no sign of alteration: the re-test differs from the baseline "
             "no more than moisture, temperature and re-mounting the sensor explain.")
+    grip = finding_words(v.get("finding"))
+    if grip:
+        text += f" Found: {grip}."
     if p is not None:
         text += f" Unaltered bats differ at least this much {chance_words(p)}"
         if alpha:

@@ -55,12 +55,12 @@ MASS_MAX_G = 120.0
 """Most mass a stretch may gain, g (six 10 g nails and a cap, or a thick coat)."""
 LOSS_MAX_IN = 0.3
 """Most outer diameter a stretch may lose, in (a barrel shaved flat on one side)."""
-SCAN_STEP_IN = 2.0
-SCAN_LENGTHS_IN = (1.5, 3.0, 6.0, 10.0)
+SCAN_STEP_IN = 3.0
+SCAN_LENGTHS_IN = (2.0, 5.0, 10.0)
 """Trial stretches of the scan: starts every ``SCAN_STEP_IN`` along the bat, these lengths."""
 UNIT = {"local_change": (0.05, 0.05), "added_mass": (10.0,), "diameter_loss": (0.05,)}
 """The unit amplitudes whose responses the scan combines (alpha, beta; g; in)."""
-MAX_NFEV = 30
+MAX_NFEV = 20
 
 
 @dataclass(frozen=True)

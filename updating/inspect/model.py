@@ -26,7 +26,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from updating.inspect.segments import Segment, segment_mass_kg, segment_matrices
+from updating.inspect.segments import Segment, segment_change
 from updating.model.assembly import (
     BatModel,
     assemble,
@@ -119,6 +119,10 @@ def wood_system(
     return WoodSystem(model, K, M, Kb, 2 * idx, tuple(K_ends), tuple(M_ends), t)
 
 
+LOCAL_CACHE = 64
+"""Local-change matrices a predictor keeps (``ChangePredictor.local``)."""
+
+
 class ChangePredictor:
     """predict(params) -> (freq_hz (n_solve,), shapes at the points (n_points, n_solve)).
 
@@ -135,6 +139,7 @@ class ChangePredictor:
         self.sensor_x_m, self.n_solve = float(sensor_x_m), int(n_solve)
         self.drive = int(np.argmin(np.abs(self.points_m - self.sensor_x_m)))
         self._cache: dict[Core | None, WoodSystem] = {}
+        self._local: dict = {}
 
     def at_sensor(self, sensor_x_m: float) -> ChangePredictor:
         """Return the same bat with its accelerometer elsewhere.
@@ -145,6 +150,7 @@ class ChangePredictor:
         out = ChangePredictor(self.profile, self.reference, self.points_m, sensor_x_m,
                               self.n_solve)
         out._cache = self._cache
+        out._local = self._local
         return out
 
     def with_reference(self, reference: BatReference) -> ChangePredictor:
@@ -163,11 +169,26 @@ class ChangePredictor:
                                             like)
         return self._cache[core]
 
+    def local(self, ws: WoodSystem, segments: tuple[Segment, ...]):
+        """(dK, dM, mass change) of local changes on a wood system, or None for none.
+
+        Cached per (system, segments), at most ``LOCAL_CACHE`` entries: a fit's Jacobian
+        moves one parameter at a time, so most of its columns share the segments.
+        """
+        if not segments:
+            return None
+        key = (id(ws), segments)
+        if key not in self._local:
+            if len(self._local) >= LOCAL_CACHE:
+                self._local.clear()
+            self._local[key] = segment_change(ws.model, segments)
+        return self._local[key]
+
     def wood_mass_kg(self, p: ChangeParams) -> float:
         """Return the wood's mass with the changes ``p``, kg."""
         ws = self.system(p.core)
         _, M = ws.wood_matrices(p.end_moisture_pt)
-        added = segment_mass_kg(ws.model, p.segments) if p.segments else 0.0
+        added = self.local(ws, p.segments)[2] if p.segments else 0.0
         return p.density_scale * ws.mass_kg(M) + added
 
     def __call__(self, p: ChangeParams) -> tuple[np.ndarray, np.ndarray]:
@@ -175,7 +196,7 @@ class ChangePredictor:
         ws = self.system(p.core)
         K, M = ws.wood_matrices(p.end_moisture_pt)
         M = p.density_scale * M
-        local = segment_matrices(ws.model, p.segments)
+        local = self.local(ws, p.segments)
         if local is not None:  # after moisture's scale: it scales the wood, not a foreign mass
             K, M = K + local[0], M + local[1]
         x = float(np.clip(self.sensor_x_m + p.sensor_shift_m, 0.0, self.profile.length_m))

@@ -82,8 +82,8 @@ def fit_hypotheses(predict: ChangePredictor, diff: Differences, space: ParamSpac
     full = fit_segment(predict, diff, gspace, sigma, null, n_starts)
     sigma = shape_noise(full, diff, sigma, N_NULL + N_SEGMENT)
     null = fit_null(predict, diff, space, sigma, x0=null.x)
-    starts = [full.x, np.concatenate([null.x, full.x[N_NULL:]])]
-    full = fit_segment(predict, diff, gspace, sigma, null, starts=starts)
+    full = fit_segment(predict, diff, gspace, sigma, null,
+                       starts=[np.concatenate([null.x, full.x[N_NULL:]])])
     kinds = classify(predict, diff, space, sigma, null, full)
     best = min(kinds.fits, key=lambda k: kinds.fits[k].rss)
     # the noise from the best family's residual (the generic change may fit an alteration of

@@ -147,8 +147,8 @@ def segment_parts(model: BatModel, seg: Segment) -> tuple[ElementParts, float]:
     return parts, float(np.sum(w * d_rhoa))
 
 
-def segment_matrices(model: BatModel, segments) -> tuple[np.ndarray, np.ndarray] | None:
-    """(dK, dM) of the segments on the model's wood matrices, or None for no segment.
+def segment_change(model: BatModel, segments) -> tuple[np.ndarray, np.ndarray, float]:
+    """(dK, dM, mass change in kg) of the segments on the model's wood matrices.
 
     Parameters
     ----------
@@ -157,16 +157,21 @@ def segment_matrices(model: BatModel, segments) -> tuple[np.ndarray, np.ndarray]
     segments : iterable of Segment
         The changes (their effects add).
     """
-    segs = tuple(segments)
-    if not segs:
-        return None
     dK = np.zeros((model.n_dof, model.n_dof))
     dM = np.zeros_like(dK)
-    for seg in segs:
-        p, _ = segment_parts(model, seg)
+    mass = 0.0
+    for seg in segments:
+        p, m = segment_parts(model, seg)
         dK += place(model, p.k_bend) + place(model, p.k_shear)
         dM += place(model, p.m_trans) + place(model, p.m_rot)
-    return dK, dM
+        mass += m
+    return dK, dM, mass
+
+
+def segment_matrices(model: BatModel, segments) -> tuple[np.ndarray, np.ndarray] | None:
+    """(dK, dM) of the segments on the model's wood matrices, or None for no segment."""
+    segs = tuple(segments)
+    return None if not segs else segment_change(model, segs)[:2]
 
 
 def segment_mass_kg(model: BatModel, segments) -> float:
