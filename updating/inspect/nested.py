@@ -66,6 +66,8 @@ class Hypotheses:
     sigma_rel: np.ndarray
     scan: PositionScan
     kinds: KindFits
+    family: str = "local_change"
+    """The family ``full`` belongs to."""
 
 
 def fit_hypotheses(predict: ChangePredictor, diff: Differences, space: ParamSpace,
@@ -94,7 +96,11 @@ def fit_hypotheses(predict: ChangePredictor, diff: Differences, space: ParamSpac
     fun = residual_function(predict, diff, fspace, sigma)
     x0 = kinds.fits[best].x
     full = fit_bounded(fun, x0, fspace.lower(), fspace.upper(), fspace, diff, MAX_NFEV_CORE)
-    return Hypotheses(null, full, sigma, PositionScan(), kinds)
+    fits = dict(kinds.fits, **{best: full})
+    dof = max(diff.n_data - N_NULL - N_PARAMS[kinds.family], 1)
+    kinds = replace(kinds, fits=fits, fit=fits[kinds.family],
+                    cov=covariance(fits[kinds.family], dof))
+    return Hypotheses(null, full, sigma, PositionScan(), kinds, best)
 
 
 def nested_f(rss_null: float, rss_core: float, q: int, dof: int) -> tuple[float, float]:

@@ -46,7 +46,7 @@ from updating.inspect.decision import Evidence, decide
 from updating.inspect.details import InspectionDetails
 from updating.inspect.finding import Finding
 from updating.inspect.hypotheses import NullBounds, ParamSpace
-from updating.inspect.model import ChangePredictor, baseline_sensor_offset
+from updating.inspect.model import ChangeParams, ChangePredictor, baseline_sensor_offset
 from updating.inspect.nested import fit_hypotheses, nested_test, weigh_evidence
 from updating.inspect.reading import (
     Reading,
@@ -195,7 +195,7 @@ def inspect_retest(
         reasons[-1] = reading.reason
     finding = reported_finding(evidence, altered, reading, profile.length_m)
     core = reading.core_fit.params.core if altered and finding.kind == "core" else None
-    factors = element_factors(predict.system().model, reading.fit.params if altered else None)
+    factors = element_factors(predict.system().model, _finding_change(reading, finding, altered))
     # 6. the MSSO map, with the accepted model's drift (when there is a core, the null fit's
     # uniform scales absorb part of it and the map would show that as a change of the bat)
     ps = reading.fit.params
@@ -220,6 +220,15 @@ def inspect_retest(
         modes=mode_pairs(predict, diff, pairs, baseline, retest, hyp.null, reading.core_fit),
         details=InspectionDetails(pairs.n, time.perf_counter() - t0, record),
         reasons=tuple(reasons), finding=finding if finding.kind else None)
+
+
+def _finding_change(reading: Reading, finding: Finding, altered: bool | None):
+    """The reported fit's state with only the finding's change (no grip, no drift), or None."""
+    if not altered:
+        return None
+    p = reading.fit.params
+    own = p.segments[-1:] if finding.family != "core" else ()
+    return replace(ChangeParams(), core=p.core, segments=own)
 
 
 def reported_finding(evidence: Evidence, altered: bool | None, reading: Reading,
