@@ -158,3 +158,16 @@ def test_fleet_runs_bats_through_the_command_line():
             for p in files_of("batlab") if p not in fleet
             for line, name in imported_modules(p) if name.startswith("batlab.fleet")]
     assert not bad, "\n".join(bad)
+
+
+def test_no_function_of_100_lines_or_more():
+    """Every function and method in the four packages is under 100 lines (split by step)."""
+    long = []
+    for pkg in PACKAGES:
+        for path in sorted((ROOT / pkg).rglob("*.py")):
+            for node in ast.walk(ast.parse(path.read_text(), str(path))):
+                if isinstance(node, ast.FunctionDef | ast.AsyncFunctionDef):
+                    n = node.end_lineno - node.lineno + 1
+                    if n >= 100:
+                        long.append(f"{path.relative_to(ROOT)}:{node.name} ({n} lines)")
+    assert not long, long

@@ -192,8 +192,6 @@ def select_poles(
         Every cluster of at least two stable poles that is not a mode, with why
         (``ema.poles.rejected``).
     """
-    from scipy.cluster.hierarchy import fcluster, linkage  # here: 0.1-0.2 s to import
-
     lo, hi = sweep.band_hz if freq_range_hz is None else freq_range_hz
     cand = np.flatnonzero(
         stab.all
@@ -203,27 +201,65 @@ def select_poles(
         & (sweep.freq_hz < hi)
     )
     min_count = max(3, int(np.ceil(min_fraction * sweep.orders.size)))
-    clusters: list[np.ndarray] = []
-    if cand.size >= 2:
-        f = sweep.freq_hz[cand]
-        z = sweep.damping_ratio[cand]
-        df = np.abs(f[:, None] - f[None, :]) / (0.5 * (f[:, None] + f[None, :]))
-        tol = np.maximum(tol_cluster_freq, 0.25 * (z[:, None] + z[None, :]))
-        dmac = (1.0 - mac(sweep.shape[cand].T, sweep.shape[cand].T)) / (1.0 - min_mac)
-        d = np.maximum(df / tol, dmac)
-        same_order = sweep.order[cand][:, None] == sweep.order[cand][None, :]
-        d[same_order] = np.maximum(d[same_order], 2.0)  # never two poles of one order
-        np.fill_diagonal(d, 0.0)
-        iu = np.triu_indices(cand.size, 1)
-        labels = fcluster(linkage(d[iu], method="average"), t=1.0, criterion="distance")
-        for members in _join_smeared(sweep, [cand[labels == lab] for lab in np.unique(labels)],
-                                     tol_cluster_freq):
-            # at most one pole per order: keep the one nearest the cluster median frequency
-            fm = np.median(sweep.freq_hz[members])
-            order_rank = np.lexsort((np.abs(sweep.freq_hz[members] - fm), sweep.order[members]))
-            members = members[order_rank]
-            _, first = np.unique(sweep.order[members], return_index=True)
-            clusters.append(members[first])
+    clusters = _cluster_candidates(sweep, cand, min_mac, tol_cluster_freq)
+    rows, rejected = _judge_clusters(sweep, clusters, min_count, min_mpc)
+    rows.sort(key=lambda r: r[0])
+    fr = np.array([r[0] for r in rows], dtype=float)
+    zr = np.array([r[1] for r in rows], dtype=float)
+    wn = 2 * np.pi * fr
+    n_out = sweep.shape.shape[1]
+    return SelectedPoles(
+        freq_hz=fr,
+        damping_ratio=zr,
+        freq_std_hz=np.array([r[2] for r in rows], dtype=float),
+        damping_std=np.array([r[3] for r in rows], dtype=float),
+        pole=-zr * wn + 1j * wn * np.sqrt(1 - zr**2),
+        count=np.array([r[4] for r in rows], dtype=int),
+        shape=np.array([r[5] for r in rows], dtype=complex).reshape(-1, n_out),
+    ), rejected
+
+
+def _cluster_candidates(sweep: PoleSweep, cand: np.ndarray, min_mac: float,
+                        tol_cluster_freq: float) -> list[np.ndarray]:
+    """Cluster candidate poles by frequency (tolerance widening with damping) and MAC.
+
+    Average-linkage clustering of d = max(df / tol, (1 - MAC) / (1 - min_mac)), two poles of
+    one order never together; smeared neighbours joined (``_join_smeared``); at most one pole
+    per order kept in each cluster, the one nearest the cluster's median frequency.
+    """
+    from scipy.cluster.hierarchy import fcluster, linkage  # here: 0.1-0.2 s to import
+
+    if cand.size < 2:
+        return []
+    f = sweep.freq_hz[cand]
+    z = sweep.damping_ratio[cand]
+    df = np.abs(f[:, None] - f[None, :]) / (0.5 * (f[:, None] + f[None, :]))
+    tol = np.maximum(tol_cluster_freq, 0.25 * (z[:, None] + z[None, :]))
+    dmac = (1.0 - mac(sweep.shape[cand].T, sweep.shape[cand].T)) / (1.0 - min_mac)
+    d = np.maximum(df / tol, dmac)
+    same_order = sweep.order[cand][:, None] == sweep.order[cand][None, :]
+    d[same_order] = np.maximum(d[same_order], 2.0)  # never two poles of one order
+    np.fill_diagonal(d, 0.0)
+    iu = np.triu_indices(cand.size, 1)
+    labels = fcluster(linkage(d[iu], method="average"), t=1.0, criterion="distance")
+    clusters = []
+    for members in _join_smeared(sweep, [cand[labels == lab] for lab in np.unique(labels)],
+                                 tol_cluster_freq):
+        fm = np.median(sweep.freq_hz[members])
+        order_rank = np.lexsort((np.abs(sweep.freq_hz[members] - fm), sweep.order[members]))
+        members = members[order_rank]
+        _, first = np.unique(sweep.order[members], return_index=True)
+        clusters.append(members[first])
+    return clusters
+
+
+def _judge_clusters(sweep: PoleSweep, clusters: list[np.ndarray], min_count: int,
+                    min_mpc: float) -> tuple[list[tuple], list[Rejection]]:
+    """Keep the clusters stable at ``min_count`` orders with MPC >= ``min_mpc``.
+
+    Returns rows (median frequency and damping, their spreads, count, the representative's
+    shape) and the rejections with their reasons.
+    """
     rows, rejected = [], []
     for members in clusters:
         f = sweep.freq_hz[members]
@@ -241,17 +277,4 @@ def select_poles(
             rejected.append(Rejection(fm, zm, "complexity", f"MPC {phase:.2f} < {min_mpc:g}"))
             continue
         rows.append((fm, zm, np.std(f), np.std(z), members.size, sweep.shape[rep]))
-    rows.sort(key=lambda r: r[0])
-    fr = np.array([r[0] for r in rows], dtype=float)
-    zr = np.array([r[1] for r in rows], dtype=float)
-    wn = 2 * np.pi * fr
-    n_out = sweep.shape.shape[1]
-    return SelectedPoles(
-        freq_hz=fr,
-        damping_ratio=zr,
-        freq_std_hz=np.array([r[2] for r in rows], dtype=float),
-        damping_std=np.array([r[3] for r in rows], dtype=float),
-        pole=-zr * wn + 1j * wn * np.sqrt(1 - zr**2),
-        count=np.array([r[4] for r in rows], dtype=int),
-        shape=np.array([r[5] for r in rows], dtype=complex).reshape(-1, n_out),
-    ), rejected
+    return rows, rejected
