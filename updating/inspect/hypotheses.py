@@ -68,6 +68,8 @@ spray 1-8 g (Rule 3.02(c) allows any amount within 18 in of the knob)."""
 HANDLE_MAX_IN, HANDLE_MIN_IN = 18.0, 4.0
 """Reach of a legal grip substance from the knob end (Rule 3.02(c)), and the shortest reach
 fitted (a substance covers at least a hand's width)."""
+GRIP_PLACE = (8, 9)
+"""Indices of the grip substance's reach and start in x (``NullBounds.held`` skips them)."""
 HANDLE_FROM_MAX_IN = 3.0
 """Furthest from the knob end a grip substance is taken to start (tape and pine tar start
 0.5-2 in from the end, past the knob)."""
@@ -215,8 +217,13 @@ class NullBounds:
 
     @staticmethod
     def held(fit: ChangeFit) -> list[str]:
-        """Names of the null parameters a bound holds in ``fit`` (the data want more)."""
-        return [NULL_NAMES[i] for i in np.flatnonzero(fit.active[:N_NULL])]
+        """Names of the null parameters a bound holds in ``fit`` (the data want more).
+
+        A grip substance's start and reach are left out: their bounds are where a grip is
+        (the knob, Rule 3.02(c)'s 18 in), not a drift's physical limit.
+        """
+        active = np.flatnonzero(fit.active[:N_NULL])
+        return [NULL_NAMES[i] for i in active if i not in GRIP_PLACE]
 
 
 @dataclass(frozen=True)
