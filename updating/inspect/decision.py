@@ -252,7 +252,7 @@ def _drift(e: Evidence) -> list[str]:
 
 
 def grip_text(f: Finding) -> str:
-    """A grip substance in words: about N g added on the handle, a-b in."""
+    """Say a grip substance in words: about N g added on the handle, a-b in."""
     a, b = (v / IN_TO_M for v in f.region_m)
     return f"about {1e3 * f.reading['added_mass_kg']:.0f} g added on the handle, {a:.0f}-{b:.0f} in"
 

@@ -124,8 +124,10 @@ def akaike(rss: float, n_params: int, s2: float) -> float:
 
 
 def choose_family(scores: dict[str, float], generic_score: float) -> str:
-    """The family with the lowest score, or ``local_change`` when every one trails the
-    generic change by more than ``KIND_MARGIN``."""
+    """Choose the family with the lowest score.
+
+    ``local_change`` when every one trails the generic change by more than ``KIND_MARGIN``.
+    """
     best = min(scores, key=scores.get)
     return "local_change" if scores[best] - generic_score > KIND_MARGIN else best
 

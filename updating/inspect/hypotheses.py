@@ -402,8 +402,10 @@ class ParamSpace:
 
 
 def handle_segment(x: np.ndarray) -> Segment | None:
-    """The grip substance of the null part x[:N_NULL] (a surface layer from its start near the
-    knob end to its reach), or None when there is none."""
+    """Return the grip substance of the null part x[:N_NULL], or None when there is none.
+
+    A surface layer from its start near the knob end to its reach.
+    """
     mass_g, reach_in, from_in = float(x[7]), float(x[8]), float(x[9])
     if mass_g <= 0.0:
         return None
@@ -413,7 +415,7 @@ def handle_segment(x: np.ndarray) -> Segment | None:
 
 def null_params(x: np.ndarray, sensor_mount_m: float, core: Core | None = None,
                 segments: tuple[Segment, ...] = ()) -> ChangeParams:
-    """The bat's state for the null part of x (module docstring) with a core or segments.
+    """Return the bat's state for the null part of x (module docstring), a core or segments.
 
     Parameters
     ----------

@@ -78,7 +78,7 @@ class KindFits:
 
 
 def segment_space(space: ParamSpace, family: str) -> SegmentSpace:
-    """The segment family ``family`` on the null of a core's parameter space."""
+    """Return the segment family ``family`` on the null of a core's parameter space."""
     return SegmentSpace(space.profile, space.bounds, family, space.sensor_mount_m)
 
 
@@ -117,7 +117,7 @@ def fit_families(predict, diff: Differences, space: ParamSpace, sigma_rel: Sigma
 
 def segment_reading(fit: ChangeFit, fspace: SegmentSpace, cov: np.ndarray,
                     predict) -> tuple[dict, dict]:
-    """(reading, uncertainty) of a segment family's fit, SI (``finding.Finding``)."""
+    """Read a segment family's fit: (reading, uncertainty), SI (``finding.Finding``)."""
     x = fit.x
     sd = np.sqrt(np.clip(np.diag(cov), 0.0, None))
     unc = {"region_start_m": float(sd[N_NULL]) * IN_TO_M}
@@ -138,7 +138,7 @@ def segment_reading(fit: ChangeFit, fspace: SegmentSpace, cov: np.ndarray,
 
 def read_finding(family: str, fit: ChangeFit, space: ParamSpace, cov: np.ndarray,
                  predict) -> Finding:
-    """The finding of one family's fit: kind, rule, region, reading and uncertainty."""
+    """Read one family's fit as a finding: kind, rule, region, reading, uncertainty."""
     length_m = space.profile.length_m
     if family == "core":
         r = space.reading(fit.x, cov)
@@ -183,5 +183,5 @@ def classify(predict, diff: Differences, space: ParamSpace, sigma_rel: SigmaRel,
 
 
 def with_region(finding: Finding, region_m: tuple[float, float]) -> Finding:
-    """The same finding over another region (a reading refined elsewhere)."""
+    """Return the same finding over another region (a reading refined elsewhere)."""
     return replace(finding, region_m=region_m)

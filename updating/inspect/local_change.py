@@ -111,13 +111,13 @@ class SegmentSpace:
         return np.concatenate([self.bounds.upper, self.family_bounds()[1]])
 
     def interval_m(self, x: np.ndarray) -> tuple[float, float]:
-        """The stretch (start, end) of x, m from the knob end, within the bat."""
+        """Return the stretch (start, end) of x, m from the knob end, within the bat."""
         start_in, length_in = float(x[N_NULL]), float(x[N_NULL + 1])
         end_in = min(start_in + length_in, self.length_in)
         return start_in * IN_TO_M, end_in * IN_TO_M
 
     def segment(self, x: np.ndarray) -> Segment:
-        """The family's ``Segment`` for x."""
+        """Return the family's ``Segment`` for x."""
         x0, x1 = self.interval_m(x)
         amp = x[N_NULL + 2:]
         if self.family == "local_change":
@@ -128,13 +128,13 @@ class SegmentSpace:
         return Segment(x0, x1, diameter_loss_m=float(amp[0]) * IN_TO_M)
 
     def params(self, x: np.ndarray) -> ChangeParams:
-        """The bat's state for x (null part and, when present, the family's stretch)."""
+        """Return the bat's state for x (null part and, when present, the family's stretch)."""
         x = np.asarray(x, dtype=float)
         segs = () if x.size == N_NULL else (self.segment(x),)
         return null_params(x, self.sensor_mount_m, segments=segs)
 
     def seed(self, start_in: float, length_in: float, amplitudes) -> np.ndarray:
-        """The family's part of x for a stretch and its amplitudes, inside the bounds."""
+        """Return the family's part of x for a stretch and its amplitudes, inside the bounds."""
         lo, hi = self.family_bounds()
         return np.clip(np.concatenate([[start_in, length_in], amplitudes]), lo, hi)
 
@@ -159,9 +159,11 @@ class SegmentScan:
 
 
 def trial_stretches(length_in: float) -> np.ndarray:
-    """(k, 2) start and length, in, of the scan's trial stretches (``SCAN_STEP_IN`` apart,
-    each of ``SCAN_LENGTHS_IN`` that fits inside the bat, and each ending at the barrel
-    end)."""
+    """Return the scan's trial stretches: (k, 2) start and length, in.
+
+    Starts ``SCAN_STEP_IN`` apart, each of ``SCAN_LENGTHS_IN`` that fits inside the bat, and
+    each length ending at the barrel end.
+    """
     out = []
     for ell in SCAN_LENGTHS_IN:
         starts = np.arange(0.0, length_in - ell + 1e-9, SCAN_STEP_IN)
@@ -210,7 +212,7 @@ def segment_scan(predict, diff: Differences, space: SegmentSpace, sigma_rel: Sig
 
 
 def distinct_best(scan: SegmentScan, n: int, apart_in: float = 2.0) -> list[np.ndarray]:
-    """The ``n`` best seeds of a scan whose stretches start at least ``apart_in`` apart."""
+    """Return the ``n`` best seeds of a scan whose stretches start ``apart_in`` apart."""
     chosen: list[int] = []
     for i in np.argsort(scan.norm):
         if all(abs(scan.stretches_in[i, 0] - scan.stretches_in[j, 0]) >= apart_in
@@ -224,7 +226,7 @@ def distinct_best(scan: SegmentScan, n: int, apart_in: float = 2.0) -> list[np.n
 def fit_segment(predict, diff: Differences, space: SegmentSpace, sigma_rel: SigmaRel,
                 null: ChangeFit, n_starts: int = 2,
                 starts: list[np.ndarray] | None = None) -> ChangeFit:
-    """The null model plus one stretch of the family, best of several starts.
+    """Fit the null model plus one stretch of the family, best of several starts.
 
     Parameters
     ----------
@@ -250,7 +252,7 @@ def fit_segment(predict, diff: Differences, space: SegmentSpace, sigma_rel: Sigm
 
 def start_from(other: ChangeFit, other_space: SegmentSpace, space: SegmentSpace,
                predict) -> np.ndarray:
-    """A start for ``space``'s family on the stretch another family's fit found.
+    """Start ``space``'s family on the stretch another family's fit found.
 
     The amplitude is converted through the wood there: alpha of the generic change is an
     added mass alpha m_wood (the stretch's wood mass), or a diameter loss -alpha D / 2.

@@ -215,7 +215,7 @@ def _core_beyond_drift(predict, diff, space, hyp: Hypotheses, q: int, dof: int,
 
 
 def _grip_in_null(null: ChangeFit, n: int) -> Finding | None:
-    """The grip substance H0 read on the handle, when at least ``GRIP_MIN_G`` at 2 sigma."""
+    """Return the grip substance H0 read on the handle, when ``GRIP_MIN_G`` at 2 sigma."""
     sd = float(np.sqrt(max(covariance(null, max(n - N_NULL, 1))[7, 7], 0.0)))
     mass_g = float(null.x[7])
     if mass_g - 2 * sd < GRIP_MIN_G:

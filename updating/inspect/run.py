@@ -223,7 +223,7 @@ def inspect_retest(
 
 
 def _finding_change(reading: Reading, finding: Finding, altered: bool | None):
-    """The reported fit's state with only the finding's change (no grip, no drift), or None."""
+    """Return the reported state with only the finding's change (no grip or drift), or None."""
     if not altered:
         return None
     p = reading.fit.params

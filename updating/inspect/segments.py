@@ -90,13 +90,13 @@ def coverage(node_x_m: np.ndarray, x0_m: float, x1_m: float) -> np.ndarray:
 
 
 def element_masses_kg(model: BatModel) -> np.ndarray:
-    """Translational mass of each element, t^T m_trans,e t with t the rigid translation, (e,)."""
+    """Return each element's translational mass, t^T m_trans,e t (t: rigid translation), (e,)."""
     t = np.array([1.0, 0.0, 1.0, 0.0])
     return np.einsum("i,eij,j->e", t, model.parts.m_trans, t)
 
 
 def segment_parts(model: BatModel, seg: Segment) -> tuple[ElementParts, float]:
-    """The element parts of a segment's change, and its change of mass, kg.
+    """Integrate a segment's change into element parts, and its change of mass, kg.
 
     Parameters
     ----------
