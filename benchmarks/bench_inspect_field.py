@@ -17,8 +17,6 @@ import argparse
 import json
 import os
 import sys
-import tempfile
-import time
 from pathlib import Path
 
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
@@ -26,61 +24,12 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 import numpy as np  # noqa: E402
 
-from batlab import pipeline  # noqa: E402
+from batlab.fleet.cache import field_row as one  # noqa: E402
+from batlab.fleet.cache import score_verdict  # noqa: E402, F401
 from updating.inspect import decision  # noqa: E402
 from updating.model.units import IN_TO_M  # noqa: E402
 from updating.simulate.alterations import KINDS  # noqa: E402
-from updating.simulate.field_fleet import draw_case, write_case  # noqa: E402
 from updating.simulate.integrity import INTEGRITY  # noqa: E402
-
-
-def one(seed: int, kind: str, integrity: str | None, with_meta: bool,
-        registration: bool = False) -> dict:
-    rng = np.random.default_rng(seed)
-    row = {"seed": seed, "kind": kind, "integrity": integrity}
-    with tempfile.TemporaryDirectory(prefix="batlab-field-") as tmp:
-        try:
-            case = draw_case(rng, kind, integrity=integrity, serial=f"F-{seed}")
-            paths = write_case(case, tmp, seed, retest_meta_keys=None if with_meta else [],
-                               registration=registration)
-        except ValueError as exc:  # the simulator cannot make this draw: not counted
-            row.update(status="sim_error", reasons=[str(exc)])
-            return row
-        row["expected"] = case.expected
-        t0 = time.perf_counter()
-        try:
-            res = pipeline.inspect_files(paths["profile"], paths["meta"], paths["baseline"],
-                                         paths["retest"], 0.01,
-                                         retest_meta_path=paths["retest_meta"])
-        except ValueError as exc:
-            row.update(status="refused", reasons=[str(exc)],
-                       time_s=time.perf_counter() - t0)
-            return row
-        row["time_s"] = time.perf_counter() - t0
-    return score_verdict(row, case.meta["serial"], res.verdict, kind, case.truth)
-
-
-def score_verdict(row: dict, serial: str, verdict, kind: str, truth: dict) -> dict:
-    """``row`` with the verdict's status, reasons, F test and candidate core, and for an
-    altered bat called altered the reading's errors against ``truth`` (start in, diameter
-    relative, fill ratio absolute and relative, and whether the fill is within target)."""
-    out = pipeline.contract_dict(serial, verdict)
-    fit = verdict.details.fit
-    row.update(status=out["status"], reasons=out["reasons"], F=verdict.statistic,
-               p=None if fit is None else fit.p_value,
-               weight_change_rel=None if fit is None else fit.weight_change_rel,
-               null_fit=None if fit is None else fit.null_fit,
-               plug_m=None if fit is None else fit.plug_m,
-               candidate=None if fit is None else fit.candidate_core.to_json_dict())
-    t = truth
-    if kind != "none" and out["status"] == "altered":
-        row["start_err_in"] = out["region_in"][0] - t["region_in"][0]
-        row["d_err_rel"] = out["core_diameter_in"] / t["core_diameter_in"] - 1
-        r_true = t["fill_density_ratio"]
-        row["fill_err"] = out["fill_density_ratio"] - r_true
-        row["fill_err_rel"] = row["fill_err"] / r_true if r_true > 0 else None
-        row["fill_ok"] = bool(abs(row["fill_err"]) <= (0.25 * r_true if r_true > 0 else 0.1))
-    return row
 
 
 def d_low_in(row: dict) -> float | None:

@@ -26,99 +26,18 @@ import json
 import os
 import pickle
 import sys
-import tempfile
 import time
-from dataclasses import replace
 from pathlib import Path
 
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
-sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-import numpy as np  # noqa: E402
-from bench_inspect_field import score_verdict, summarise  # noqa: E402
+from bench_inspect_field import summarise  # noqa: E402
 
-from batlab import pipeline  # noqa: E402
-from updating.inspect.retest_meta import RetestConditions, conditions_from_dict  # noqa: E402
-from updating.inspect.run import inspect  # noqa: E402
-from updating.simulate.alterations import KINDS  # noqa: E402
-from updating.simulate.field_fleet import draw_case, write_case  # noqa: E402
-from updating.simulate.integrity import INTEGRITY  # noqa: E402
+from batlab.fleet.cache import build_one, jobs, path_of, registered_conditions, score_one  # noqa: E402, F401, E501
 from updating.simulate.nuisances import NUISANCES  # noqa: E402
 
 DEFAULT_DIR = Path("/tmp/batlab-inspect-cache")
-
-
-def jobs(clean: int, altered: int, integrity: int, seed: int) -> list[tuple[int, str, str | None]]:
-    """(seed, kind, integrity) of each bat, laid out as ``bench_inspect_field`` lays them."""
-    js = [("none", None)] * clean + [(KINDS[i % len(KINDS)], None) for i in range(altered)]
-    js += [("none", g) for _ in range(integrity) for g in INTEGRITY]
-    return [(seed + i, k, g) for i, (k, g) in enumerate(js)]
-
-
-def path_of(folder: Path, seed: int, kind: str, integ: str | None) -> Path:
-    return folder / f"{seed}_{kind}{'_' + integ if integ else ''}.pkl"
-
-
-def build_one(seed: int, kind: str, integ: str | None, with_meta: bool = True,
-              nuisances=NUISANCES, registration: bool = False) -> dict:
-    """Everything ``inspect`` needs for this bat, and its truth (or an error)."""
-    rng = np.random.default_rng(seed)
-    out: dict = {"seed": seed, "kind": kind, "integrity": integ}
-    with tempfile.TemporaryDirectory(prefix="batlab-cache-") as tmp:
-        try:
-            case = draw_case(rng, kind, nuisances, integrity=integ, serial=f"F-{seed}")
-            paths = write_case(case, tmp, seed, retest_meta_keys=None if with_meta else [],
-                               registration=registration)
-        except ValueError as exc:
-            out["error"] = ("sim_error", str(exc))
-            return out
-        out["truth"], out["expected"] = case.truth, case.expected
-        try:
-            cond = pipeline.read_conditions(paths["retest_meta"])
-            bat = pipeline.stateless_case(paths["profile"], paths["meta"], paths["baseline"],
-                                          paths["retest"])
-        except ValueError as exc:
-            out["error"] = ("refused", str(exc))
-            return out
-    out.update(nuisances=list(nuisances), registration=registration, serial=bat.serial,
-               profile=bat.profile, reference=bat.reference,
-               baseline=bat.baseline.modes, retest=bat.retest.modes, conditions=cond,
-               registered=bat.registered)
-    return out
-
-
-def registered_conditions(bat: dict) -> RetestConditions:
-    """The bat's registration as if meta.json had recorded the baseline's temperature and
-    accelerometer mass (``FieldCase.registration_conditions``; the case re-drawn from its
-    seed, which makes the same bat)."""
-    case = draw_case(np.random.default_rng(bat["seed"]), bat["kind"],
-                     bat.get("nuisances", NUISANCES), integrity=bat["integrity"],
-                     serial=f"F-{bat['seed']}")
-    extra = conditions_from_dict(case.registration_conditions, "meta.json")
-    return replace(bat["registered"], sensor_mass_kg=extra.sensor_mass_kg,
-                   temperature_c=extra.temperature_c)
-
-
-def score_one(bat: dict, false_alarm: float = 0.01, registration: bool = False) -> dict:
-    """The inspection alone on a cached bat: ``bench_inspect_field``'s row (with
-    ``registration``: meta.json's baseline temperature and accelerometer mass given)."""
-    row = {"seed": bat["seed"], "kind": bat["kind"], "integrity": bat["integrity"]}
-    if "error" in bat:
-        row.update(status=bat["error"][0], reasons=[bat["error"][1]])
-        return row
-    row["expected"] = bat["expected"]
-    if registration and not bat.get("registration"):
-        bat = dict(bat, registered=registered_conditions(bat))
-    t0 = time.perf_counter()
-    try:
-        v = inspect(bat["profile"], bat["reference"], bat["baseline"], bat["retest"],
-                    false_alarm, bat["conditions"], bat["registered"])
-    except ValueError as exc:
-        row.update(status="refused", reasons=[str(exc)], time_s=time.perf_counter() - t0)
-        return row
-    row["time_s"] = time.perf_counter() - t0
-    return score_verdict(row, bat["serial"], v, bat["kind"], bat["truth"])
 
 
 def main() -> int:

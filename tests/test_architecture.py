@@ -41,8 +41,9 @@ APPLICATION_MAY_NOT_IMPORT = (  # the stages' runners: only the pipeline calls t
     "updating.msso", "updating.simulate", "updating.solid",
 )
 
-FLEET_MAY_IMPORT = (  # batlab/fleet runs virtual bats through the real command line
-    "batlab.cli", "batlab.fleet", "batlab.pipeline", "updating.simulate",
+FLEET_MAY_IMPORT = (  # batlab/fleet runs virtual bats through the real command line (and
+    # re-scores the inspection alone on cached fits: updating.inspect)
+    "batlab.cli", "batlab.fleet", "batlab.pipeline", "updating.simulate", "updating.inspect",
 )
 
 COMMAND_MAY_IMPORT = {  # what a command may import from batlab besides batlab.pipeline

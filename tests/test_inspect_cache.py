@@ -1,24 +1,18 @@
-"""benchmarks/inspect_cache.py: a cached bat re-scored by the inspection alone gives the
-verdict the files-to-verdict benchmark (bench_inspect_field.py) gives on the same seed, and
+"""batlab.fleet.cache (benchmarks/inspect_cache.py): a cached bat re-scored by the inspection
+alone gives the verdict the files-to-verdict path (``field_row``) gives on the same seed, and
 the registration record added at scoring time is the one write_case would have written."""
 
-import sys
-from pathlib import Path
 
 import pytest
 
-BENCH = Path(__file__).resolve().parents[1] / "benchmarks"
-sys.path.insert(0, str(BENCH))
-
-import bench_inspect_field  # noqa: E402
-import inspect_cache  # noqa: E402
+from batlab.fleet import cache as inspect_cache
 
 
 def test_cached_bat_scores_as_the_full_path():
     seed, kind = 7301, "cork"
     bat = inspect_cache.build_one(seed, kind, None)
     row = inspect_cache.score_one(bat)
-    full = bench_inspect_field.one(seed, kind, None, True)
+    full = inspect_cache.field_row(seed, kind, None, True)
     assert row["status"] == full["status"] == "altered"
     assert row["F"] == pytest.approx(full["F"], rel=1e-6)
     assert row["start_err_in"] == pytest.approx(full["start_err_in"], abs=1e-9)

@@ -18,15 +18,14 @@ level hides (found on 4 of 10 such bats with it) is found and read.
 
 from __future__ import annotations
 
-import sys
 from dataclasses import replace
-from pathlib import Path
 
 import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from batlab.fleet import cache as inspect_cache
 from updating.inspect.changes import differences, pair_tests
 from updating.inspect.hypotheses import SHAPE_NOISE_PRIOR_POINTS, NullBounds, ParamSpace
 from updating.inspect.model import ChangePredictor, baseline_sensor_offset
@@ -36,9 +35,6 @@ from updating.model.sections import Core
 from updating.model.units import IN_TO_M
 from updating.simulate.fleet import random_case
 from updating.simulate.virtual_bat import simulate_modes
-
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))
-import inspect_cache  # noqa: E402
 
 
 def _null_residuals(bat: dict) -> tuple[np.ndarray, np.ndarray]:
