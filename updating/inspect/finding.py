@@ -33,8 +33,9 @@ HANDLE_SLACK_IN = 0.5
 HANDLE_START_MAX_IN = 8.0
 """Added mass that starts this close to the knob and reaches past 18 in is a grip substance
 spread too far (clean the bat), not a coat of the barrel (which starts past the handle)."""
-INSERT_MAX_IN = 4.0
-"""Longest stretch of added mass read as an insert (nails 2-3.5 in) rather than a coat."""
+INSERT_MAX_IN = 6.0
+"""Longest stretch of added mass read as an insert (nails 2-3.5 in, a dense end plug 2-4 in,
+as fitted: up to about 5 in) rather than a coat (wax over the last 10-16 in)."""
 GROOVE_MAX_IN = 2.0
 """Shortest stretch of lost diameter read as flat-surfaced rather than grooved."""
 HOLLOW_MAX_FILL = 0.1
