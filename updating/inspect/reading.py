@@ -222,8 +222,7 @@ def fit_evidence(diff: Differences, space: ParamSpace, hyp: Hypotheses, test: Ne
         null_fit=dict(zip(NULL_NAMES, map(float, null.x), strict=True)),
         null_at_bound=evidence.held_null, core_fit_at_bound=evidence.held_core,
         weight_change_rel=None if evidence.dlnw is None else float(np.expm1(evidence.dlnw)),
-        element_source=(f"the finding's fit ({kinds.family})" if altered and kinds
-                        else "drift-only model (no local change)"),
+        element_source=_element_source(kinds.family if altered and kinds else None),
         element_beta_shear=tuple(beta_shear.tolist()),
         candidate_core=candidate,
         core_fit_moisture={"stiffness_scale": float(full.params.stiffness_scale),
@@ -236,6 +235,15 @@ def fit_evidence(diff: Differences, space: ParamSpace, hyp: Hypotheses, test: Ne
                                "stiffness_change_rel"), map(float, full.x[N_NULL:]),
                               strict=True)),
         kind_scores={} if kinds is None else {k: float(v) for k, v in kinds.scores.items()})
+
+
+def _element_source(family: str | None) -> str:
+    """Say which model the verdict's element factors come from."""
+    if family is None:
+        return "drift-only model (no local change)"
+    if family == "core":
+        return "physical core fit (element-averaged section ratios)"
+    return f"physical {family.replace('_', ' ')} fit (element-integrated changes)"
 
 
 def element_map(profile, reference, baseline, retest, pairs: RetestPairs, drift, offset,
