@@ -520,28 +520,6 @@ def _provenance(r: ReportInputs, generated_at: str) -> list[list]:
     return rows
 
 
-def provenance_hashes(page: str) -> dict:
-    """Read the hashes a report page carries.
-
-    The hashes a report page carries (its Provenance rows, as ``_provenance`` writes them):
-    {"baseline_sha256", "retest_sha256", "verdict_record", "verdict_record_sha256",
-    "reference_record", "reference_record_sha256"} (missing keys absent).
-    """
-    import re
-
-    out: dict = {}
-    for label, key in (("Baseline file", "baseline_sha256"), ("Re-test file", "retest_sha256")):
-        m = re.search(rf"<td>{label}</td><td>[^<]*<br><code>sha256 ([0-9a-f]{{64}})</code>", page)
-        if m:
-            out[key] = m.group(1)
-    for label, key in (("Verdict record", "verdict_record"),
-                       ("Registration record", "reference_record")):
-        m = re.search(rf"<td>{label}</td><td>#(\d+)<br><code>sha256 ([0-9a-f]{{64}})</code>", page)
-        if m:
-            out[key], out[key + "_sha256"] = int(m.group(1)), m.group(2)
-    return out
-
-
 def render_html(r: ReportInputs, generated_at: str, figures: dict[str, bytes]) -> str:
     """Render the report page as a string (``figures``: name -> PNG bytes, see ``figures_png``)."""
     v = r.verdict

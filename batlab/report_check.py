@@ -91,7 +91,6 @@ def check_page(conn: sqlite3.Connection, page_path: str | Path,
         One line per problem, each naming the page.
     """
     from batlab.registry import custody_record, has_file
-    from batlab.report import provenance_hashes
 
     try:
         page = Path(page_path).read_text(encoding="utf-8")
@@ -118,3 +117,23 @@ def check_page(conn: sqlite3.Connection, page_path: str | Path,
         if sha and not has_file(conn, sha):
             problems.append(f"{page_path}: file {sha[:12]} ({key[:-7]}) not in the registry")
     return problems + _content_problems(conn, page, str(page_path), hashes["verdict_record"])
+
+
+def provenance_hashes(page: str) -> dict:
+    """Read the hashes a report page carries.
+
+    The hashes a report page carries (its Provenance rows, as ``_provenance`` writes them):
+    {"baseline_sha256", "retest_sha256", "verdict_record", "verdict_record_sha256",
+    "reference_record", "reference_record_sha256"} (missing keys absent).
+    """
+    out: dict = {}
+    for label, key in (("Baseline file", "baseline_sha256"), ("Re-test file", "retest_sha256")):
+        m = re.search(rf"<td>{label}</td><td>[^<]*<br><code>sha256 ([0-9a-f]{{64}})</code>", page)
+        if m:
+            out[key] = m.group(1)
+    for label, key in (("Verdict record", "verdict_record"),
+                       ("Registration record", "reference_record")):
+        m = re.search(rf"<td>{label}</td><td>#(\d+)<br><code>sha256 ([0-9a-f]{{64}})</code>", page)
+        if m:
+            out[key], out[key + "_sha256"] = int(m.group(1)), m.group(2)
+    return out
