@@ -74,15 +74,21 @@ def make_profile(x_m, diameter_m, source: str = "profile") -> Profile:
 
 
 def read_profile_csv(path: str | Path) -> Profile:
-    """Read a caliper profile CSV (``x_in,diameter_in``, inches) into SI."""
+    """Read a caliper profile CSV (``x_in,diameter_in``, inches) into SI.
+
+    A spreadsheet's byte-order mark, Windows line ends and blank lines are accepted.
+    """
     path = Path(path)
-    with path.open(newline="") as fh:
-        reader = csv.reader(fh)
-        try:
-            header = [h.strip() for h in next(reader)]
-        except StopIteration:
-            raise ValueError(f"{path}: empty file") from None
-        rows = [r for r in reader if any(c.strip() for c in r)]
+    try:
+        with path.open(newline="", encoding="utf-8-sig") as fh:
+            reader = csv.reader(fh)
+            try:
+                header = [h.strip() for h in next(reader)]
+            except StopIteration:
+                raise ValueError(f"{path}: empty file") from None
+            rows = [r for r in reader if any(c.strip() for c in r)]
+    except UnicodeDecodeError:
+        raise ValueError(f"{path}: not a text file (UTF-8 CSV expected)") from None
     for col in ("x_in", "diameter_in"):
         if col not in header:
             raise ValueError(f"{path}: missing column {col!r} (header must be x_in,diameter_in)")
