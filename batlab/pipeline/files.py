@@ -11,11 +11,15 @@ import tempfile
 from collections.abc import Callable
 from pathlib import Path
 
+import numpy as np
+
 from batlab.registry import sha256_bytes
 from ema.io.atomic_write import atomic_write
 from ema.io.frf_data import FrfTest
 from updating.correlate.points import POINT_TOL_M
 from updating.inspect.retest_meta import RetestConditions, read_retest_meta
+from updating.model import plausible
+from updating.model.json_input import read_json_object
 from updating.model.lab_input import BatMeta, read_meta
 from updating.model.profile import Profile, read_profile_csv
 from updating.model.units import IN_TO_M
@@ -104,17 +108,53 @@ def read_bat_files(profile_path, meta_path) -> tuple[Profile, BatMeta]:
     Raises
     ------
     ValueError
-        A missing file, or test points past the end of the bat, naming the file.
+        A missing file, test points off the bat, or a value no wooden bat has
+        (``updating.model.plausible``), naming the file.
     """
     for p in (profile_path, meta_path):
         if not Path(p).is_file():
             raise ValueError(f"{p}: no such file")
-    profile = read_profile_csv(profile_path)
-    meta = read_meta(meta_path)
+    profile = _read_profile_naming_slips(profile_path)
+    meta = _read_meta_naming_slips(meta_path)
+    message = (plausible.check_profile(profile.x_m, profile.diameter_m, str(profile_path))
+               or plausible.check_meta(meta.extra, str(meta_path))
+               or plausible.check_points(meta.points_m, profile.x_m, POINT_TOL_M, str(meta_path)))
+    if message:
+        raise ValueError(message)
     if meta.points_m.size and meta.points_m.max() > profile.length_m + POINT_TOL_M:
         raise ValueError(f"{meta_path}: points_in run past the end of the bat "
                          f"({profile.length_m / IN_TO_M:.2f} in long in {profile_path})")
     return profile, meta
+
+
+def _read_profile_naming_slips(path) -> Profile:
+    """Read profile.csv; one refused for its size that is in mm (or cm, m) is named so."""
+    try:
+        return read_profile_csv(path)
+    except ValueError:
+        try:
+            rows = np.genfromtxt(path, delimiter=",", skip_header=1, usecols=(0, 1), ndmin=2)
+            x_m, d_m = rows[:, 0] * IN_TO_M, rows[:, 1] * IN_TO_M
+            slip = plausible.check_profile(x_m, d_m, str(path)) if np.isfinite(rows).all() else None
+        except (ValueError, OSError, IndexError):
+            slip = None
+        if slip and slip.endswith("metres?"):
+            raise ValueError(slip) from None
+        raise
+
+
+def _read_meta_naming_slips(path) -> BatMeta:
+    """Read meta.json; a value outside its range that is a unit slip is named as one."""
+    try:
+        return read_meta(path)
+    except ValueError:
+        try:
+            slip = plausible.check_meta(read_json_object(path), str(path))
+        except ValueError:
+            slip = None
+        if slip and " looks like " in slip:
+            raise ValueError(slip) from None
+        raise
 
 
 def read_conditions(path) -> RetestConditions | None:

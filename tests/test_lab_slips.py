@@ -1,0 +1,101 @@
+"""The lab's slips caught at the door (#27): implausible bats, re-inspected files, the demo."""
+
+from __future__ import annotations
+
+import json
+import shutil
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from batlab.cli import main
+from batlab.pipeline.files import read_bat_files
+from batlab.registry import open_registry
+from updating.model import plausible
+from updating.simulate.alterations import KINDS
+from updating.simulate.field_fleet import draw_case, write_case
+from updating.simulate.rulebook import RULEBOOK_KINDS
+
+SAMPLE = Path("data_samples/smooth_bat").resolve()
+
+
+def _bat_folder(tmp_path: Path, **meta_changes) -> Path:
+    """Copy the smooth sample bat into ``tmp_path/bat`` with meta.json's keys changed."""
+    folder = tmp_path / "bat"
+    folder.mkdir(exist_ok=True)
+    shutil.copyfile(SAMPLE / "profile.csv", folder / "profile.csv")
+    meta = json.loads((SAMPLE / "meta.json").read_text())
+    meta.update(meta_changes)
+    (folder / "meta.json").write_text(json.dumps(meta))
+    return folder
+
+
+@pytest.mark.parametrize("folder",
+                         sorted(p.parent for p in Path("data_samples").glob("*/meta.json")))
+def test_sample_bats_are_plausible(folder):
+    read_bat_files(folder / "profile.csv", folder / "meta.json")
+
+
+def test_fleet_bats_are_plausible(tmp_path):
+    for kind in ("none", *KINDS, *RULEBOOK_KINDS):
+        for seed in range(3):
+            case = draw_case(np.random.default_rng(seed), kind)
+            assert plausible.check_profile(case.profile.x_m, case.profile.diameter_m, "p") is None
+            assert plausible.check_meta(case.meta, "m") is None, (kind, seed)
+    paths = write_case(case, tmp_path / "case", seed=0)
+    read_bat_files(paths["profile"], paths["meta"])
+
+
+@pytest.mark.parametrize(("key", "factor", "cause"), [
+    ("weight_lb", 453.59237, "grams"), ("weight_lb", 16.0, "ounces"),
+    ("nominal_E_psi", 6.894757e-3, "GPa"), ("nominal_E_psi", 6.894757, "MPa"),
+    ("nominal_weight_density_lbf_in3", 27679.9, "kg/m^3"),
+    ("nominal_weight_density_lbf_in3", 1 / 0.0361, "a specific gravity"),
+])
+def test_a_unit_slip_in_meta_is_named_and_nothing_stored(tmp_path, capsys, key, factor, cause):
+    true_value = json.loads((SAMPLE / "meta.json").read_text())[key]
+    folder = _bat_folder(tmp_path, **{key: true_value * factor})
+    db = tmp_path / "lab.sqlite"
+    code = main(["register", "--profile", str(folder / "profile.csv"), "--meta",
+                 str(folder / "meta.json"), "--baseline", str(SAMPLE / "baseline.uff"),
+                 "--db", str(db)])
+    err = capsys.readouterr().err
+    assert code == 2
+    assert f"meta.json: {key}" in err and f"looks like {cause}" in err
+    recovered = float(err.split(f"looks like {cause}: ")[1].split()[0])
+    assert recovered == pytest.approx(true_value, rel=1e-3)
+    if db.exists():
+        with open_registry(db) as conn:
+            assert conn.execute("SELECT COUNT(*) FROM bats").fetchone()[0] == 0
+
+
+def test_a_species_value_far_from_the_handbook_is_refused(tmp_path):
+    folder = _bat_folder(tmp_path, nominal_E_psi=5.0e6)  # white ash: 1.74e6 psi
+    with pytest.raises(ValueError, match=r"meta.json: nominal_E_psi 5e\+06 is outside"):
+        read_bat_files(folder / "profile.csv", folder / "meta.json")
+    e_unknown, _ = plausible.handbook_range("hickory")
+    assert e_unknown == pytest.approx((1.60e6 / 2, 2.02e6 * 2))
+    assert plausible.check_meta({"species": "hickory", "nominal_E_psi": 3.5e6,
+                                 "nominal_weight_density_lbf_in3": 0.02}, "m") is None
+
+
+@pytest.mark.parametrize(("scale", "cause"), [(25.4, "millimetres"), (2.54, "centimetres")])
+def test_a_profile_in_other_units_is_named(tmp_path, scale, cause):
+    folder = _bat_folder(tmp_path)
+    rows = np.loadtxt(SAMPLE / "profile.csv", delimiter=",", skiprows=1)
+    np.savetxt(folder / "profile.csv", rows * scale, delimiter=",", header="x_in,diameter_in",
+               comments="")
+    length_in = scale * (rows[-1, 0] - rows[0, 0])
+    with pytest.raises(ValueError, match=rf"profile.csv: the bat is {length_in:.4g} in long: "
+                                         rf"{cause}\?"):
+        read_bat_files(folder / "profile.csv", folder / "meta.json")
+
+
+def test_a_point_before_the_knob_or_a_thin_handle_is_refused(tmp_path):
+    folder = _bat_folder(tmp_path, points_in=[-3.0, 5.0])
+    with pytest.raises(ValueError, match="meta.json: points_in has -3 in, before the knob"):
+        read_bat_files(folder / "profile.csv", folder / "meta.json")
+    x_m = np.array([0.0, 0.85])
+    assert "diameter 0.3 in" in plausible.check_profile(x_m, np.array([0.3, 2.5]) * 0.0254, "p")
+    assert plausible.check_profile(x_m, np.array([0.9, 2.5]) * 0.0254, "p") is None

@@ -1,0 +1,157 @@
+"""What a wooden bat can be: the lab's inputs checked before any fitting.
+
+Each check returns None or a one-line message naming the file and the key. A value off by a
+common unit factor gets its likely cause, e.g. ``weight_lb 873.6 looks like grams: 1.926 lb?``.
+Handbook values: Wood Handbook (FPL-GTR-282, 2021), table 5-3a, 12 % moisture; weight density
+= SG * 0.0361 lbf/in^3.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from updating.model.units import IN_TO_M
+
+LENGTH_IN = (24.0, 42.0)
+DIAMETER_IN = (0.5, 2.75)
+WEIGHT_LB = (15.0 / 16.0, 50.0 / 16.0)
+NOMINAL_FACTOR = 2.0
+"""A species' nominal E and weight density must be within this factor of the handbook's."""
+WATER_LBF_IN3 = 0.0361
+HANDBOOK = {  # species keyword: (E psi, specific gravity)
+    "ash": (1.74e6, 0.60),  # white ash
+    "yellow birch": (2.02e6, 0.62),
+    "birch": (1.60e6, 0.55),  # paper (white) birch
+    "maple": (1.83e6, 0.63),  # sugar (hard) maple
+}
+_LENGTH_SLIPS = (("millimetres", 25.4), ("centimetres", 2.54), ("metres", 0.0254))
+_WEIGHT_SLIPS = (("grams", 453.59237), ("ounces", 16.0), ("kilograms", 0.45359237))
+_E_SLIPS = (("GPa", 6.894757e-3), ("MPa", 6.894757), ("ksi", 1e-3), ("Mpsi", 1e-6),
+            ("Pa", 6894.757))
+_DENSITY_SLIPS = (("a specific gravity", 1 / WATER_LBF_IN3), ("kg/m^3", 27679.9),
+                  ("lb/ft^3", 1728.0))
+
+
+def handbook_range(species: str) -> tuple[tuple[float, float], tuple[float, float]]:
+    """Return the accepted (E psi, weight density lbf/in^3) ranges for a species.
+
+    The species' handbook values times and divided by ``NOMINAL_FACTOR``; a species not in
+    ``HANDBOOK`` (matched by its first keyword found in the name) gets the range over all.
+
+    Parameters
+    ----------
+    species : str
+        The species as meta.json names it ("white ash", "paper birch", "hard maple", ...).
+
+    Returns
+    -------
+    e_psi : tuple of float
+        Lowest and highest nominal modulus, psi.
+    density_lbf_in3 : tuple of float
+        Lowest and highest nominal weight density, lbf/in^3.
+    """
+    name = species.lower()
+    known = [v for k, v in HANDBOOK.items() if k in name][:1] or list(HANDBOOK.values())
+    e = np.array([v[0] for v in known])
+    wd = np.array([v[1] for v in known]) * WATER_LBF_IN3
+    f = NOMINAL_FACTOR
+    return (e.min() / f, e.max() * f), (wd.min() / f, wd.max() * f)
+
+
+def _out_of_range(value: float, limits: tuple[float, float], what: str, unit: str,
+                  slips: tuple[tuple[str, float], ...]) -> str | None:
+    """Return None when ``value`` is within ``limits``, else a message with its likely slip."""
+    lo, hi = limits
+    if lo <= value <= hi:
+        return None
+    for name, per_unit in slips:
+        if lo <= value / per_unit <= hi:
+            return f"{what} {value:g} looks like {name}: {value / per_unit:.4g} {unit}?"
+    return f"{what} {value:g} is outside {lo:.4g}-{hi:.4g} {unit} for a wooden bat"
+
+
+def check_profile(x_m: np.ndarray, diameter_m: np.ndarray, label: str) -> str | None:
+    """Check a profile's length and diameters against a wooden bat's.
+
+    Parameters
+    ----------
+    x_m, diameter_m : ndarray
+        The stations from the knob end and the outer diameters there, m.
+    label : str
+        The file, for the message.
+
+    Returns
+    -------
+    str or None
+        The message, None when plausible.
+    """
+    length_in = float(x_m[-1] - x_m[0]) / IN_TO_M
+    lo, hi = LENGTH_IN
+    if not lo <= length_in <= hi:
+        slip = next((n for n, k in _LENGTH_SLIPS if lo <= length_in / k <= hi), None)
+        cause = f": {slip}?" if slip else f", not {lo:g}-{hi:g} in"
+        return f"{label}: the bat is {length_in:.4g} in long{cause}"
+    d_in = np.asarray(diameter_m, dtype=float) / IN_TO_M
+    lo, hi = DIAMETER_IN
+    if d_in.min() < lo or d_in.max() > hi:
+        bad = d_in.max() if d_in.max() > hi else d_in.min()
+        return f"{label}: diameter {bad:.4g} in is outside {lo:g}-{hi:g} in for a wooden bat"
+    return None
+
+
+def check_meta(meta: dict, label: str) -> str | None:
+    """Check meta.json's weight and the species' nominal values against a wooden bat's.
+
+    Parameters
+    ----------
+    meta : dict
+        meta.json as read (``weight_lb``, ``nominal_E_psi``,
+        ``nominal_weight_density_lbf_in3``, ``species``).
+    label : str
+        The file, for the message.
+
+    Returns
+    -------
+    str or None
+        The message, None when plausible.
+    """
+    e_range, wd_range = handbook_range(str(meta.get("species", "")))
+    checks = [("nominal_E_psi", e_range, "psi", _E_SLIPS),
+              ("nominal_weight_density_lbf_in3", wd_range, "lbf/in^3", _DENSITY_SLIPS)]
+    if meta.get("weight_lb") is not None:
+        checks.insert(0, ("weight_lb", WEIGHT_LB, "lb", _WEIGHT_SLIPS))
+    for key, limits, unit, slips in checks:
+        value = meta.get(key)
+        if isinstance(value, bool) or not isinstance(value, int | float) or not np.isfinite(value):
+            continue  # missing or not a number: lab_input.read_meta names it
+        message = _out_of_range(float(value), limits, key, unit, slips)
+        if message:
+            return f"{label}: {message}"
+    return None
+
+
+def check_points(points_m: np.ndarray, x_m: np.ndarray, tol_m: float, label: str) -> str | None:
+    """Check that no test point lies before the knob end.
+
+    Points past the barrel end are reported by the reader with the bat's length.
+
+    Parameters
+    ----------
+    points_m : ndarray
+        The impact points from the knob end, m.
+    x_m : ndarray
+        The profile's stations, m.
+    tol_m : float
+        The tolerance, m.
+    label : str
+        The file, for the message.
+
+    Returns
+    -------
+    str or None
+        The message, None when all points are at or after the knob end.
+    """
+    if points_m.size and points_m.min() < x_m[0] - tol_m:
+        return (f"{label}: points_in has {points_m.min() / IN_TO_M:.4g} in, before the "
+                "knob end")
+    return None
