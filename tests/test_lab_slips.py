@@ -99,3 +99,19 @@ def test_a_point_before_the_knob_or_a_thin_handle_is_refused(tmp_path):
     x_m = np.array([0.0, 0.85])
     assert "diameter 0.3 in" in plausible.check_profile(x_m, np.array([0.3, 2.5]) * 0.0254, "p")
     assert plausible.check_profile(x_m, np.array([0.9, 2.5]) * 0.0254, "p") is None
+
+
+def test_demo_without_out_leaves_nothing_behind(tmp_path, monkeypatch, capsys):
+    import tempfile
+
+    from tests.inspect_standins import use_standins
+
+    use_standins(monkeypatch)  # the numerics are checked in test_cli_inspect_demo
+    scratch = tmp_path / "tmp"
+    scratch.mkdir()
+    monkeypatch.setattr(tempfile, "tempdir", str(scratch))
+    assert main(["demo"]) == 0
+    out = capsys.readouterr().out
+    assert out.startswith("DEMO-34A: ")
+    assert "report: not kept" in out and str(scratch) not in out
+    assert list(scratch.iterdir()) == []

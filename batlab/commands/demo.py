@@ -33,6 +33,9 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 def run(args: argparse.Namespace) -> int:
     """Simulate, register and inspect the built-in bat on the virtual rig.
 
+    Without ``--out`` the work goes into a temporary directory removed at the end (the
+    report is then not kept, and no report path is stored).
+
     Parameters
     ----------
     args : argparse.Namespace
@@ -44,13 +47,20 @@ def run(args: argparse.Namespace) -> int:
         Exit code: 0 (bad input raises ValueError or OSError; ``batlab.cli`` prints
         it in one line and exits 2).
     """
+    if args.out:
+        return _run_in(Path(args.out), args, keep=True)
+    with tempfile.TemporaryDirectory(prefix="batlab-demo-") as tmp:
+        return _run_in(Path(tmp), args, keep=False)
+
+
+def _run_in(work: Path, args: argparse.Namespace, keep: bool) -> int:
+    """Run the demo in ``work``; with ``keep`` False its files are about to be removed."""
     from batlab import pipeline
     from batlab.formatting import readable
     from batlab.registry import open_registry
     from batlab.report import check_destination, write_report
 
     progress = progress_printer("demo")
-    work = Path(args.out) if args.out else Path(tempfile.mkdtemp(prefix="batlab-demo-"))
     check_destination(work, "--out")
     db = Path(args.db) if args.db else work / "registry.sqlite"
     files = pipeline.simulate_demo_pair(work, args.seed, progress)
@@ -65,18 +75,24 @@ def run(args: argparse.Namespace) -> int:
         inputs = pipeline.report_inputs(result, done.record.meta,
                                         pipeline.provenance(conn, stored=stored))
         report = write_report(work / "report", inputs)
-        pipeline.note_report(conn, stored, str(report))
+        if keep:
+            pipeline.note_report(conn, stored, str(report))
     out = pipeline.contract_dict(serial, result.verdict)
-    progress(f"wrote the tests, registry and report under {work}; report: {report}")
+    where = f"under {work}; report: {report}" if keep else "(not kept: give --out DIR to keep them)"
+    progress(f"wrote the tests, registry and report {where}")
     if args.json:
         print(json.dumps(out), flush=True)
-    else:
-        print(readable(out))
-        print(f"truth: corked, 1.00 in core from 24.0 to 33.0 in, fill 0.30 "
-              f"(plus moisture +{pipeline.DEMO_RETEST['moisture_pct']} points and a "
-              "re-mounted sensor)")
-        print(f"report: {report}")
-        print(f"files:  {work} (profile.csv, meta.json, baseline.uff, retest.uff); "
-              f"registry: {db}")
-        print(f"again:  batlab inspect --serial {serial} {retest} --db {db}")
+        return 0
+    print(readable(out))
+    print(f"truth: corked, 1.00 in core from 24.0 to 33.0 in, fill 0.30 "
+          f"(plus moisture +{pipeline.DEMO_RETEST['moisture_pct']} points and a "
+          "re-mounted sensor)")
+    if not keep:
+        print("report: not kept (the work directory was temporary; give --out DIR to keep "
+              "the files and the report)")
+        return 0
+    print(f"report: {report}")
+    print(f"files:  {work} (profile.csv, meta.json, baseline.uff, retest.uff); "
+          f"registry: {db}")
+    print(f"again:  batlab inspect --serial {serial} {retest} --db {db}")
     return 0
