@@ -115,3 +115,32 @@ def test_demo_without_out_leaves_nothing_behind(tmp_path, monkeypatch, capsys):
     assert out.startswith("DEMO-34A: ")
     assert "report: not kept" in out and str(scratch) not in out
     assert list(scratch.iterdir()) == []
+
+
+def test_a_retest_file_inspected_twice_is_stored_once(tmp_path, monkeypatch, capsys):
+    from batlab.registry import history
+    from tests.inspect_standins import run_cli, use_standins
+
+    use_standins(monkeypatch)
+    db = tmp_path / "lab.sqlite"
+    assert run_cli(["register", "--profile", SAMPLE / "profile.csv", "--meta",
+                    SAMPLE / "meta.json", "--baseline", SAMPLE / "baseline.uff", "--db", db],
+                   capsys)[0] == 0
+    copy = tmp_path / "retest_again.uff"  # the same bytes under another name: same file
+    shutil.copyfile(SAMPLE / "retest_corked.uff", copy)
+    inspect = ["inspect", "--serial", "HX-2001", "--db", db, "--json"]
+    code, first, err = run_cli([*inspect, SAMPLE / "retest_corked.uff"], capsys)
+    assert code == 0 and "already inspected" not in err
+    code, second, err = run_cli([*inspect, copy], capsys)
+    assert code == 0 and "already inspected (inspection #1" in err and "--again" in err
+    assert json.loads(second) == json.loads(first)
+    with open_registry(db) as conn:
+        assert len(history(conn, "HX-2001")) == 1
+    code, third, err = run_cli([*inspect, copy, "--again"], capsys)
+    assert code == 0 and "already inspected" not in err
+    assert json.loads(third) == json.loads(first)
+    code, _, err = run_cli([*inspect, copy, "--false-alarm", "0.05"], capsys)
+    assert code == 0 and "already inspected" not in err
+    with open_registry(db) as conn:
+        assert len(history(conn, "HX-2001")) == 3
+    assert run_cli(["registry", "check", "--db", db], capsys)[0] == 0

@@ -4,7 +4,11 @@ Two forms, the same verdict:
     batlab inspect --profile P --meta M --baseline B.uff --retest R.uff
                    [--retest-meta retest.json] [--json]                        (stateless)
     batlab inspect --serial S R.uff [--retest-meta retest.json] [--db PATH] [--json]
-                                                               (registered bat; stored)
+                   [--again]                                   (registered bat; stored)
+
+A registered bat's re-test file already inspected (same SHA-256, baseline and false-alarm
+rate, no --retest-meta) is not inspected or stored again: its stored verdict is printed;
+``--again`` re-runs and stores it anew.
 """
 
 from __future__ import annotations
@@ -37,6 +41,9 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                         "writable before any work)")
     p.add_argument("--plots", default=None, metavar="DIR",
                    help="write the report's figures as PNG files to DIR")
+    p.add_argument("--again", action="store_true",
+                   help="with --serial: inspect and store a re-test file already inspected "
+                        "(default: print its stored verdict)")
     add_db_argument(p)
     p.add_argument("--json", action="store_true",
                    help="print the verdict as one JSON object on stdout")
@@ -83,6 +90,10 @@ def run(args: argparse.Namespace) -> int:
             raise ValueError("--serial takes the bat from the registry: drop --profile, --meta "
                              "and --baseline")
         with open_registry(db_path(args), create=False) as conn:
+            done = None if args.again or args.retest_meta else \
+                pipeline.already_inspected(conn, args.serial, retest, args.false_alarm)
+            if done is not None:
+                return _print_stored(args, conn, done, retest, progress, readable)
             result = pipeline.inspect_registered(conn, args.serial, retest, args.false_alarm,
                                                  refit_baseline=bool(args.report or args.plots),
                                                  progress=progress,
@@ -115,6 +126,21 @@ def run(args: argparse.Namespace) -> int:
                                        retest_sha256=pipeline.file_sha256(retest))
             meta = pipeline.read_meta_dict(args.meta)
             _report(args, pipeline.report_inputs(result, meta, prov), progress)
+    return 0
+
+
+def _print_stored(args, conn, done, retest: str, progress, readable) -> int:
+    """Print the stored verdict of a re-test file already inspected (and its report if asked)."""
+    from batlab import pipeline
+
+    progress(f"{retest} was already inspected (inspection #{done.id} of {done.serial}, "
+             f"{done.inspected_at}): its stored verdict, not stored again (--again re-runs it)")
+    _print(args, pipeline.stored_contract_dict(done.verdict), readable)
+    if args.report or args.plots:
+        path = _report(args, pipeline.stored_report_inputs(conn, done.serial, done.id,
+                                                           progress), progress)
+        if path is not None:
+            pipeline.note_report(conn, done, path)
     return 0
 
 

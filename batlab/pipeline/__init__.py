@@ -59,15 +59,16 @@ _SOURCES = {
         "PAPER", "PaperCase", "TRUE", "element_rows", "plot_figures", "run_paper_case",
     ),
     "batlab.pipeline.records": (
-        "FittedTest", "ReportInputs", "contract_dict", "jsonable", "verdict_record",
+        "FittedTest", "ReportInputs", "contract_dict", "jsonable", "stored_contract_dict",
+        "verdict_record",
     ),
     "batlab.pipeline.registered": (
         "Registration", "inspect_registered", "prepare_registration", "register_files",
         "registered_case",
     ),
     "batlab.pipeline.stored": (
-        "history_table", "note_report", "provenance", "report_inputs", "store_inspection",
-        "stored_bat", "stored_report_inputs",
+        "already_inspected", "history_table", "note_report", "provenance", "report_inputs",
+        "store_inspection", "stored_bat", "stored_report_inputs",
     ),
     "updating.model.json_input": (
         "read_json_object",

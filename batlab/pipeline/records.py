@@ -185,6 +185,26 @@ def jsonable(value):
     return str(value)
 
 
+RECORD_ONLY_KEYS = ("statistic", "moisture", "uncertainty", "modes", "details")
+"""What ``verdict_record`` adds to the contract dict."""
+
+
+def stored_contract_dict(record: dict) -> dict:
+    """Return the contract dict of a stored verdict record (``verdict_record``'s inverse part).
+
+    Parameters
+    ----------
+    record : dict
+        A stored inspection's verdict.
+
+    Returns
+    -------
+    dict
+        The contract's JSON object, as ``contract_dict`` wrote it.
+    """
+    return {k: v for k, v in record.items() if k not in RECORD_ONLY_KEYS}
+
+
 def verdict_record(serial: str, verdict: Verdict) -> dict:
     """Write what the registry keeps of an inspection.
 

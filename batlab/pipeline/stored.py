@@ -7,7 +7,7 @@ from pathlib import Path
 
 from batlab import __version__
 from batlab import registry as reg
-from batlab.pipeline.files import Progress, frf_from_bytes, quiet
+from batlab.pipeline.files import Progress, file_sha256, frf_from_bytes, quiet
 from batlab.pipeline.inspection import InspectionResult, fit_file
 from batlab.pipeline.records import FittedTest, ReportInputs, verdict_record
 from batlab.pipeline.registered import registered_weight_kg
@@ -55,6 +55,37 @@ def store_inspection(
         conn, result.serial, verdict_record(result.serial, result.verdict), path.name,
         content, reference_seq=result.reference_seq,
         inputs={"false_alarm": float(false_alarm), "batlab_version": __version__})
+
+
+def already_inspected(
+    conn: sqlite3.Connection, serial: str, retest_path, false_alarm: float = 0.01,
+) -> reg.Inspection | None:
+    """Find the bat's latest stored inspection of this very re-test file, if any.
+
+    The same file (SHA-256) against the bat's current baseline at the same false-alarm rate.
+
+    Parameters
+    ----------
+    conn : sqlite3.Connection
+        The registry.
+    serial : str
+        The bat's serial number.
+    retest_path : str or os.PathLike
+        The re-test file.
+    false_alarm : float
+        The decision's false-alarm rate.
+
+    Returns
+    -------
+    Inspection or None
+        The stored inspection, None when this file was not inspected yet.
+    """
+    bat = reg.get_bat(conn, serial)
+    sha = file_sha256(retest_path)
+    same = [i for i in reg.history(conn, serial)
+            if i.retest_sha256 == sha and i.baseline_sha256 == bat.baseline_sha256
+            and (i.inputs or {}).get("false_alarm", 0.01) == float(false_alarm)]
+    return same[-1] if same else None
 
 
 def stored_bat(conn: sqlite3.Connection, stored: reg.Inspection) -> reg.BatRecord:
