@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import os
 import tempfile
+import warnings
 from collections.abc import Callable
 from pathlib import Path
 
@@ -133,7 +134,10 @@ def _read_profile_naming_slips(path) -> Profile:
         return read_profile_csv(path)
     except ValueError:
         try:
-            rows = np.genfromtxt(path, delimiter=",", skip_header=1, usecols=(0, 1), ndmin=2)
+            with warnings.catch_warnings():  # an empty file: the reader's message stands
+                warnings.simplefilter("ignore")
+                rows = np.genfromtxt(path, delimiter=",", skip_header=1, usecols=(0, 1),
+                                     ndmin=2)
             x_m, d_m = rows[:, 0] * IN_TO_M, rows[:, 1] * IN_TO_M
             slip = plausible.check_profile(x_m, d_m, str(path)) if np.isfinite(rows).all() else None
         except (ValueError, OSError, IndexError):
