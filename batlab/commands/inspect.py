@@ -98,7 +98,8 @@ def run(args: argparse.Namespace) -> int:
                                                  refit_baseline=bool(args.report or args.plots),
                                                  progress=progress,
                                                  retest_meta_path=args.retest_meta)
-            stored = pipeline.store_inspection(conn, result, retest, args.false_alarm)
+            stored = pipeline.store_inspection(conn, result, retest, args.false_alarm,
+                                               retest_meta=bool(args.retest_meta))
             progress(f"stored as inspection #{stored.id} of {result.serial} (custody record "
                      f"#{stored.record_seq})")
             _print(args, pipeline.contract_dict(result.serial, result.verdict), readable)

@@ -26,6 +26,7 @@ EXPORT_COLUMNS = [
 
 def store_inspection(
     conn: sqlite3.Connection, result: InspectionResult, retest_path, false_alarm: float = 0.01,
+    retest_meta: bool = False,
 ) -> reg.Inspection:
     """Record an inspection of a registered bat.
 
@@ -42,6 +43,8 @@ def store_inspection(
         The re-test file (its bytes as judged are stored when the result kept them).
     false_alarm : float
         The decision's false-alarm rate.
+    retest_meta : bool
+        Whether a retest.json gave the re-test's conditions (kept in the inputs).
 
     Returns
     -------
@@ -54,7 +57,8 @@ def store_inspection(
     return reg.add_inspection(
         conn, result.serial, verdict_record(result.serial, result.verdict), path.name,
         content, reference_seq=result.reference_seq,
-        inputs={"false_alarm": float(false_alarm), "batlab_version": __version__})
+        inputs={"false_alarm": float(false_alarm), "batlab_version": __version__,
+                "retest_meta": bool(retest_meta)})
 
 
 def already_inspected(
@@ -62,7 +66,8 @@ def already_inspected(
 ) -> reg.Inspection | None:
     """Find the bat's latest stored inspection of this very re-test file, if any.
 
-    The same file (SHA-256) against the bat's current baseline at the same false-alarm rate.
+    The same file (SHA-256) against the bat's current baseline at the same false-alarm rate,
+    inspected without a retest.json (whose conditions are not stored to compare).
 
     Parameters
     ----------
@@ -84,7 +89,8 @@ def already_inspected(
     sha = file_sha256(retest_path)
     same = [i for i in reg.history(conn, serial)
             if i.retest_sha256 == sha and i.baseline_sha256 == bat.baseline_sha256
-            and (i.inputs or {}).get("false_alarm", 0.01) == float(false_alarm)]
+            and (i.inputs or {}).get("false_alarm", 0.01) == float(false_alarm)
+            and not (i.inputs or {}).get("retest_meta", False)]
     return same[-1] if same else None
 
 
