@@ -30,7 +30,7 @@ def _lab_worker(db: str, folder: str, serial: str, n_inspections: int) -> None:
     assert code == 0
     for _ in range(n_inspections):
         assert main(["inspect", "--serial", serial, str(SAMPLE / "retest_corked.uff"),
-                     "--db", db, "--json"]) == 0
+                     "--db", db, "--json", "--again"]) == 0  # the same file: stored anew
 
 
 def test_concurrent_register_and_inspect_processes(tmp_path):
