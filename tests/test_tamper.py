@@ -47,7 +47,7 @@ def lab(tmp_path_factory) -> dict:
                    root / "meta.json", "--baseline", root / "baseline.uff")[0] == 0
         for k in (1, 2):
             code, _, err = cli("inspect", "--serial", "HX-2001", root / "retest_corked.uff",
-                               "--report", root / f"rep{k}")
+                               "--report", root / f"rep{k}", "--again")  # stored twice
             assert code == 0, err
             if k == 1:
                 shutil.copyfile(db, root / "older.sqlite")
@@ -141,7 +141,7 @@ def test_a_record_added_with_batlab_and_another_key_is_found(lab, copy, tmp_path
     lab_key = signing.key_id(signing.signing_key().public_key())
     intruder = _other_key(tmp_path, monkeypatch)
     code, _, err = cli("inspect", "--serial", "HX-2001", lab["root"] / "retest_corked.uff",
-                       "--db", copy)
+                       "--db", copy, "--again")
     assert code == 0, err
     monkeypatch.delenv("BATLAB_KEY")
     code, problems = check(copy)
