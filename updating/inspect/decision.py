@@ -36,7 +36,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from updating.inspect.finding import Finding
+from updating.inspect.finding import Finding, describe
 from updating.model.units import IN_TO_M
 
 F_FLOOR = 10.0
@@ -246,15 +246,9 @@ def _drift_beyond_bounds(e: Evidence) -> list[str]:
 
 def _drift(e: Evidence) -> list[str]:
     grip = "" if e.grip is None else (
-        f"; {grip_text(e.grip)}: a grip substance, legal under Rule 3.02(c)")
+        f"; {describe(e.grip)}: a grip substance, legal under Rule 3.02(c)")
     return [f"the change between the tests is what moisture, temperature and the "
             f"accelerometer make (F = {e.F:.2f}, p = {e.p_value:.2f}){e.weight_note}{grip}"]
-
-
-def grip_text(f: Finding) -> str:
-    """Say a grip substance in words: about N g added on the handle, a-b in."""
-    a, b = (v / IN_TO_M for v in f.region_m)
-    return f"about {1e3 * f.reading['added_mass_kg']:.0f} g added on the handle, {a:.0f}-{b:.0f} in"
 
 
 @dataclass(frozen=True)

@@ -10,7 +10,7 @@ generic change's stretch. The family with the best Akaike score gives the findin
 
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -180,8 +180,3 @@ def classify(predict, diff: Differences, space: ParamSpace, sigma_rel: SigmaRel,
     cov = covariance(fit, max(n - N_NULL - N_PARAMS[family], 1))
     finding = read_finding(family, fit, space, cov, predict)
     return KindFits(fits, scores, family, finding, fit, cov)
-
-
-def with_region(finding: Finding, region_m: tuple[float, float]) -> Finding:
-    """Return the same finding over another region (a reading refined elsewhere)."""
-    return replace(finding, region_m=region_m)
