@@ -46,7 +46,7 @@ import numpy as np
 
 from ema.io.frf_data import FrfTest
 from ema.mode_checks import CLOSE_PAIR, ClosePair, close_pairs, mode_warnings
-from ema.poles.autopoles import auto_poles
+from ema.poles.autopoles import MERGE_OVERLAP, auto_poles
 from ema.poles.local_support import (
     MAX_SHIFT,
     MIN_LINES,
@@ -334,7 +334,7 @@ def _select_poles(
         p_max = int(max_order) if max_order else max(12, 30 // n_poly_ref)
         auto = auto_poles(test.freq_hz, lay.h_poly, band, p_max)
         sel, rejected = auto.modes, list(auto.rejected)
-        rescued = _peak_confirmed(sel.freq_hz, rejected, peaks)
+        rescued = _peak_confirmed(sel.freq_hz, sel.damping_ratio, rejected, peaks)
         f_r = np.array([r.freq_hz for r in rescued])
         z_r = np.array([r.damping_ratio for r in rescued])
         order = np.argsort(np.r_[sel.freq_hz, f_r])
@@ -375,7 +375,8 @@ def _merge_warnings(freq_hz: np.ndarray, rejected: list[Rejection]) -> list[list
 
 
 def _peak_confirmed(
-    mode_freq_hz: np.ndarray, rejected: list[Rejection], peaks: PeakPick, min_orders: int = 3
+    mode_freq_hz: np.ndarray, mode_damping: np.ndarray, rejected: list[Rejection],
+    peaks: PeakPick, min_orders: int = 3,
 ) -> list[Rejection]:
     """Return the candidates rejected for stability that a sum-MIF peak confirms.
 
@@ -383,7 +384,9 @@ def _peak_confirmed(
     orders, within the peak's half-power half-width (at least 1 %) of a peak that no selected
     mode explains. A heavily damped mode whose peak moves between the FRFs is stable at fewer
     orders than the automatic criterion asks, yet plain to see; the support check after the
-    LSFD still applies to it. One (the most stable) per peak.
+    LSFD still applies to it. One (the most stable) per peak. A candidate inside a selected
+    mode's half-power width (``merge_overlapping``'s rule) is not rescued: a peak split in two
+    by a null of the hammer's force spectrum shows two sum-MIF peaks around one mode.
     """
     out: list[Rejection] = []
     for fp, zp in zip(peaks.freq_hz, peaks.damping_ratio, strict=True):
@@ -391,7 +394,9 @@ def _peak_confirmed(
         if np.any(np.abs(mode_freq_hz - fp) <= width):
             continue
         near = [r for r in rejected if r.reason == "stability" and r.stable_orders >= min_orders
-                and abs(r.freq_hz - fp) <= width and r not in out]
+                and abs(r.freq_hz - fp) <= width and r not in out
+                and not np.any(MERGE_OVERLAP * np.abs(mode_freq_hz - r.freq_hz) < 0.5 * (
+                    mode_damping * mode_freq_hz + r.damping_ratio * r.freq_hz))]
         if near:
             out.append(max(near, key=lambda r: r.stable_orders))
     return out

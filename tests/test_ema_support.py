@@ -67,3 +67,17 @@ def test_line_weight_is_the_inverse_variance_of_h1():
     assert w[0] == pytest.approx(1.0) and w[1] == pytest.approx(9.0)
     assert w[2] == pytest.approx(999.0)  # capped: gamma^2 = 1 is no infinite certainty
     assert line_weight(None) is None
+
+
+def test_a_peak_split_by_a_force_null_rescues_no_second_pole():
+    """The sum-MIF shows two peaks around one mode whose middle a force null cuts: a candidate
+    inside the kept mode's half-power width is not rescued as a second mode, one outside it is."""
+    from ema.poles.mif import PeakPick
+    from ema.poles.rejected import Rejection
+
+    mode_hz, mode_zeta = np.array([2094.7]), np.array([0.0108])
+    peaks = PeakPick(np.array([2055.6, 2110.1]), np.array([0.018, 0.0115]), np.ones(2))
+    inside = Rejection(2083.5, 0.008, "stability", "stable at 8 of 29 orders", 8)
+    outside = Rejection(2040.0, 0.008, "stability", "stable at 8 of 29 orders", 8)
+    assert modal_fit._peak_confirmed(mode_hz, mode_zeta, [inside], peaks) == []
+    assert modal_fit._peak_confirmed(mode_hz, mode_zeta, [outside], peaks) == [outside]
