@@ -12,13 +12,13 @@ from pathlib import Path
 def add_db_argument(p: argparse.ArgumentParser) -> None:
     """Add ``--db``, the registry file, to a command's parser."""
     p.add_argument("--db", default=None,
-                   help="registry file (default $BATLAB_DB, else "
+                   help="registry: a SQLite file or a postgresql:// URL (default $BATLAB_DB, else "
                         "$XDG_DATA_HOME/batlab/registry.sqlite or "
                         "~/.local/share/batlab/registry.sqlite)")
 
 
-def db_path(args: argparse.Namespace) -> Path:
-    """Return the registry file: ``--db`` if given, else the default.
+def db_path(args: argparse.Namespace) -> Path | str:
+    """Return the registry: ``--db`` if given, else the default (a file, or a server's URL).
 
     Parameters
     ----------
@@ -27,12 +27,15 @@ def db_path(args: argparse.Namespace) -> Path:
 
     Returns
     -------
-    Path
-        ``--db`` with ``~`` expanded, else ``batlab.registry.default_db_path()``
-        ($BATLAB_DB, else under $XDG_DATA_HOME or ~/.local/share).
+    Path or str
+        A PostgreSQL URL as given, else ``--db`` with ``~`` expanded, else
+        ``batlab.registry.default_db_path()`` ($BATLAB_DB, else under $XDG_DATA_HOME or
+        ~/.local/share).
     """
-    from batlab.registry import default_db_path
+    from batlab.registry import default_db_path, is_url
 
+    if args.db and is_url(args.db):
+        return args.db
     return Path(args.db).expanduser() if args.db else default_db_path()
 
 

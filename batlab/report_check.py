@@ -48,14 +48,12 @@ def _seal_problems(page: str, where: str, trusted: set[str]) -> list[str]:
 def _content_problems(conn: sqlite3.Connection, page: str, where: str,
                       verdict_seq: int) -> list[str]:
     """Check the page's verdict words, reasons and head against the inspection and chain."""
-    from batlab.registry import custody_rows, get_inspection
+    from batlab.registry import custody_rows, inspection_by_record
 
     problems = []
-    row = conn.execute("SELECT id FROM inspections WHERE record_seq = ?",
-                       (verdict_seq,)).fetchone()
-    if row is None:
+    stored = inspection_by_record(conn, verdict_seq)
+    if stored is None:
         return [f"{where}: no stored inspection has verdict record #{verdict_seq}"]
-    stored = get_inspection(conn, int(row[0]))
     shown = _STATUS.search(page)
     if shown is None or shown.group(1) != stored.status:
         problems.append(f"{where}: shows verdict {shown.group(1) if shown else 'none'!r}, "

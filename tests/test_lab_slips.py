@@ -67,7 +67,7 @@ def test_a_unit_slip_in_meta_is_named_and_nothing_stored(tmp_path, capsys, key, 
     assert recovered == pytest.approx(true_value, rel=1e-3)
     if db.exists():
         with open_registry(db) as conn:
-            assert conn.execute("SELECT COUNT(*) FROM bats").fetchone()[0] == 0
+            assert conn.exec_driver_sql("SELECT COUNT(*) FROM bats").fetchone()[0] == 0
 
 
 def test_a_species_value_far_from_the_handbook_is_refused(tmp_path):

@@ -40,7 +40,7 @@ def test_default_path_from_env(tmp_path):
 def test_register_get_list_history(tmp_path):
     with reg.open_registry(tmp_path / "sub" / "r.sqlite") as conn:
         assert reg.schema_version(conn) == reg.SCHEMA_VERSION
-        assert conn.execute("PRAGMA journal_mode").fetchone()[0] == "wal"
+        assert conn.exec_driver_sql("PRAGMA journal_mode").fetchone()[0] == "wal"
         bat = make_bat("HX-1")
         stored = reg.add_bat(conn, bat, "base.uff", b"UFF bytes 1")
         assert stored.baseline_sha256 == reg.sha256_bytes(b"UFF bytes 1")
@@ -71,7 +71,7 @@ def test_register_get_list_history(tmp_path):
         assert hist[1].reference_seq == stored.reference_seq
         # the re-test file is kept once (two inspections of the same bytes)
         assert reg.stored_file(conn, hist[2].retest_sha256, "x") == ("r2.uff", b"bb")
-        assert conn.execute("SELECT count(*) FROM files").fetchone()[0] == 4
+        assert conn.exec_driver_sql("SELECT count(*) FROM files").fetchone()[0] == 4
 
         bats = reg.list_bats(conn)
         assert [b.serial for b in bats] == ["HX-0", "HX-1"]
@@ -108,7 +108,7 @@ def test_replace_keeps_history_and_every_file(tmp_path):
         assert then.profile_x_m == old.profile_x_m and then.reference == old.reference
         assert then.baseline_name == "a.uff"
         reg.add_bat(conn, make_bat("S1"), "c.uff", b"third", replace=True)
-        names = {r[0] for r in conn.execute("SELECT name FROM files")}
+        names = {r[0] for r in conn.exec_driver_sql("SELECT name FROM files")}
         assert names == {"a.uff", "b.uff", "c.uff", "r.uff", "r2.uff"}
         assert reg.check(conn).ok
 
@@ -132,10 +132,10 @@ def test_failed_transaction_leaves_nothing(tmp_path):
         bad = reg.BatRecord(**{**make_bat("B1").__dict__, "profile_diameter_m": [0.04]})
         with pytest.raises(ValueError):  # zip(strict=True) fails after the bat row went in
             reg.add_bat(conn, bad, "a.uff", b"x")
-        assert not conn.in_transaction
+        assert not conn.connection.dbapi_connection.in_transaction  # rolled back
         assert reg.list_bats(conn) == []
-        assert conn.execute("SELECT count(*) FROM files").fetchone()[0] == 0
-        assert conn.execute("SELECT count(*) FROM custody").fetchone()[0] == 0
+        assert conn.exec_driver_sql("SELECT count(*) FROM files").fetchone()[0] == 0
+        assert conn.exec_driver_sql("SELECT count(*) FROM custody").fetchone()[0] == 0
 
 
 def test_migration_from_v1(tmp_path):
@@ -144,20 +144,20 @@ def test_migration_from_v1(tmp_path):
     assert reg.schema_version(conn) == 1
     prof = {"x_m": [0.0, 0.4, 0.86], "diameter_m": [0.03, 0.035, 0.066]}
     blob = b"old baseline"
-    conn.execute(
+    conn.exec_driver_sql(
         "INSERT INTO bats VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?)",
         ("V1", json.dumps(prof), json.dumps({"serial": "V1", "species": "maple"}),
          json.dumps({"E_pa": 1e10}), json.dumps({"freq_hz": [1.0]}), "base.uff",
          reg.sha256_bytes(blob), blob, "2026-01-01T00:00:00+00:00"))
-    conn.execute("INSERT INTO inspections (serial, verdict_json, retest_sha256, inspected_at) "
-                 "VALUES ('V1', ?, 'abc', '2026-02-01T00:00:00+00:00')",
-                 (json.dumps({"serial": "V1", "altered": True}),))
+    conn.exec_driver_sql("INSERT INTO inspections (serial, verdict_json, retest_sha256, "
+                         "inspected_at) VALUES ('V1', ?, 'abc', '2026-02-01T00:00:00+00:00')",
+                         (json.dumps({"serial": "V1", "altered": True}),))
     conn.close()
 
     with reg.open_registry(path) as conn:
-        assert reg.schema_version(conn) == reg.SCHEMA_VERSION == 4
-        versions = [r[0] for r in conn.execute("SELECT version FROM schema_version")]
-        assert versions == [1, 2, 3, 4]
+        assert reg.schema_version(conn) == reg.SCHEMA_VERSION == 5
+        versions = [r[0] for r in conn.exec_driver_sql("SELECT version_num FROM alembic_version")]
+        assert versions == ["0005"]  # Alembic ran 0002..0005 in place
         bat = reg.get_bat(conn, "V1")
         assert bat.profile_x_m == prof["x_m"] and bat.profile_diameter_m == prof["diameter_m"]
         assert bat.species == "maple" and bat.reference == {"E_pa": 1e10}
@@ -168,17 +168,18 @@ def test_migration_from_v1(tmp_path):
         assert insp.baseline_sha256 == reg.sha256_bytes(blob)
         # the migration chained what was there: the file, the bat, the verdict (unsigned,
         # schema 3), then schema 4 sealed them with a signed record naming how many
-        rows = conn.execute("SELECT kind, signer FROM custody ORDER BY seq").fetchall()
+        rows = conn.exec_driver_sql("SELECT kind, signer FROM custody ORDER BY seq").fetchall()
         assert [r[0] for r in rows] == ["file", "reference", "verdict", "seal"]
         assert [r[1] is None for r in rows] == [True, True, True, False]
-        assert "altered" not in [c[1] for c in conn.execute("PRAGMA table_info(inspections)")]
+        columns = conn.exec_driver_sql("PRAGMA table_info(inspections)")
+        assert "altered" not in [c[1] for c in columns]
         res = reg.check(conn)
         assert res.ok and res.notes == [
             f"inspection #{insp.id}: re-test file not kept (inspected before schema 3)",
             "records #1..#3 are unsigned legacy records (written before schema 4), sealed by "
             "signed record #4"]
-        assert conn.execute("PRAGMA foreign_key_check").fetchall() == []
-        assert conn.execute("PRAGMA integrity_check").fetchone()[0] == "ok"
+        assert conn.exec_driver_sql("PRAGMA foreign_key_check").fetchall() == []
+        assert conn.exec_driver_sql("PRAGMA integrity_check").fetchone()[0] == "ok"
         # the migrated database is fully usable
         reg.add_inspection(conn, "V1", {"altered": False}, "r.uff", b"def")
         assert [i.altered for i in reg.history(conn, "V1")] == [True, False]
@@ -189,7 +190,7 @@ def test_newer_schema_is_refused(tmp_path):
     path = tmp_path / "r.sqlite"
     reg.connect(path).close()
     raw = sqlite3.connect(path)
-    raw.execute("INSERT INTO schema_version VALUES (99, 'future')")
+    raw.execute("UPDATE alembic_version SET version_num = '0099'")
     raw.commit()
     raw.close()
     with pytest.raises(ValueError, match="newer"):
@@ -237,8 +238,8 @@ def test_concurrent_writers(tmp_path):
         assert len(hist) == 60
         assert sorted(h.retest_sha256 for h in hist) == sorted(
             reg.sha256_bytes(f"{w}-{k}".encode()) for w in range(4) for k in range(15))
-        assert [r[0] for r in conn.execute("SELECT version FROM schema_version")] == [1, 2, 3,
-                                                                                      4]
+        assert conn.exec_driver_sql("SELECT version_num FROM alembic_version").all() == [
+            ("0005",)]  # created once at the head, whoever came first
         assert reg.check(conn).ok  # one unbroken chain however the writers interleaved
 
 
@@ -247,11 +248,11 @@ def test_concurrent_writers(tmp_path):
 
 def _die_mid_transaction(path: str, ready) -> None:
     conn = reg.connect(path)
-    conn.execute("BEGIN IMMEDIATE")
-    conn.execute("INSERT INTO files VALUES ('dead', 'dead.uff', 4, x'00112233')")
-    conn.execute("INSERT INTO bats (serial, species, meta_json, reference_json, modes_json, "
-                 "baseline_sha256, registered_at) VALUES ('DEAD', '', '{}', '{}', '{}', 'dead', "
-                 "'now')")
+    conn.exec_driver_sql("BEGIN IMMEDIATE")
+    conn.exec_driver_sql("INSERT INTO files VALUES ('dead', 'dead.uff', 4, x'00112233')")
+    conn.exec_driver_sql("INSERT INTO bats (serial, species, meta_json, reference_json, "
+                         "modes_json, baseline_sha256, registered_at) VALUES ('DEAD', '', '{}', "
+                         "'{}', '{}', 'dead', 'now')")
     ready.set()
     time.sleep(60)  # killed here, before COMMIT
 
@@ -282,8 +283,8 @@ def test_killed_writer_leaves_database_consistent(tmp_path):
         proc.join(10)
         assert proc.exitcode == -signal.SIGKILL
     with reg.open_registry(path) as conn:
-        assert conn.execute("PRAGMA integrity_check").fetchone()[0] == "ok"
-        assert conn.execute("PRAGMA foreign_key_check").fetchall() == []
+        assert conn.exec_driver_sql("PRAGMA integrity_check").fetchone()[0] == "ok"
+        assert conn.exec_driver_sql("PRAGMA foreign_key_check").fetchall() == []
         assert [b.serial for b in reg.list_bats(conn)] == ["K1"]  # DEAD never committed
         hist = reg.history(conn, "K1")
         assert len(hist) >= 20
@@ -309,7 +310,7 @@ def _chained(path) -> dict:
         ids = [reg.add_inspection(conn, "C1", {"altered": k == 1, "k": k}, f"r{k}.uff",
                                   f"retest {k}".encode()).id for k in range(3)]
         assert reg.check(conn).ok
-        rows = conn.execute("SELECT seq, kind, subject FROM custody ORDER BY seq").fetchall()
+        rows = conn.exec_driver_sql("SELECT seq, kind, subject FROM custody ORDER BY seq").all()
     return {"ids": ids, "seq": {(kind, subject): seq for seq, kind, subject in rows}}
 
 
@@ -343,7 +344,8 @@ def test_chain_names_a_rewritten_record_and_everything_after_stays_linked(tmp_pa
     info = _chained(path)
     seq = info["seq"][("verdict", str(info["ids"][0]))]
     with reg.open_registry(path) as conn:
-        payload = conn.execute("SELECT payload FROM custody WHERE seq = ?", (seq,)).fetchone()[0]
+        payload = conn.exec_driver_sql("SELECT payload FROM custody WHERE seq = ?",
+                                       (seq,)).scalar()
     forged = payload.replace('"altered":false', '"altered":true')
     assert forged != payload
     _raw(path, "UPDATE custody SET payload = ?, content_sha256 = ? WHERE seq = ?",
@@ -414,7 +416,7 @@ def test_chain_names_whichever_record_was_changed(tmp_path, n_bats, n_insp, pick
             reg.add_inspection(conn, f"P{k % n_bats}", {"altered": k % 2 == 0}, f"r{k}.uff",
                                f"retest {k}".encode())
         assert reg.check(conn).ok
-        n = conn.execute("SELECT count(*) FROM custody").fetchone()[0]
+        n = conn.exec_driver_sql("SELECT count(*) FROM custody").fetchone()[0]
     seq = 1 + int(pick * n)
     column, value = {"content": ("content_sha256", "f" * 64),
                      "stamp": ("recorded_at", "2000-01-01T00:00:00+00:00"),
@@ -438,7 +440,7 @@ def test_connect_waits_for_another_process_switching_to_wal(tmp_path):
     timer.start()
     try:
         with reg.open_registry(path) as conn:
-            assert conn.execute("PRAGMA journal_mode").fetchone()[0] == "wal"
+            assert conn.exec_driver_sql("PRAGMA journal_mode").fetchone()[0] == "wal"
             assert reg.schema_version(conn) == reg.SCHEMA_VERSION
     finally:
         timer.join()

@@ -152,8 +152,10 @@ def test_damaged_and_read_only_registries(lab, capsys):
     db = lab / "reg.sqlite"
     code, _, _ = run_cli(["bats"], capsys)
     assert code == 0
+    with sqlite3.connect(db) as raw:  # the bats table's first page, wherever it lies
+        root = raw.execute("SELECT rootpage FROM sqlite_master WHERE name = 'bats'").fetchone()[0]
     data = bytearray(db.read_bytes())
-    data[4096:8192] = b"\xff" * 4096  # a damaged page
+    data[(root - 1) * 4096:root * 4096] = b"\xff" * 4096  # a damaged page
     bad = lab / "bad.sqlite"
     bad.write_bytes(bytes(data))
     for args in (["bats"], ["history", "HX-2001"], ["registry", "check"]):

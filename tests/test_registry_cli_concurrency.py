@@ -55,7 +55,7 @@ def test_concurrent_register_and_inspect_processes(tmp_path):
         for k in range(3):
             hist = history(conn, f"C-{k}")
             assert len(hist) == 3 and all(h.altered for h in hist)
-        assert conn.execute("PRAGMA integrity_check").fetchone()[0] == "ok"
+        assert conn.exec_driver_sql("PRAGMA integrity_check").fetchone()[0] == "ok"
         # one baseline and one re-test file, each stored once, shared by the three bats
-        assert conn.execute("SELECT count(*) FROM files").fetchone()[0] == 2
+        assert conn.exec_driver_sql("SELECT count(*) FROM files").fetchone()[0] == 2
         assert check(conn).ok  # one unbroken custody chain however the writers interleaved

@@ -184,9 +184,9 @@ def test_a_second_verdict_record_for_an_inspection_is_found(copy, tmp_path, monk
 
     intruder = _other_key(tmp_path, monkeypatch)
     with reg.open_registry(copy) as conn, reg.transaction(conn):
-        payload = reg._inspection_payload(conn, 1)
-        seq = reg._append_record(conn, "verdict", "1", None,
-                                 reg._canonical({**payload, "status": "not_altered"}))
+        payload = reg.chain.inspection_payload(conn, 1)
+        seq = reg.chain.append_record(conn, "verdict", "1", None,
+                                      reg.chain.canonical({**payload, "status": "not_altered"}))
     monkeypatch.delenv("BATLAB_KEY")
     code, problems = check(copy)
     assert code == 1

@@ -1,0 +1,70 @@
+"""The registry of bats: SQLite (one file, the default) or PostgreSQL (a league's server).
+
+A bat is registered once under its serial number with its profile (stations), meta.json,
+species, calibrated model parameters (``BatReference.to_dict()``), the baseline FRF file itself
+(copied in, keyed by its SHA-256 and checked on every read) and the baseline's fitted modes.
+Every later inspection is stored with its verdict, the re-test file and the time, and every
+stored thing gets a signed record in the custody chain.
+
+The package, one job a module: ``common`` (where the registry is, hashes, time stamps),
+``schema`` (the tables, SQLAlchemy Core), ``lock`` (write transactions and their lock),
+``migrate`` and ``migrations/`` (Alembic), ``engine`` (opening a file or a server),
+``chain`` (appending and reading custody records), ``records`` (bats, files, inspections),
+``check`` (``registry check``) and ``copy`` (``registry copy``). Layout, locking and
+migrations: docs/registry.md.
+"""
+
+from batlab.registry.chain import (
+    GENESIS_SHA256,
+    CustodyRecord,
+    chain_head,
+    custody_record,
+    custody_rows,
+    head,
+    record_hash,
+)
+from batlab.registry.check import CheckResult, check
+from batlab.registry.common import (
+    BUSY_TIMEOUT_S,
+    default_db_path,
+    is_url,
+    now_utc,
+    sha256_bytes,
+    shown,
+)
+from batlab.registry.engine import connect, open_registry
+from batlab.registry.lock import transaction
+from batlab.registry.migrate import SCHEMA_VERSION, migrate, schema_version
+from batlab.registry.records import (
+    BatRecord,
+    BatSummary,
+    Inspection,
+    add_bat,
+    add_inspection,
+    all_inspections,
+    baseline_file,
+    bat_as_registered,
+    decode_modes,
+    encode_modes,
+    get_bat,
+    get_inspection,
+    has_bat,
+    has_file,
+    history,
+    inspection_by_record,
+    list_bats,
+    set_report_path,
+    store_file,
+    stored_file,
+)
+
+__all__ = [
+    "BUSY_TIMEOUT_S", "GENESIS_SHA256", "SCHEMA_VERSION", "BatRecord", "BatSummary",
+    "CheckResult", "CustodyRecord", "Inspection", "add_bat", "add_inspection",
+    "all_inspections", "bat_as_registered", "baseline_file", "chain_head", "check", "connect",
+    "custody_record", "custody_rows", "decode_modes", "default_db_path", "encode_modes",
+    "get_bat", "get_inspection", "has_bat", "has_file", "head", "history",
+    "inspection_by_record", "is_url", "list_bats", "migrate", "now_utc", "open_registry",
+    "record_hash", "schema_version", "set_report_path", "sha256_bytes", "shown",
+    "store_file", "stored_file", "transaction",
+]

@@ -1,0 +1,187 @@
+"""``registry check``: every stored file, row and custody record verified against the chain."""
+
+from __future__ import annotations
+
+import sqlite3
+from dataclasses import dataclass
+
+import sqlalchemy as sa
+
+from batlab import custody, signing
+from batlab.registry.chain import bat_payload, canonical, custody_rows, inspection_payload
+from batlab.registry.common import sha256_bytes
+from batlab.registry.schema import bats, files, inspections
+
+
+@dataclass(frozen=True)
+class CheckResult:
+    """The result of ``registry check``.
+
+    ``problems`` is empty when the registry is intact; ``first_changed`` is the first custody
+    record that no longer verifies (None if none); ``head`` the chain's head as ``SEQ:SHA256``.
+    """
+
+    n_records: int
+    n_files: int
+    problems: list[str]
+    notes: list[str]
+    first_changed: int | None
+    head_sha256: str | None
+    head: str | None = None
+
+    @property
+    def ok(self) -> bool:
+        """Whether nothing is wrong."""
+        return not self.problems
+
+
+def check(conn: sa.Connection, trusted: set[str] | None = None,
+          head_seen: str | None = None) -> CheckResult:
+    """Verify the registry.
+
+    SQLite's integrity and foreign keys (a PostgreSQL server keeps both itself), every stored
+    file against its SHA-256, every file an inspection or bat names is present, the custody
+    chain (each record's hash, link, content hash and signature by a trusted key: ``trusted``,
+    default the lab's own key), coverage (every bat, file and inspection row has its one
+    custody record, every record's row exists) and, with ``head_seen`` (``SEQ:SHA256`` noted
+    earlier), that the chain still holds that record. Names the first changed record; a
+    registry too damaged to read is one problem naming the database's complaint.
+    """
+    if trusted is None:
+        trusted = signing.trusted_keys()
+    if head_seen is not None:
+        custody.parse_head(head_seen)
+    try:
+        return _check(conn, trusted, head_seen)
+    except (sa.exc.DBAPIError, sqlite3.DatabaseError) as exc:
+        reason = " ".join(str(getattr(exc, "orig", None) or exc).split())
+        try:
+            integrity = "; ".join(r[0] for r in _integrity(conn)[:3])
+        except (sa.exc.DBAPIError, sqlite3.DatabaseError):
+            integrity = "integrity check failed too"
+        return CheckResult(0, 0, [f"registry damaged, unreadable ({reason}): {integrity}"], [],
+                           None, None)
+
+
+def _integrity(conn: sa.Connection) -> list[tuple[str]]:
+    """Return SQLite's integrity check rows (``[("ok",)]`` on a server, which keeps its own)."""
+    if conn.dialect.name != "sqlite":
+        return [("ok",)]
+    return conn.exec_driver_sql("PRAGMA integrity_check").fetchall()
+
+
+def _check(conn: sa.Connection, trusted: set[str], head_seen: str | None) -> CheckResult:
+    problems: list[str] = []
+    notes: list[str] = []
+    files_by_sha = _check_files(conn, problems, notes)
+    rows = custody_rows(conn)
+    chain = custody.check_chain(rows, trusted)
+    problems += chain.problems
+    notes += chain.notes
+    changed = _check_coverage(conn, rows, files_by_sha, problems)
+    if head_seen is not None:
+        problems += custody.check_head(rows, head_seen)
+    first = min([s for s in (chain.first_changed, *changed) if s is not None], default=None)
+    last = rows[-1] if rows else None
+    return CheckResult(len(rows), len(files_by_sha), problems, notes, first,
+                       None if last is None else last.record_sha256,
+                       None if last is None else custody.head_text(last.seq,
+                                                                   last.record_sha256))
+
+
+def _check_files(conn: sa.Connection, problems: list[str], notes: list[str]) -> dict:
+    """Check the database's integrity and every stored file; return sha -> name."""
+    integrity = _integrity(conn)
+    if [r[0] for r in integrity] != ["ok"]:
+        problems.append("SQLite integrity check: " + "; ".join(r[0] for r in integrity[:3]))
+    if conn.dialect.name == "sqlite" and conn.exec_driver_sql("PRAGMA foreign_key_check"
+                                                              ).fetchall():
+        problems.append("foreign keys: rows refer to missing rows")
+    by_sha = {}
+    for sha, name, content in conn.execute(sa.select(files.c.sha256, files.c.name,
+                                                     files.c.content)):
+        by_sha[sha] = name
+        if sha256_bytes(bytes(content)) != sha:
+            problems.append(f"file {name} ({sha[:12]}): content fails its SHA-256")
+    for serial, sha in conn.execute(sa.select(bats.c.serial, bats.c.baseline_sha256)):
+        if sha not in by_sha:
+            problems.append(f"bat {serial!r}: baseline file {sha[:12]} missing")
+    i = inspections.c
+    for iid, sha, bsha, ref in conn.execute(sa.select(i.id, i.retest_sha256, i.baseline_sha256,
+                                                      i.reference_seq)):
+        if sha not in by_sha:
+            if ref is None:
+                notes.append(f"inspection #{iid}: re-test file not kept (inspected before "
+                             "schema 3)")
+            else:
+                problems.append(f"inspection #{iid}: re-test file {sha[:12]} missing")
+        if bsha not in by_sha:
+            problems.append(f"inspection #{iid}: baseline file {bsha[:12]} missing")
+    return by_sha
+
+
+def _by_subject(rows: list[custody.Row], kind: str) -> dict[str, list[custody.Row]]:
+    out: dict[str, list[custody.Row]] = {}
+    for r in rows:
+        if r.kind == kind:
+            out.setdefault(r.subject, []).append(r)
+    return out
+
+
+def _check_coverage(conn: sa.Connection, rows: list[custody.Row], by_sha: dict,
+                    problems: list[str]) -> list[int]:
+    """Check that every row has its custody record and every record its row.
+
+    One record per file and verdict, the latest registration for a bat, each matching its row;
+    returns the numbers of the records whose row was changed.
+    """
+    changed = []
+    for sha, recs in _by_subject(rows, "file").items():
+        if sha not in by_sha:
+            problems.append(f"custody record #{recs[0].seq}: file {sha[:12]} missing from the "
+                            "registry (row deleted)")
+        if len(recs) > 1:
+            problems.append(f"file {sha[:12]}: {len(recs)} custody records "
+                            f"(#{', #'.join(str(r.seq) for r in recs)}), expected one")
+    file_recs = {r.subject for r in rows if r.kind == "file"}
+    problems += [f"file {by_sha[sha]} ({sha[:12]}): no custody record" for sha in by_sha
+                 if sha not in file_recs]
+    refs = _by_subject(rows, "reference")
+    serials = set(conn.execute(sa.select(bats.c.serial)).scalars())
+    for serial in sorted(serials):
+        if serial not in refs:
+            problems.append(f"bat {serial!r}: no custody record")
+        elif canonical(bat_payload(conn, serial)) != refs[serial][-1].payload:
+            problems.append(f"bat {serial!r}: stored bat differs from custody record "
+                            f"#{refs[serial][-1].seq}")
+            changed.append(refs[serial][-1].seq)
+    problems += [f"custody record #{recs[0].seq}: bat {s!r} is no longer in the registry "
+                 "(row deleted)" for s, recs in refs.items() if s not in serials]
+    changed += _check_verdicts(conn, _by_subject(rows, "verdict"), problems)
+    return changed
+
+
+def _check_verdicts(conn: sa.Connection, verdicts: dict[str, list[custody.Row]],
+                    problems: list[str]) -> list[int]:
+    """Check each inspection row against its one verdict record (and its ``record_seq``)."""
+    changed = []
+    rows = dict(conn.execute(sa.select(inspections.c.id, inspections.c.record_seq)).all())
+    for iid in sorted(rows):
+        recs = verdicts.get(str(iid))
+        if recs is None:
+            problems.append(f"inspection #{iid}: no custody record")
+            continue
+        if len(recs) > 1:
+            problems.append(f"inspection #{iid}: {len(recs)} verdict records "
+                            f"(#{', #'.join(str(r.seq) for r in recs)}), expected one")
+        if rows[iid] != recs[0].seq:
+            problems.append(f"inspection #{iid}: names verdict record #{rows[iid]}, its record "
+                            f"is #{recs[0].seq}")
+        if canonical(inspection_payload(conn, iid)) != recs[0].payload:
+            problems.append(f"inspection #{iid}: stored verdict differs from custody record "
+                            f"#{recs[0].seq}")
+            changed.append(recs[0].seq)
+    problems += [f"custody record #{recs[0].seq}: inspection #{s} is no longer in the "
+                 "registry (rows deleted)" for s, recs in verdicts.items()
+                 if not s.isdigit() or int(s) not in rows]
+    return changed

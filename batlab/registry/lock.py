@@ -1,0 +1,49 @@
+"""Write transactions: one writer at a time, on SQLite and on PostgreSQL alike.
+
+SQLite: ``BEGIN IMMEDIATE`` takes the file's write lock at the start (other writers wait up
+to ``busy_timeout``). PostgreSQL: ``BEGIN`` then ``pg_advisory_xact_lock(WRITE_LOCK)``, a
+transaction-level advisory lock every batlab writer takes first, so two labs appending to the
+custody chain at once queue on the lock: the second reads the head the first wrote and the
+chain never forks (released at ``COMMIT``/``ROLLBACK``). Readers take no lock.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterator
+from contextlib import contextmanager
+
+import sqlalchemy as sa
+
+WRITE_LOCK = int.from_bytes(b"batlab-w", "big") & 0x7FFF_FFFF_FFFF_FFFF
+"""The advisory lock key (a bigint) every batlab write transaction holds on PostgreSQL."""
+
+
+def _begin(conn: sa.Connection) -> None:
+    if conn.dialect.name == "postgresql":
+        conn.exec_driver_sql("BEGIN")
+        conn.exec_driver_sql(f"SELECT pg_advisory_xact_lock({WRITE_LOCK})")
+    else:
+        conn.exec_driver_sql("BEGIN IMMEDIATE")
+
+
+@contextmanager
+def transaction(conn: sa.Connection) -> Iterator[sa.Connection]:
+    """Run the block in one write transaction holding the registry's write lock.
+
+    Rolled back on any exception (or never committed if the process dies). A read-only
+    registry is a one-line ValueError.
+    """
+    try:
+        _begin(conn)
+        try:
+            yield conn
+        except BaseException:
+            conn.exec_driver_sql("ROLLBACK")
+            raise
+        conn.exec_driver_sql("COMMIT")
+    except sa.exc.DBAPIError as exc:
+        text = str(exc.orig)
+        if "readonly" in text or "read-only" in text:
+            raise ValueError(f"registry is read-only ({text.splitlines()[0]}): nothing can be "
+                             "stored in it") from None
+        raise
