@@ -24,3 +24,39 @@ def _private_signing_key(tmp_path_factory):
             os.environ.pop(k, None)
         else:
             os.environ[k] = v
+
+
+@pytest.fixture(scope="session")
+def pg_server_url():
+    """A PostgreSQL 15 server of this test session (one per xdist worker), on a Unix socket.
+
+    Yields the URL of its ``batlab`` database; skipped, with the reason, only when the server
+    binaries are absent (tests/pg_server.py).
+    """
+    import shutil
+    import tempfile
+    from pathlib import Path
+
+    from tests.pg_server import missing_reason, pg_server
+
+    reason = missing_reason()
+    if reason:
+        pytest.skip(reason)
+    folder = Path(tempfile.mkdtemp(prefix="batlab-pg-"))  # short: a socket path has a limit
+    try:
+        with pg_server(folder) as url:
+            yield url
+    finally:
+        shutil.rmtree(folder, ignore_errors=True)
+
+
+@pytest.fixture
+def pg_url(pg_server_url, request):
+    """A fresh, empty database on the session's PostgreSQL server, as a ``postgresql://`` URL."""
+    import re
+
+    from tests.pg_server import create_database
+
+    pg_url.count = getattr(pg_url, "count", 0) + 1
+    name = re.sub(r"\W", "_", request.node.name.lower())[:40] + f"_{pg_url.count}"
+    return create_database(pg_server_url, name)

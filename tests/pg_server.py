@@ -44,7 +44,8 @@ def pg_server(folder: Path, database: str = "batlab") -> Iterator[str]:
     Parameters
     ----------
     folder : Path
-        An empty folder for the cluster (``data/``), its socket and its log.
+        An empty folder for the cluster (``data/``), its socket and its log; as root, one
+        the ``postgres`` user can reach (e.g. ``tempfile.mkdtemp()`` under /tmp).
     database : str
         Name of the database to create.
 
@@ -54,13 +55,9 @@ def pg_server(folder: Path, database: str = "batlab") -> Iterator[str]:
         ``postgresql://postgres@/DATABASE?host=FOLDER``.
     """
     folder.mkdir(parents=True, exist_ok=True)
-    if os.geteuid() == 0:
+    if os.geteuid() == 0:  # the folder's parents must let the server user through
         entry = pwd.getpwnam(PG_USER)
         shutil.chown(folder, entry.pw_uid, entry.pw_gid)
-        for parent in folder.parents:  # the server user must reach its folder
-            if parent == Path("/"):
-                break
-            os.chmod(parent, os.stat(parent).st_mode | 0o001)
     data, log = folder / "data", folder / "server.log"
     run = dict(check=True, capture_output=True, text=True)
     subprocess.run(_as_server_user([str(PG_BIN / "initdb"), "-D", str(data), "-U", PG_USER,

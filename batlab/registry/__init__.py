@@ -8,9 +8,9 @@ stored thing gets a signed record in the custody chain.
 
 The package, one job a module: ``common`` (where the registry is, hashes, time stamps),
 ``schema`` (the tables, SQLAlchemy Core), ``lock`` (write transactions and their lock),
-``migrate`` and ``migrations/`` (Alembic), ``engine`` (opening a file or a server),
+``migration`` and ``migrations/`` (Alembic), ``engine`` (opening a file or a server),
 ``chain`` (appending and reading custody records), ``records`` (bats, files, inspections),
-``check`` (``registry check``) and ``copy`` (``registry copy``). Layout, locking and
+``verify`` (``registry check``) and ``copy`` (``registry copy``). Layout, locking and
 migrations: docs/registry.md.
 """
 
@@ -23,7 +23,6 @@ from batlab.registry.chain import (
     head,
     record_hash,
 )
-from batlab.registry.check import CheckResult, check
 from batlab.registry.common import (
     BUSY_TIMEOUT_S,
     default_db_path,
@@ -34,7 +33,7 @@ from batlab.registry.common import (
 )
 from batlab.registry.engine import connect, open_registry
 from batlab.registry.lock import transaction
-from batlab.registry.migrate import SCHEMA_VERSION, migrate, schema_version
+from batlab.registry.migration import SCHEMA_VERSION, migrate, schema_version
 from batlab.registry.records import (
     BatRecord,
     BatSummary,
@@ -57,6 +56,7 @@ from batlab.registry.records import (
     store_file,
     stored_file,
 )
+from batlab.registry.verify import CheckResult, check
 
 __all__ = [
     "BUSY_TIMEOUT_S", "GENESIS_SHA256", "SCHEMA_VERSION", "BatRecord", "BatSummary",

@@ -20,7 +20,7 @@ import sqlalchemy as sa
 from sqlalchemy.pool import NullPool
 
 from batlab.registry.common import BUSY_TIMEOUT_S, is_url, shown
-from batlab.registry.migrate import (
+from batlab.registry.migration import (
     SCHEMA_VERSION,
     migrate,
     refuse_foreign,

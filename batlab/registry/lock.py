@@ -47,3 +47,18 @@ def transaction(conn: sa.Connection) -> Iterator[sa.Connection]:
             raise ValueError(f"registry is read-only ({text.splitlines()[0]}): nothing can be "
                              "stored in it") from None
         raise
+
+
+@contextmanager
+def snapshot(conn: sa.Connection) -> Iterator[sa.Connection]:
+    """Read in the block from one consistent snapshot, taking no write lock.
+
+    SQLite: a deferred ``BEGIN`` (in WAL mode its first read fixes the snapshot).
+    PostgreSQL: ``BEGIN ISOLATION LEVEL REPEATABLE READ, READ ONLY``. Always rolled back.
+    """
+    pg = conn.dialect.name == "postgresql"
+    conn.exec_driver_sql("BEGIN ISOLATION LEVEL REPEATABLE READ, READ ONLY" if pg else "BEGIN")
+    try:
+        yield conn
+    finally:
+        conn.exec_driver_sql("ROLLBACK")

@@ -1,6 +1,6 @@
 """Alembic's environment for the registry: runs on the connection batlab hands it.
 
-``batlab.registry.migrate`` opens the registry, takes its write lock and passes the
+``batlab.registry.migration`` opens the registry, takes its write lock and passes the
 connection in ``config.attributes["connection"]``; the migrations run inside that
 transaction (no ``alembic.ini``, no logging set-up, no engine of their own).
 """
