@@ -1,4 +1,4 @@
-"""`batlab registry`: check the registry, print the lab's public key or the chain's head."""
+"""`batlab registry`: check the registry, print the lab's key or the chain's head, copy it."""
 
 from __future__ import annotations
 
@@ -8,25 +8,34 @@ from dataclasses import asdict, replace
 
 from batlab.cli_support import add_db_argument, db_path
 
-EXAMPLE = "batlab registry check --db lab.sqlite --head 42:<sha256>"
+EXAMPLE = ("batlab registry check --db lab.sqlite --head 42:<sha256>\n"
+           "  batlab registry copy --from lab.sqlite --to postgresql://lab@league/batlab")
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
     """Add the ``registry`` arguments to parser ``p``."""
-    p.add_argument("action", choices=["check", "key", "head"],
+    p.add_argument("action", choices=["check", "key", "head", "copy"],
                    help="check: verify everything stored; key: print the lab's public key "
                         "(ed25519:<base64>) for a league to keep; head: print the chain's "
-                        "head, SEQ:SHA256, to note outside the file")
+                        "head, SEQ:SHA256, to note outside the file; copy: copy every bat, "
+                        "file, inspection and custody record --from one registry --to another")
     p.add_argument("--report", default=None, metavar="INDEX.html",
                    help="check: also verify a report page: its seal, what it says (verdict, "
                         "reasons, the head it shows) and its records and files")
     p.add_argument("--trust", default=None, metavar="FILE",
-                   help="check: also trust these lab public keys (one ed25519:<base64> a line)")
+                   help="check, copy: also trust these lab public keys (one ed25519:<base64> "
+                        "a line)")
+    p.add_argument("--from", dest="source", default=None, metavar="DB",
+                   help="copy: the registry to copy (a SQLite file or a postgresql:// URL); "
+                        "its custody chain must verify")
+    p.add_argument("--to", dest="destination", default=None, metavar="DB",
+                   help="copy: the registry to copy into (created if need be); refused, "
+                        "nothing written, if it holds one of the serials")
     p.add_argument("--head", default=None, metavar="SEQ:SHA256",
                    help="check: a head printed earlier; fails if that record is no longer in "
                         "the chain (rollback, truncation, fork)")
     add_db_argument(p)
-    p.add_argument("--json", action="store_true", help="check: print the result as JSON")
+    p.add_argument("--json", action="store_true", help="check, copy: print the result as JSON")
 
 
 def run(args: argparse.Namespace) -> int:
@@ -41,13 +50,16 @@ def run(args: argparse.Namespace) -> int:
     -------
     int
         Exit code: for ``check`` 0 only when everything verifies, else 1 (bad input raises
-        ValueError or OSError; ``batlab.cli`` prints it in one line and exits 2).
+        ValueError or OSError, as does a refused copy; ``batlab.cli`` prints it in one line
+        and exits 2).
     """
     from batlab import signing
 
     if args.action == "key":
         print(signing.key_id(signing.signing_key(create=True).public_key()))
         return 0
+    if args.action == "copy":
+        return _copy(args)
     from batlab.registry import check, head, open_registry
 
     path = db_path(args)
@@ -83,3 +95,39 @@ def _print(res, path, as_json: bool) -> None:
         print(f"  note: {line}")
     if res.first_changed is not None:
         print(f"  first changed record: #{res.first_changed}")
+
+
+def _registry_arg(text: str):
+    """Return a ``--from``/``--to`` value as ``open_registry`` takes it (URL or path)."""
+    from pathlib import Path
+
+    from batlab.registry import is_url
+
+    return text if is_url(text) else Path(text).expanduser()
+
+
+def _copy(args: argparse.Namespace) -> int:
+    """Run ``batlab registry copy --from SRC --to DST``: print what was copied."""
+    from batlab import signing
+    from batlab.registry import open_registry, shown
+    from batlab.registry.copy import copy_registry
+
+    if not args.source or not args.destination:
+        raise ValueError("copy needs --from SRC and --to DST (SQLite files or postgresql:// "
+                         "URLs)")
+    source, destination = _registry_arg(args.source), _registry_arg(args.destination)
+    if str(source) == str(destination):
+        raise ValueError(f"{shown(source)}: --from and --to name the same registry")
+    trusted = signing.trusted_keys(args.trust)
+    with open_registry(source, create=False, readonly=True) as src, \
+            open_registry(destination) as dst:
+        res = copy_registry(src, dst, trusted, shown(source), shown(destination))
+    if args.json:
+        print(json.dumps({"from": shown(source), "to": shown(destination), **asdict(res)}))
+    else:
+        print(f"{shown(source)} -> {shown(destination)}: copied {res.n_bats} bats, "
+              f"{res.n_files} files, {res.n_inspections} inspections, {res.n_records} custody "
+              f"records ({res.mode}); both chains verified")
+        print(f"  source head {res.source_head}")
+        print(f"  destination head {res.head}")
+    return 0
