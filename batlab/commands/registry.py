@@ -109,8 +109,7 @@ def _registry_arg(text: str):
 def _copy(args: argparse.Namespace) -> int:
     """Run ``batlab registry copy --from SRC --to DST``: print what was copied."""
     from batlab import signing
-    from batlab.registry import open_registry, shown
-    from batlab.registry.copy import copy_registry
+    from batlab.registry import copy_registry, open_registry, shown
 
     if not args.source or not args.destination:
         raise ValueError("copy needs --from SRC and --to DST (SQLite files or postgresql:// "

@@ -31,6 +31,7 @@ from batlab.registry.common import (
     sha256_bytes,
     shown,
 )
+from batlab.registry.copy import CopyResult, copy_registry
 from batlab.registry.engine import connect, open_registry
 from batlab.registry.lock import transaction
 from batlab.registry.migration import SCHEMA_VERSION, migrate, schema_version
@@ -60,11 +61,11 @@ from batlab.registry.verify import CheckResult, check
 
 __all__ = [
     "BUSY_TIMEOUT_S", "GENESIS_SHA256", "SCHEMA_VERSION", "BatRecord", "BatSummary",
-    "CheckResult", "CustodyRecord", "Inspection", "add_bat", "add_inspection",
-    "all_inspections", "bat_as_registered", "baseline_file", "chain_head", "check", "connect",
-    "custody_record", "custody_rows", "decode_modes", "default_db_path", "encode_modes",
-    "get_bat", "get_inspection", "has_bat", "has_file", "head", "history",
+    "CheckResult", "CopyResult", "CustodyRecord", "Inspection", "add_bat", "add_inspection",
+    "all_inspections", "baseline_file", "bat_as_registered", "chain_head", "check", "connect",
+    "copy_registry", "custody_record", "custody_rows", "decode_modes", "default_db_path",
+    "encode_modes", "get_bat", "get_inspection", "has_bat", "has_file", "head", "history",
     "inspection_by_record", "is_url", "list_bats", "migrate", "now_utc", "open_registry",
-    "record_hash", "schema_version", "set_report_path", "sha256_bytes", "shown",
-    "store_file", "stored_file", "transaction",
+    "record_hash", "schema_version", "set_report_path", "sha256_bytes", "shown", "store_file",
+    "stored_file", "transaction",
 ]
