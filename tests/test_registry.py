@@ -35,6 +35,11 @@ def test_default_path_from_env(tmp_path):
     assert reg.default_db_path({"XDG_DATA_HOME": str(tmp_path)}) == (
         tmp_path / "batlab" / "registry.sqlite")
     assert reg.default_db_path({}).parts[-4:] == (".local", "share", "batlab", "registry.sqlite")
+    url = "postgresql://lab7:secret@league.example.org/batlab?sslmode=require"
+    assert reg.default_db_path({"BATLAB_DB": url}) == url  # a URL stays text, not a Path
+    assert reg.shown(url) == "postgresql://lab7@league.example.org/batlab?sslmode=require"
+    assert reg.shown("postgresql:///batlab?host=/run/pg") == "postgresql:///batlab?host=/run/pg"
+    assert not reg.is_url("postgresql.sqlite") and not reg.is_url(tmp_path / "postgresql:")
 
 
 def test_register_get_list_history(tmp_path):

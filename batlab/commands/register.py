@@ -38,7 +38,7 @@ def run(args: argparse.Namespace) -> int:
         it in one line and exits 2).
     """
     from batlab.pipeline import LBF_IN3_TO_KG_M3, PSI_TO_PA, register_files
-    from batlab.registry import open_registry
+    from batlab.registry import open_registry, shown
 
     progress = progress_printer("register")
     path = db_path(args)
@@ -46,14 +46,14 @@ def run(args: argparse.Namespace) -> int:
         done = register_files(conn, args.profile, args.meta, args.baseline, args.serial,
                               args.replace, progress)
     rec = done.record
-    out = {"serial": rec.serial, "db": str(path), "registered_at": rec.registered_at,
+    out = {"serial": rec.serial, "db": shown(path), "registered_at": rec.registered_at,
            "baseline": rec.baseline_name, "baseline_sha256": rec.baseline_sha256,
            "modes_hz": [round(f, 3) for f in rec.modes["freq_hz"]],
            "reference": rec.reference}
     if args.json:
         print(json.dumps(out))
     else:
-        print(f"registered {rec.serial} in {path}")
+        print(f"registered {rec.serial} in {shown(path)}")
         print(f"  baseline {rec.baseline_name} (sha256 {rec.baseline_sha256[:16]}...)")
         print("  modes (Hz): " + ", ".join(f"{f:.1f}" for f in rec.modes["freq_hz"]))
         ref = rec.reference

@@ -60,14 +60,14 @@ def run(args: argparse.Namespace) -> int:
         return 0
     if args.action == "copy":
         return _copy(args)
-    from batlab.registry import check, head, open_registry
+    from batlab.registry import check, head, open_registry, shown
 
     path = db_path(args)
     with open_registry(path, create=False, readonly=True) as conn:
         if args.action == "head":
             text = head(conn)
             if text is None:
-                raise ValueError(f"{path}: the registry holds no custody record yet")
+                raise ValueError(f"{shown(path)}: the registry holds no custody record yet")
             print(text)
             return 0
         trusted = signing.trusted_keys(args.trust)
@@ -76,7 +76,7 @@ def run(args: argparse.Namespace) -> int:
             from batlab.report_check import check_page
 
             res = replace(res, problems=res.problems + check_page(conn, args.report, trusted))
-    _print(res, path, args.json)
+    _print(res, shown(path), args.json)
     return 0 if res.ok else 1
 
 
