@@ -17,7 +17,8 @@ import pytest
 from batlab.cli import COMMANDS, chosen_command
 
 ROOT = Path(__file__).resolve().parents[1]
-HEAVY = ("scipy.signal", "pandas", "matplotlib", "serial", "scipy")
+HEAVY = ("scipy.signal", "pandas", "matplotlib", "serial", "scipy", "sqlalchemy", "alembic",
+         "psycopg")
 
 PROBE = """
 import contextlib, io, json, sys
