@@ -6,6 +6,8 @@ import argparse
 import json
 import sys
 
+from batlab.cli_support import add_plots_argument
+
 EXAMPLE = "batlab paper --json"
 
 
@@ -16,8 +18,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--seed", type=int, default=0, help="noise seed")
     p.add_argument("--modes", type=int, default=6, help="elastic modes used (default 6)")
     p.add_argument("--json", action="store_true", help="print JSON on stdout")
-    p.add_argument("--plot", metavar="DIR", nargs="?", const="paper_figures", default=None,
-                   help="write Figures 2 and 3 as PNG into DIR (default DIR: paper_figures)")
+    add_plots_argument(p, "write Figures 2 and 3 as PNG into DIR (default DIR: "
+                          "paper_figures)", nargs="?", const="paper_figures")
 
 
 def run(args: argparse.Namespace) -> int:
@@ -40,8 +42,8 @@ def run(args: argparse.Namespace) -> int:
         raise ValueError("--noise must be >= 0 and --modes between 2 and 10")
     print("running SEREP + MSSO + refinement on the paper's bat ...", file=sys.stderr)
     case = run_paper_case(args.modes, args.noise, args.seed)
-    if args.plot:
-        for path in plot_figures(case, args.plot):
+    if args.plots:
+        for path in plot_figures(case, args.plots):
             print(f"wrote {path}", file=sys.stderr)
     if args.json:
         out = dict(case.final)
