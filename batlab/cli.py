@@ -191,6 +191,10 @@ def main(argv: Sequence[str] | None = None) -> int:
     except KeyboardInterrupt:
         print(f"batlab {args.command}: interrupted", file=sys.stderr)
         return 130
+    finally:
+        from batlab.cli_support import stop_all
+
+        stop_all()  # no progress heartbeat outlives its command
 
 
 if __name__ == "__main__":

@@ -192,3 +192,27 @@ def test_the_mass_line_of_a_bat_follows_its_weight():
     assert plausible.check_mass_line(a[0], x_m, d_m, 0.8, 0.8) is None
     assert "about 2.2 lb, not meta.json's weight_lb 1.764" in plausible.check_mass_line(
         a[1], x_m, d_m, 0.8, 0.8)  # a 1 kg bat's mass line
+
+
+def test_a_long_step_is_never_silent(capsys):
+    import re
+    import time
+
+    from batlab.cli_support import Progress, stop_all
+
+    progress = Progress("inspect", every_s=0.05)
+    progress("calibrating the reference model ...")
+    time.sleep(0.3)
+    stop_all()
+    lines = capsys.readouterr().err.splitlines()
+    assert lines[0].startswith("batlab inspect [") and lines[0].endswith("reference model ...")
+    still = [line for line in lines[1:] if "still calibrating the reference model (" in line]
+    assert len(still) >= 2 and all(re.search(r"\[\s*\d+\.\d s\]", line) for line in still)
+    time.sleep(0.15)
+    assert capsys.readouterr().err == ""  # stopped with its command
+
+
+def test_simulate_says_its_step_with_the_time(tmp_path, capsys):
+    assert main(["simulate", "-o", str(tmp_path / "t.uff"), "--df", "4", "--seed", "1"]) == 0
+    err = capsys.readouterr().err
+    assert "batlab simulate [" in err and "s]: simulating 16 impact points, 801 lines" in err

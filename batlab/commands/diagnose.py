@@ -6,7 +6,7 @@ import argparse
 import json
 import sys
 
-from batlab.cli_support import add_plots_argument
+from batlab.cli_support import add_plots_argument, progress_printer
 
 EXAMPLE = "batlab diagnose --profile profile.csv --meta meta.json --frf baseline.uff --plots plots/"
 
@@ -50,9 +50,7 @@ def run(args: argparse.Namespace) -> int:
     if args.plots:  # created like every other output directory, and proved writable first
         check_destination(args.plots, "--plots")
 
-    def progress(message: str) -> None:
-        print(f"batlab diagnose: {message}", file=sys.stderr, flush=True)
-
+    progress = progress_printer("diagnose")
     meta, result = pipeline.diagnose_files(args.profile, args.meta, args.frf, args.method,
                                            args.min_gain, progress, solid=args.solid)
     out = result.to_json_dict()

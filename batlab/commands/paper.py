@@ -4,9 +4,8 @@ from __future__ import annotations
 
 import argparse
 import json
-import sys
 
-from batlab.cli_support import add_plots_argument
+from batlab.cli_support import add_plots_argument, progress_printer
 
 EXAMPLE = "batlab paper --json"
 
@@ -40,11 +39,13 @@ def run(args: argparse.Namespace) -> int:
 
     if args.noise < 0 or not 2 <= args.modes <= 10:
         raise ValueError("--noise must be >= 0 and --modes between 2 and 10")
-    print("running SEREP + MSSO + refinement on the paper's bat ...", file=sys.stderr)
+    progress = progress_printer("paper")
+    progress("running SEREP + MSSO + refinement on the paper's bat")
     case = run_paper_case(args.modes, args.noise, args.seed)
+    progress("done")
     if args.plots:
         for path in plot_figures(case, args.plots):
-            print(f"wrote {path}", file=sys.stderr)
+            progress(f"wrote {path}")
     if args.json:
         out = dict(case.final)
         out["modes_used"] = args.modes

@@ -6,7 +6,7 @@ import argparse
 import json
 import sys
 
-from batlab.cli_support import add_deprecated_alias, add_out_argument
+from batlab.cli_support import add_deprecated_alias, add_out_argument, progress_printer
 
 EXAMPLE = ("batlab simulate --profile profile.csv --meta meta.json --alter "
            "cork:depth=10,d=1.0 --seed 1 -o retest.uff")
@@ -76,7 +76,7 @@ def run_case(args, folder: str) -> int:
         nuisances = tuple(n.strip() for n in args.nuisances.split(",") if n.strip())
     paths, expected = pipeline.simulate_field_case(
         args.seed, args.kind, nuisances, args.integrity, folder,
-        progress=lambda msg: print(msg, file=sys.stderr))
+        progress=progress_printer("simulate"))
     summary = {k: str(v) for k, v in paths.items() if v is not None}
     summary["expected"] = expected
     if args.json:
@@ -140,7 +140,8 @@ def run(args: argparse.Namespace) -> int:
         beam=args.beam, alter=args.alter, moisture_pct=args.moisture, zeta1=args.zeta,
         rel_noise=args.noise_pct / 100)
     freq = np.arange(0.0, args.fmax + args.df / 2, args.df)
-    print(f"simulating {points.size} impact points, {freq.size} lines ...", file=sys.stderr)
+    progress = progress_printer("simulate")
+    progress(f"simulating {points.size} impact points, {freq.size} lines")
     test = pipeline.simulate_bat_test(bat, freq, seed=args.seed)
     pipeline.write_frf(args.out, test)
     summary = {"out": str(args.out),
