@@ -181,8 +181,8 @@ def element_figure(r: ReportInputs):
             b = np.append(band[key], band[key][-1])
             ax.fill_between(edges, -b, b, step="post", color="0.6", alpha=0.3, lw=0,
                             label="map noise band (±2σ)")
-        ax.bar(x0, fit[key], width=w / 2 if has_map else w, align="edge", color=color,
-               edgecolor="k", lw=0.4, label="core fit (how much)")
+        core_bars = ax.bar(x0, fit[key], width=w / 2 if has_map else w, align="edge",
+                           color=color, edgecolor="k", lw=0.4, label="core fit (how much)")
         if has_map:
             ax.bar(x0 + w / 2, msso[key], width=w / 2, align="edge",
                    color="none", edgecolor="C2", hatch="////", lw=0.6,
@@ -198,6 +198,7 @@ def element_figure(r: ReportInputs):
         ax.set_ylabel(name)
         ax.grid(alpha=0.3, axis="y")
     axes[0].legend(fontsize=7, loc="upper left", ncol=3)
+    axes[1].legend(handles=[core_bars], fontsize=7, loc="upper left")  # its own colour
     axes[0].set_title("Element changes along the bat (knob at 0)")
     ax = axes[2]
     x = prof.x_m / IN_TO_M
