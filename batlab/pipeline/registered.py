@@ -31,7 +31,8 @@ from updating.correlate.measured import driving_mass_line
 from updating.correlate.points import match_points, point_positions_m
 from updating.inspect.retest_meta import conditions_from_dict
 from updating.model import plausible
-from updating.model.profile import make_profile
+from updating.model.lab_input import BatMeta
+from updating.model.profile import Profile, make_profile
 from updating.model.reference import BatReference
 from updating.model.units import LB_TO_KG, PSI_TO_PA
 
@@ -61,7 +62,7 @@ def registered_weight_kg(bat: reg.BatRecord) -> float | None:
     return None if weight is None else float(weight) * LB_TO_KG
 
 
-def baseline_mass_line(profile, meta, baseline: FittedTest) -> str | None:
+def baseline_mass_line(profile: Profile, meta: BatMeta, baseline: FittedTest) -> str | None:
     """Check the baseline's driving-point mass line against the profile and scale weight.
 
     ``updating.model.plausible.check_mass_line``; None when it is plausible, or the bat was

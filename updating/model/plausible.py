@@ -2,6 +2,8 @@
 
 Each check returns None or a one-line message naming the file and the key. A value off by a
 common unit factor gets its likely cause, e.g. ``weight_lb 873.6 looks like grams: 1.926 lb?``.
+After the baseline's fit and calibration, ``check_baseline`` says in a few lines why it cannot
+be this bat's (another bat's, or one of the same length but heavier: ``check_mass_line``).
 Handbook values: Wood Handbook (FPL-GTR-282, 2021), table 5-3a, 12 % moisture; weight density
 = SG * 0.0361 lbf/in^3.
 """
