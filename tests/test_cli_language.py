@@ -13,7 +13,8 @@ WRITES = {"acquire", "demo", "export", "fit", "inspect", "report", "simulate"}
 """Commands that write a file or a folder the user names (``-o/--out``)."""
 PLOTS = {"diagnose", "fit", "inspect", "paper", "report"}
 """Commands that write figures (``--plots DIR``)."""
-OLD = ("--output", "--plot", "--report-dir")
+OLD = ("--output", "--plot")
+"""Old spellings that no --help lists (they work one release, hidden, with a warning)."""
 
 
 def _options(name: str, capsys) -> set[str]:
