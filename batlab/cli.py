@@ -101,7 +101,7 @@ def build_parser(wired: Iterable[str] | None = None) -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="batlab",
         description="Detect altered wooden baseball bats from impact-hammer vibration tests.",
-        epilog="example: batlab demo --out demo/   (then: batlab <command> --help)",
+        epilog="example: batlab demo -o demo/   (then: batlab <command> --help)",
     )
     parser.add_argument("--version", action="version", version=f"batlab {__version__}")
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
@@ -141,6 +141,25 @@ def chosen_command(argv: Sequence[str]) -> str | None:
     return first if first in COMMANDS else None
 
 
+def error_lines(exc: BaseException) -> str:
+    """Return an error's message with each line's runs of white space made one space.
+
+    A message is one line, or a few when it says what to check (indented by two spaces).
+
+    Parameters
+    ----------
+    exc : BaseException
+        The error.
+
+    Returns
+    -------
+    str
+        The message (the error's type name when it has none).
+    """
+    lines = [" ".join(line.split()) for line in str(exc).splitlines() if line.strip()]
+    return "\n  ".join(lines) or type(exc).__name__
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Run the ``batlab`` command line.
 
@@ -153,7 +172,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     -------
     int
         The exit code: 0 done, 2 bad input (one line on stderr naming the file and the
-        problem), 130 interrupted; 1 when ``check-rig`` or ``registry check`` finds a fault.
+        problem, or a few saying what to check), 130 interrupted; 1 when ``check-rig`` or
+        ``registry check`` finds a fault.
     """
     argv = sys.argv[1:] if argv is None else list(argv)
     chosen = chosen_command(argv)
@@ -161,8 +181,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     try:
         return int(args._run(args) or 0)
     except (ValueError, OSError) as exc:
-        message = " ".join(str(exc).split()) or type(exc).__name__
-        print(f"batlab {args.command}: error: {message}", file=sys.stderr)
+        print(f"batlab {args.command}: error: {error_lines(exc)}", file=sys.stderr)
         return 2
     except sqlite3.DatabaseError as exc:  # damage found after the registry opened
         db = getattr(args, "db", None) or "the registry"
@@ -172,6 +191,10 @@ def main(argv: Sequence[str] | None = None) -> int:
     except KeyboardInterrupt:
         print(f"batlab {args.command}: interrupted", file=sys.stderr)
         return 130
+    finally:
+        from batlab.cli_support import stop_all
+
+        stop_all()  # no progress heartbeat outlives its command
 
 
 if __name__ == "__main__":

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import sys
+import threading
 import time
 from collections.abc import Callable
 from pathlib import Path
@@ -39,7 +40,69 @@ def db_path(args: argparse.Namespace) -> Path | str:
     return Path(args.db).expanduser() if args.db else default_db_path()
 
 
-def progress_printer(command: str) -> Callable[[str], None]:
+HEARTBEAT_S = 5.0
+"""A step running this long without a new line gets a 'still ...' line on stderr."""
+_RUNNING: list[Progress] = []
+
+
+class Progress:
+    """``progress(msg)``: print ``batlab CMD [12.3 s]: msg`` on stderr, and keep saying it.
+
+    While one step runs longer than ``HEARTBEAT_S`` without a new message, a background
+    thread prints ``still <step> (10 s on this step)`` every ``HEARTBEAT_S``, so no long work
+    is silent. ``stop_all`` (``batlab.cli.main``, at the command's end) ends the threads.
+
+    Parameters
+    ----------
+    command : str
+        The command's name, shown in every line.
+    every_s : float
+        The heartbeat's period, s.
+    """
+
+    def __init__(self, command: str, every_s: float = HEARTBEAT_S):
+        self.command, self.every_s = command, every_s
+        self.start = self._since = time.perf_counter()
+        self._step: str | None = None
+        self._lock = threading.Lock()
+        self._stop = threading.Event()
+        self._thread: threading.Thread | None = None
+
+    def __call__(self, message: str) -> None:
+        """Print one step's line (the time is seconds since the command started)."""
+        with self._lock:
+            self._step, self._since = message, time.perf_counter()
+            if self._thread is None:
+                self._thread = threading.Thread(target=self._beat, daemon=True)
+                self._thread.start()
+                _RUNNING.append(self)
+        self._print(message)
+
+    def _print(self, message: str) -> None:
+        print(f"batlab {self.command} [{time.perf_counter() - self.start:5.1f} s]: {message}",
+              file=sys.stderr, flush=True)
+
+    def _beat(self) -> None:
+        while not self._stop.wait(self.every_s):
+            with self._lock:
+                step, took = self._step, time.perf_counter() - self._since
+            if step is not None and took >= self.every_s:
+                self._print(f"still {step.rstrip(' .')} ({took:.0f} s on this step)")
+
+    def stop(self) -> None:
+        """End the heartbeat (idempotent)."""
+        self._stop.set()
+        if self._thread is not None and self._thread is not threading.current_thread():
+            self._thread.join()
+
+
+def stop_all() -> None:
+    """Stop every running ``Progress``'s heartbeat (the command is done)."""
+    while _RUNNING:
+        _RUNNING.pop().stop()
+
+
+def progress_printer(command: str) -> Progress:
     """Make a ``progress(msg)`` callable printing ``batlab CMD [12.3 s]: msg`` on stderr.
 
     Parameters
@@ -49,16 +112,11 @@ def progress_printer(command: str) -> Callable[[str], None]:
 
     Returns
     -------
-    callable
-        ``progress(message)``; the time is seconds since this call, flushed at once.
+    Progress
+        ``progress(message)``; the time is seconds since this call, flushed at once; a step
+        longer than ``HEARTBEAT_S`` is said to be still running.
     """
-    start = time.perf_counter()
-
-    def progress(message: str) -> None:
-        print(f"batlab {command} [{time.perf_counter() - start:5.1f} s]: {message}",
-              file=sys.stderr, flush=True)
-
-    return progress
+    return Progress(command)
 
 
 def note_printer(command: str) -> Callable[[str], None]:
@@ -79,3 +137,76 @@ def note_printer(command: str) -> Callable[[str], None]:
         print(f"batlab {command}: {message}", file=sys.stderr)
 
     return note
+
+
+class _DeprecatedAlias(argparse.Action):
+    """Store like the new option, with one deprecation line on stderr (hidden from --help)."""
+
+    def __init__(self, option_strings, dest, new: str = "", **kwargs):
+        super().__init__(option_strings, dest, default=argparse.SUPPRESS, help=argparse.SUPPRESS,
+                         **kwargs)
+        self.new = new
+
+    def __call__(self, parser, namespace, values, option_string=None):
+        print(f"{parser.prog}: warning: {option_string} is deprecated and goes in the next "
+              f"release: use {self.new}", file=sys.stderr)
+        setattr(namespace, self.dest, self.const if values is None and self.nargs == 0
+                else values)
+
+
+def add_deprecated_alias(p: argparse.ArgumentParser, old: str, new: str, dest: str,
+                         **kwargs) -> None:
+    """Keep an old option spelling for one release: it works, warns on stderr, is not listed.
+
+    Parameters
+    ----------
+    p : argparse.ArgumentParser
+        The command's parser.
+    old : str
+        The old spelling, e.g. ``"--plot"``.
+    new : str
+        The new spelling the warning names, e.g. ``"--plots DIR"``.
+    dest : str
+        The new option's ``dest``, set by the old spelling too.
+    **kwargs
+        ``type``, ``nargs``, ``const`` as the old option had them.
+    """
+    p.add_argument(old, dest=dest, action=_DeprecatedAlias, new=new, **kwargs)
+
+
+def add_out_argument(p: argparse.ArgumentParser, help_text: str, metavar: str = "PATH",
+                     old: str | None = None, default=None) -> None:
+    """Add ``-o/--out``, the file or folder a command writes (``old``: a deprecated spelling).
+
+    Parameters
+    ----------
+    p : argparse.ArgumentParser
+        The command's parser.
+    help_text : str
+        What is written there.
+    metavar : str
+        The value's name in the help.
+    old : str or None
+        An old spelling kept for one release (``add_deprecated_alias``).
+    default : optional
+        The value without the option.
+    """
+    p.add_argument("-o", "--out", default=default, metavar=metavar, help=help_text)
+    if old:
+        add_deprecated_alias(p, old, "-o/--out", "out")
+
+
+def add_plots_argument(p: argparse.ArgumentParser, help_text: str, **kwargs) -> None:
+    """Add ``--plots DIR``, the folder of a command's figures (old ``--plot`` kept one release).
+
+    Parameters
+    ----------
+    p : argparse.ArgumentParser
+        The command's parser.
+    help_text : str
+        Which figures are written there.
+    **kwargs
+        ``nargs``/``const`` of both spellings (paper: ``--plots`` alone is ./paper_figures).
+    """
+    p.add_argument("--plots", default=None, metavar="DIR", help=help_text, **kwargs)
+    add_deprecated_alias(p, "--plot", "--plots DIR", "plots", **kwargs)

@@ -10,6 +10,7 @@ from __future__ import annotations
 import math
 
 from updating.inspect.details import InspectionDetails
+from updating.inspect.words import chance, percent
 
 
 def status_of(verdict: dict) -> str:
@@ -42,25 +43,14 @@ def p_value(verdict: dict) -> float | None:
     return None if p is None else min(max(float(p), 0.0), 1.0)
 
 
-def chance_words(p: float) -> str:
-    """How often, in words a non-specialist reads correctly ("in about 97 of 100 re-tests")."""
-    if p < 0.001:
-        return "in fewer than 1 of 1,000 re-tests"
-    if p < 0.01:
-        return f"in about {round(p * 1000)} of 1,000 re-tests"
-    return f"in about {round(p * 100)} of 100 re-tests"
-
-
 def p_value_words(verdict: dict) -> str | None:
-    """Say a p-value in words.
+    """Say a stored verdict's p-value in the one wording (``updating.inspect.words.chance``).
 
-    "p = 0.925: an unaltered bat differs this much in about 92 of 100 re-tests" (a
-    confidence of 0.075 is not "7.5 % sure").
+    "chance an unaltered bat differs this much: 92 %" (a confidence of 0.075 is not
+    "7.5 % sure"); None when the verdict has none.
     """
     p = p_value(verdict)
-    if p is None:
-        return None
-    return f"p = {p:.3g}: an unaltered bat differs this much {chance_words(p)}"
+    return None if p is None else chance(p)
 
 
 def readable(out: dict) -> str:
@@ -69,10 +59,10 @@ def readable(out: dict) -> str:
     lines = [f"{out['serial']}: {STATUS_WORDS.get(status, status)}"]
     for reason in out.get("reasons") or []:
         lines.append(f"  reason: {reason}")
-    chance = p_value_words(out)
-    if chance:
+    said = p_value_words(out)
+    if said:
         fa = out.get("false_alarm_rate")
-        lines.append(f"  {chance}" + (f" (called altered below p = {fa:g})" if fa else ""))
+        lines.append(f"  {said}" + (f" (called altered below {percent(fa)})" if fa else ""))
     words = finding_words(out.get("finding"))
     if words:
         lines.append(f"  finding: {words}")

@@ -24,12 +24,13 @@ from pathlib import Path
 
 import numpy as np
 
-from batlab.formatting import chance_words, finding_words, p_value, status_of
+from batlab.formatting import finding_words, p_value, status_of
 from batlab.pipeline.records import ReportInputs, jsonable
 from batlab.registry import now_utc
 from batlab.report_check import seal_page
 from ema.io.atomic_write import atomic_write
 from updating.inspect.details import InspectionDetails, ModePair
+from updating.inspect.words import chance, percent
 from updating.model.mass_properties import MassProperties, mass_properties
 from updating.model.sections import Core
 from updating.model.units import (
@@ -180,8 +181,8 @@ def element_figure(r: ReportInputs):
             b = np.append(band[key], band[key][-1])
             ax.fill_between(edges, -b, b, step="post", color="0.6", alpha=0.3, lw=0,
                             label="map noise band (±2σ)")
-        ax.bar(x0, fit[key], width=w / 2 if has_map else w, align="edge", color=color,
-               edgecolor="k", lw=0.4, label="core fit (how much)")
+        core_bars = ax.bar(x0, fit[key], width=w / 2 if has_map else w, align="edge",
+                           color=color, edgecolor="k", lw=0.4, label="core fit (how much)")
         if has_map:
             ax.bar(x0 + w / 2, msso[key], width=w / 2, align="edge",
                    color="none", edgecolor="C2", hatch="////", lw=0.6,
@@ -197,6 +198,7 @@ def element_figure(r: ReportInputs):
         ax.set_ylabel(name)
         ax.grid(alpha=0.3, axis="y")
     axes[0].legend(fontsize=7, loc="upper left", ncol=3)
+    axes[1].legend(handles=[core_bars], fontsize=7, loc="upper left")  # its own colour
     axes[0].set_title("Element changes along the bat (knob at 0)")
     ax = axes[2]
     x = prof.x_m / IN_TO_M
@@ -276,13 +278,6 @@ def mass_rows(r: ReportInputs) -> list[tuple[str, float, float, float]]:
 # --- words -----------------------------------------------------------------------------------
 
 
-def _one_in(p: float) -> str:
-    """Say a rate as "1 in 100", "5 in 100", "1 in 1,000"."""
-    if p >= 0.01:
-        return f"{round(p * 100):g} in 100"
-    return f"{round(p * 1000):g} in 1,000" if p >= 0.001 else f"{p:.1g}"
-
-
 def headline(r: ReportInputs) -> str:
     """One plain sentence (or two): what was found, where, how much and how sure."""
     v, serial = r.verdict, r.serial
@@ -311,8 +306,7 @@ def headline(r: ReportInputs) -> str:
             text += f" ({abs(d_oz):.1f} oz {'lighter' if d_oz < 0 else 'heavier'})"
         text += "."
         if p is not None:
-            text += (f" The evidence is strong: an unaltered bat would differ this much from "
-                     f"its baseline {chance_words(p)}.")
+            text += f" The evidence is strong: the {chance(p)}."
         return text
     text = (f"Bat {serial} shows no sign of alteration: the re-test differs from the baseline "
             "no more than moisture, temperature and re-mounting the sensor explain.")
@@ -320,10 +314,9 @@ def headline(r: ReportInputs) -> str:
     if grip:
         text += f" Found: {grip}."
     if p is not None:
-        text += f" Unaltered bats differ at least this much {chance_words(p)}"
+        text += f" The {chance(p)}"
         if alpha:
-            text += (f"; a bat is called altered only when that chance falls below "
-                     f"{_one_in(float(alpha))}")
+            text += f"; a bat is called altered only when that chance is below {percent(alpha)}"
         text += "."
     return text
 
@@ -455,11 +448,13 @@ def _facts(r: ReportInputs) -> list[list]:
         return facts
     if p is not None:
         shown = "< 0.000001" if p < 1e-6 else f"{p:.3g}"
-        facts.append(["Chance an unaltered bat differs this much (p-value)",
-                      _Raw(f"{shown} ({html.escape(chance_words(p))})")])
+        facts.append([_Raw("Chance an unaltered bat differs this much <span class='note'>"
+                           "(the p-value: how often a re-test of an unaltered bat differs "
+                           "at least this much from its baseline)</span>"),
+                      _Raw(f"{percent(p)} <span class='note'>(p = {shown})</span>")])
     if v.get("false_alarm_rate") is not None:
         facts.append(["Called altered when that chance is below (false-alarm rate)",
-                      v["false_alarm_rate"]])
+                      percent(float(v["false_alarm_rate"]))])
     if v.get("region_in"):
         facts.append(["Altered region (in from the knob end)",
                       _Raw(f"{v['region_in'][0]:.2f} – {v['region_in'][1]:.2f}")])

@@ -44,7 +44,8 @@ def fake_fit(test, known_mass_kg=None):
 def fake_calibrate(profile, meta, baseline_modes, suspension_hz=None):
     m = meta.material
     return SimpleNamespace(reference=BatReference(m.E_pa, m.rho_kg_m3, m.e_over_g,
-                                                  sensor_x_m=baseline_modes.sensor_x_m))
+                                                  sensor_x_m=baseline_modes.sensor_x_m),
+                           extended=SimpleNamespace(rms_pct=0.0), warnings=())
 
 
 def fake_inspect(profile, reference, baseline, retest, false_alarm, conditions=None,

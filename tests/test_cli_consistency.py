@@ -48,7 +48,7 @@ def test_one_default_wood_stated_on_stderr(capsys):
 
 
 def test_simulate_json_is_rounded_and_names_its_wood(tmp_path, capsys):
-    code, out, err = run_cli(["simulate", "--out", tmp_path / "t.npz", "--points", "1,3,33",
+    code, out, err = run_cli(["simulate", "--out", tmp_path / "t.npz", "--points-in", "1,3,33",
                               "--fmax", "300", "--df", "2", "--seed", "1", "--json"], capsys)
     assert code == 0 and "the default wood" in err and "E/G 14" in err
     assert json.loads(out)["points_in"] == [1.0, 3.0, 33.0]
@@ -70,6 +70,6 @@ def test_diagnose_plot_directory_checked_before_work(tmp_path, capsys):
     (tmp_path / "f").write_text("x")
     code, out, err = run_cli(["diagnose", "--profile", "data_samples/smooth_bat/profile.csv",
                               "--meta", "data_samples/smooth_bat/meta.json", "--frf",
-                              "data_samples/smooth_bat/baseline.uff", "--plot",
+                              "data_samples/smooth_bat/baseline.uff", "--plots",
                               tmp_path / "f" / "plots"], capsys)
-    assert code == 2 and out == "" and "--plot destination not writable" in err
+    assert code == 2 and out == "" and "--plots destination not writable" in err

@@ -319,14 +319,14 @@ def test_cli_process_missing_file_exit_code(tmp_path):
 
 
 def test_report_option_both_forms(lab, capsys):
-    code, out, err = run_cli(stateless(lab, extra=["--json", "--report", lab / "rep1"]), capsys)
+    code, out, err = run_cli(stateless(lab, extra=["--json", "-o", lab / "rep1"]), capsys)
     assert code == 0
     check_contract(json.loads(out), "HX-2001")  # stdout still holds only the JSON
     assert (lab / "rep1" / "index.html").is_file() and "report:" in err
     assert run_cli(["register", "--profile", lab / "profile.csv", "--meta", lab / "meta.json",
                     "--baseline", lab / "baseline.uff"], capsys)[0] == 0
     code, out, _ = run_cli(["inspect", "--serial", "HX-2001", lab / "retest_corked.uff",
-                            "--report", lab / "rep2"], capsys)
+                            "-o", lab / "rep2"], capsys)
     assert code == 0 and out.startswith("HX-2001: ALTERED")
     code, out, _ = run_cli(["history", "HX-2001", "--json"], capsys)
     (insp,) = json.loads(out)["inspections"]

@@ -16,7 +16,7 @@ SAMPLES = Path(__file__).resolve().parent.parent / "data_samples"
 
 def test_simulate_writes_contract_uff(tmp_path, capsys):
     out = tmp_path / "t.uff"
-    code = main(["simulate", "--out", str(out), "--seed", "4", "--df", "2", "--points",
+    code = main(["simulate", "--out", str(out), "--seed", "4", "--df", "2", "--points-in",
                  "1,5,9,13,17,21,25,29,32", "--alter", "cork:depth=10,d=1,ratio=0.33", "--json"])
     assert code == 0
     summary = json.loads(capsys.readouterr().out)
@@ -33,8 +33,8 @@ def test_simulate_writes_contract_uff(tmp_path, capsys):
 
 
 def test_simulate_bad_points(tmp_path, capsys):
-    assert main(["simulate", "--out", str(tmp_path / "x.uff"), "--points", "1,a"]) == 2
-    assert "--points" in capsys.readouterr().err
+    assert main(["simulate", "--out", str(tmp_path / "x.uff"), "--points-in", "1,a"]) == 2
+    assert "--points-in" in capsys.readouterr().err
     assert not (tmp_path / "x.uff").exists()
 
 
@@ -59,7 +59,7 @@ def test_sample_is_what_the_script_makes(tmp_path, monkeypatch, capsys):
 
 def test_simulate_case_writes_a_labs_files(tmp_path, capsys):
     folder = tmp_path / "bat"
-    assert main(["simulate", "--case", str(folder), "--kind", "cork", "--nuisances",
+    assert main(["simulate", "--case", "-o", str(folder), "--kind", "cork", "--nuisances",
                  "moisture,cup", "--seed", "3", "--json"]) == 0
     summary = json.loads(capsys.readouterr().out)
     assert summary["expected"] == "altered"
@@ -73,7 +73,7 @@ def test_simulate_case_writes_a_labs_files(tmp_path, capsys):
 
 
 def test_simulate_case_bad_nuisance(tmp_path, capsys):
-    assert main(["simulate", "--case", str(tmp_path / "x"), "--nuisances", "bogus"]) == 2
+    assert main(["simulate", "--case", "-o", str(tmp_path / "x"), "--nuisances", "bogus"]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "bogus" in err[0]
     assert not (tmp_path / "x").exists()

@@ -45,7 +45,7 @@ def test_end_to_end_through_frfs(tmp_path, capsys):
     ash = material_from_imperial(1.74e6, 0.0217)
     wood = Material(ash.E_pa * 1.07, ash.rho_kg_m3 * 0.96, 14.0)
     paths = write_bat(tmp_path, wood, sensor_g=4.0, bungee=200.0, seed=11)
-    code = main(args_of(paths) + ["--json", "--plot", str(tmp_path)])
+    code = main(args_of(paths) + ["--json", "--plots", str(tmp_path)])
     captured = capsys.readouterr()
     assert code == 0, captured.err
     out = json.loads(captured.out)  # stdout holds the JSON object alone

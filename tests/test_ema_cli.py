@@ -35,7 +35,7 @@ def case(tmp_path_factory):
 def test_fit_json_recovers_the_modes(case, capsys, tmp_path):
     path, model = case
     out = tmp_path / "modes.uff"
-    assert main(["fit", str(path), "--json", "-o", str(out), "--plot", str(tmp_path)]) == 0
+    assert main(["fit", str(path), "--json", "-o", str(out), "--plots", str(tmp_path)]) == 0
     doc = json.loads(capsys.readouterr().out)
     f = np.array([m["frequency_hz"] for m in doc["modes"]])
     z = np.array([m["damping_ratio"] for m in doc["modes"]])

@@ -76,7 +76,7 @@ def test_another_bat_is_not_the_same_bat():
 
 
 def test_layout_without_barrel_points_is_named():
-    """``batlab model --points`` of old: nothing between 16 and 34 in but the end face."""
+    """``batlab model --n-points`` of old: nothing between 16 and 34 in but the end face."""
     x = np.append(np.arange(1.0, 16.0, 2.0), 33.9) * IN_TO_M
     why = coverage_reason(x, 34.0 * IN_TO_M)
     assert why and "barrel" in why

@@ -144,3 +144,75 @@ def test_a_retest_file_inspected_twice_is_stored_once(tmp_path, monkeypatch, cap
     with open_registry(db) as conn:
         assert len(history(conn, "HX-2001")) == 3
     assert run_cli(["registry", "check", "--db", db], capsys)[0] == 0
+
+
+def _register(tmp_path, baseline, capsys, folder=SAMPLE):
+    """Register ``folder``'s bat with ``baseline`` into a new registry: (code, stderr, db)."""
+    db = tmp_path / "lab.sqlite"
+    code = main(["register", "--profile", str(folder / "profile.csv"), "--meta",
+                 str(folder / "meta.json"), "--baseline", str(baseline), "--db", str(db)])
+    return code, capsys.readouterr().err, db
+
+
+def test_a_heavier_bats_baseline_is_refused_with_its_weight(tmp_path, capsys):
+    import time
+
+    scale = np.random.default_rng().uniform(1.15, 1.25)  # same profile, heavier wood
+    heavy = tmp_path / "heavy.uff"
+    assert main(["simulate", "--profile", str(SAMPLE / "profile.csv"), "--meta",
+                 str(SAMPLE / "meta.json"), "--density-scale", f"{scale:.4f}", "--seed", "3",
+                 "-o", str(heavy)]) == 0
+    capsys.readouterr()
+    start = time.perf_counter()
+    code, err, db = _register(tmp_path, heavy, capsys)
+    assert code == 2 and time.perf_counter() - start < 60
+    assert "heavy.uff: does not look like the baseline of bat HX-2001" in err
+    assert "check: that" in err and "nothing stored" in err and len(err.splitlines()) < 10
+    weight_lb = json.loads((SAMPLE / "meta.json").read_text())["weight_lb"]
+    implied_lb = float(err.split("says the bat weighs about ")[1].split()[0])
+    assert implied_lb == pytest.approx(scale * weight_lb, rel=0.06)
+    assert not db.exists()
+
+
+def test_another_bats_baseline_is_refused_and_no_registry_made(tmp_path, capsys):
+    code, err, db = _register(tmp_path, "data_samples/paper_bat/baseline.uff", capsys)
+    assert code == 2 and "misses its frequencies by" in err and "at its upper limit" in err
+    assert not db.exists()
+    folder = _bat_folder(tmp_path, weight_lb=873.6)
+    code, err, db = _register(tmp_path, SAMPLE / "baseline.uff", capsys, folder)
+    assert code == 2 and "looks like grams" in err and not db.exists()
+
+
+def test_the_mass_line_of_a_bat_follows_its_weight():
+    x_m, d_m = np.array([0.0, 0.5, 0.85]), np.array([0.03, 0.03, 0.065])
+    a = [plausible.rigid_flexibility(x_m, d_m, w, 0.8) for w in (0.8, 1.0)]
+    assert a[0] / a[1] == pytest.approx(1.25)  # a(x_d) = 1/M + (x_d - x_c)^2 / I, both ~ 1/M
+    lighter = plausible.rigid_flexibility(x_m, d_m, 0.8, 0.8, sensor_kg=0.01)
+    assert lighter < a[0]
+    assert plausible.check_mass_line(a[0], x_m, d_m, 0.8, 0.8) is None
+    assert "about 2.2 lb, not meta.json's weight_lb 1.764" in plausible.check_mass_line(
+        a[1], x_m, d_m, 0.8, 0.8)  # a 1 kg bat's mass line
+
+
+def test_a_long_step_is_never_silent(capsys):
+    import re
+    import time
+
+    from batlab.cli_support import Progress, stop_all
+
+    progress = Progress("inspect", every_s=0.05)
+    progress("calibrating the reference model ...")
+    time.sleep(0.3)
+    stop_all()
+    lines = capsys.readouterr().err.splitlines()
+    assert lines[0].startswith("batlab inspect [") and lines[0].endswith("reference model ...")
+    still = [line for line in lines[1:] if "still calibrating the reference model (" in line]
+    assert len(still) >= 2 and all(re.search(r"\[\s*\d+\.\d s\]", line) for line in still)
+    time.sleep(0.15)
+    assert capsys.readouterr().err == ""  # stopped with its command
+
+
+def test_simulate_says_its_step_with_the_time(tmp_path, capsys):
+    assert main(["simulate", "-o", str(tmp_path / "t.uff"), "--df", "4", "--seed", "1"]) == 0
+    err = capsys.readouterr().err
+    assert "batlab simulate [" in err and "s]: simulating 16 impact points, 801 lines" in err

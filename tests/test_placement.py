@@ -1,4 +1,4 @@
-"""Suggested test points (`batlab model --points`): the barrel covered where a core can be,
+"""Suggested test points (`batlab model --n-points`): the barrel covered where a core can be,
 the accelerometer 1.5 in from the barrel end, not on the end face."""
 
 import json
@@ -46,13 +46,13 @@ def test_paper_bat_layout_and_cli(capsys):
     pts, drive = layout_in(paper_profile(), 16)
     assert drive == pytest.approx(paper_profile().length_m / IN_TO_M - 1.5)
     assert np.max(np.diff(pts[pts > 20.0])) <= 1.5 + 1e-6
-    assert main(["model", "--json", "--points", "12"]) == 0
+    assert main(["model", "--json", "--n-points", "12"]) == 0
     out = json.loads(capsys.readouterr().out)
     assert len(out["suggested_points_in"]) == 12 and out["driving_point_in"] == pytest.approx(drive)
-    assert main(["model", "--points", "6"]) == 2
+    assert main(["model", "--n-points", "6"]) == 2
     # one error line (a notice of the default wood may precede it)
     err = [line for line in capsys.readouterr().err.splitlines() if "error:" in line]
-    assert len(err) == 1 and "--points 6" in err[0] and "barrel" in err[0]
+    assert len(err) == 1 and "--n-points 6" in err[0] and "barrel" in err[0]
 
 
 def test_efi_keeps_fixed_rows_and_picks_independent_ones():

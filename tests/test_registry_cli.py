@@ -39,7 +39,7 @@ def test_report_regenerated_from_the_registry_alone(lab, capsys):
     from its date, against the registration it was judged with."""
     register(lab, capsys)
     retest = lab / "retest_corked.uff"
-    code, out, _ = run_cli(["inspect", "--serial", "HX-2001", retest, "--report",
+    code, out, _ = run_cli(["inspect", "--serial", "HX-2001", retest, "-o",
                             lab / "rep", "--json"], capsys)
     assert code == 0 and json.loads(out)["altered"] is True
     original = (lab / "rep" / "index.html").read_text()
@@ -122,8 +122,8 @@ def test_unwritable_report_fails_at_once_and_stores_nothing(lab, capsys, monkeyp
     from updating.correlate import fitted
     monkeypatch.setattr(fitted, "fit_test", lambda *a, **k: calls.append(1))
     code, out, err = run_cli(["inspect", "--serial", "HX-2001", lab / "retest_corked.uff",
-                              "--report", lab / "afile" / "rep"], capsys)
-    assert code == 2 and out == "" and "--report destination not writable" in err
+                              "-o", lab / "afile" / "rep"], capsys)
+    assert code == 2 and out == "" and "-o/--out destination not writable" in err
     assert calls == []  # refused before any work
     code, out, _ = run_cli(["history", "HX-2001", "--json"], capsys)
     assert json.loads(out)["inspections"] == []
@@ -138,7 +138,7 @@ def test_verdict_stored_and_printed_before_the_report_fails(lab, capsys, monkeyp
 
     monkeypatch.setattr(report, "figures_png", broken)
     code, out, err = run_cli(["inspect", "--serial", "HX-2001", lab / "retest_corked.uff",
-                              "--report", lab / "rep", "--json"], capsys)
+                              "-o", lab / "rep", "--json"], capsys)
     assert code == 2 and "disk full" in err and "the verdict is stored (inspection #1)" in err
     assert "batlab report HX-2001 --inspection 1" in err
     assert json.loads(out)["altered"] is True  # printed

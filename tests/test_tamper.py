@@ -47,7 +47,7 @@ def lab(tmp_path_factory) -> dict:
                    root / "meta.json", "--baseline", root / "baseline.uff")[0] == 0
         for k in (1, 2):
             code, _, err = cli("inspect", "--serial", "HX-2001", root / "retest_corked.uff",
-                               "--report", root / f"rep{k}", "--again")  # stored twice
+                               "-o", root / f"rep{k}", "--again")  # stored twice
             assert code == 0, err
             if k == 1:
                 shutil.copyfile(db, root / "older.sqlite")

@@ -15,6 +15,8 @@ from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+from batlab.cli_support import add_out_argument
+
 if TYPE_CHECKING:
     from batlab.pipeline import CaptureSettings
 
@@ -31,8 +33,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--driving-point", type=int,
                         help="point number of the accelerometer (response node)")
     parser.add_argument("--hits", type=int, help="accepted hits per point (default 3)")
-    parser.add_argument("-o", "--output", help="FRF file to write (.uff)")
-    parser.add_argument("--raw", help="raw stream file (default: OUTPUT with .raw.bin)")
+    add_out_argument(parser, "FRF file to write (.uff)", "FILE.uff", old="--output")
+    parser.add_argument("--raw", help="raw stream file (default: -o's with .raw.bin)")
     parser.add_argument("--json", action="store_true", help="print a JSON summary on stdout")
     parser.add_argument("--points-in", help="positions of points 1..n from the knob end, in")
     parser.add_argument("--meta", help="meta.json whose points_in gives the positions")
@@ -123,11 +125,11 @@ def _progress(msg: str) -> None:
 
 def _check_flags(args: argparse.Namespace) -> None:
     """Raise ValueError for a combination of flags that cannot run."""
-    if args.replay and not args.output:
+    if args.replay and not args.out:
         raise ValueError("--replay needs -o OUTPUT (the FRF file to write from the recording)")
     if args.resume and not args.port:
         raise ValueError("--resume continues a live session: give --port too")
-    if args.port and not (args.raw or args.output):
+    if args.port and not (args.raw or args.out):
         raise ValueError("give -o OUTPUT or --raw PATH: the raw stream must be saved")
     if args.partial and not args.replay:
         raise ValueError("--partial applies to --replay (a live session saves its points)")
@@ -183,7 +185,7 @@ def _plan(args: argparse.Namespace) -> _Plan:
     from batlab.pipeline import CaptureSettings
 
     raw = Path(args.replay) if args.replay else Path(
-        args.raw or Path(args.output).with_suffix(".raw.bin"))
+        args.raw or Path(args.out).with_suffix(".raw.bin"))
     side_path = Path(str(raw) + ".json")
     side = _read_sidecar(side_path, required=bool(args.resume)) if (
         args.replay or args.resume) else {}
@@ -195,8 +197,8 @@ def _plan(args: argparse.Namespace) -> _Plan:
         settings = CaptureSettings(**side["settings"])
     tau = args.exp_window_tau if args.exp_window_tau is not None else side.get("exp_window_tau_s")
     csv_dict, csv_info = _channels(args, side)
-    if args.output:
-        out = Path(args.output)
+    if args.out:
+        out = Path(args.out)
         if out.parent and not out.parent.is_dir():
             raise ValueError(f"{out}: output directory {out.parent} does not exist")
     return _Plan(raw, side_path, side, points, hits, driving, node_x, settings, tau, csv_dict,
@@ -233,7 +235,7 @@ def _open_live(args: argparse.Namespace, plan: _Plan, done: dict, log_before: li
 def _resume_hint(args: argparse.Namespace, raw: Path) -> str:
     """Return the command that continues a killed live session."""
     return (f"batlab acquire --port PORT --resume --raw {raw}"
-            + (f" -o {args.output}" if args.output else ""))
+            + (f" -o {args.out}" if args.out else ""))
 
 
 def _partial_result(args: argparse.Namespace, plan: _Plan, interrupted):
@@ -322,7 +324,7 @@ def _summary(args: argparse.Namespace, plan: _Plan, result, log_all: list[dict],
                  "detail": h["detail"]} for h in log_all if not h["accepted"]]
     return {"accepted": int(sum(h["accepted"] for h in log_all)), "rejected": rejected,
             "points": [int(v) for v in result.points], "driving_point": plan.driving,
-            "raw": str(plan.raw), "output": args.output, "exp_window_tau_s": plan.tau,
+            "raw": str(plan.raw), "output": args.out, "exp_window_tau_s": plan.tau,
             "sample_rate_hz": result.info.sample_rate_hz,
             "n_averages": np.asarray(result.n_averages).tolist(),
             "resumed_points": resumed}
@@ -353,8 +355,8 @@ def run(args: argparse.Namespace) -> int:
     log_all = log_before + result.hits_as_dicts()
     if args.port:
         write_json_atomic(plan.side_path, side | {"completed": sorted(done), "log": log_all})
-    if args.output:  # atomic (temporary name, then os.replace)
-        write_session_test(Path(args.output), result, points, plan.driving, plan.node_x,
+    if args.out:  # atomic (temporary name, then os.replace)
+        write_session_test(Path(args.out), result, points, plan.driving, plan.node_x,
                            plan.tau, plan.raw, plan.hits)
     summary = _summary(args, plan, result, log_all, resumed)
     _progress(f"batlab acquire: {summary['accepted']} hits accepted, "

@@ -15,16 +15,15 @@ import json
 import tempfile
 from pathlib import Path
 
-from batlab.cli_support import add_db_argument, progress_printer
+from batlab.cli_support import add_db_argument, add_out_argument, progress_printer
 
-EXAMPLE = "batlab demo --out demo/"
+EXAMPLE = "batlab demo -o demo/"
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
     """Add the options of ``batlab demo`` to its sub-parser."""
-    p.add_argument("--out", default=None,
-                   help="work directory for the test files, registry and report (default: a "
-                        "new temporary directory)")
+    add_out_argument(p, "work directory for the test files, registry and report (default: "
+                        "a new temporary directory, removed at the end)", "DIR")
     add_db_argument(p)
     p.add_argument("--seed", type=int, default=7, help="noise seed of the baseline (re-test: +1)")
     p.add_argument("--json", action="store_true", help="print the verdict JSON on stdout")

@@ -6,7 +6,9 @@ import argparse
 import json
 import sys
 
-EXAMPLE = "batlab diagnose --profile profile.csv --meta meta.json --frf baseline.uff --plot plots/"
+from batlab.cli_support import add_plots_argument, progress_printer
+
+EXAMPLE = "batlab diagnose --profile profile.csv --meta meta.json --frf baseline.uff --plots plots/"
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -15,8 +17,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--meta", required=True, help="meta.json (handbook wood, weight_lb)")
     p.add_argument("--frf", required=True, help="baseline test (.uff, .csv or .npz)")
     p.add_argument("--json", action="store_true", help="print the JSON result on stdout")
-    p.add_argument("--plot", default=None, metavar="DIR",
-                   help="write diagnose.png (percent frequency error per mode) into DIR")
+    add_plots_argument(p, "write diagnose.png (percent frequency error per mode) into DIR")
     p.add_argument("--min-gain", type=float, default=None,
                    help="least RMS gain, percentage points, to name a cause (default 0.05)")
     p.add_argument("--method", choices=("lscf", "peak"), default="lscf",
@@ -46,20 +47,18 @@ def run(args: argparse.Namespace) -> int:
     from batlab.diagnose_report import format_table, write_plot
     from batlab.report import check_destination
 
-    if args.plot:  # created like every other output directory, and proved writable first
-        check_destination(args.plot, "--plot")
+    if args.plots:  # created like every other output directory, and proved writable first
+        check_destination(args.plots, "--plots")
 
-    def progress(message: str) -> None:
-        print(f"batlab diagnose: {message}", file=sys.stderr, flush=True)
-
+    progress = progress_printer("diagnose")
     meta, result = pipeline.diagnose_files(args.profile, args.meta, args.frf, args.method,
                                            args.min_gain, progress, solid=args.solid)
     out = result.to_json_dict()
     out["serial"] = meta.serial
     for w in result.warnings:
         print(f"batlab diagnose: warning: {w}", file=sys.stderr)
-    if args.plot:
-        path = write_plot(result, Path(args.plot) / "diagnose.png", title=meta.serial)
+    if args.plots:
+        path = write_plot(result, Path(args.plots) / "diagnose.png", title=meta.serial)
         progress(f"wrote {path}")
     if args.json:
         print(json.dumps(out))

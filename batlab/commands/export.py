@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import argparse
 
-from batlab.cli_support import add_db_argument, db_path
+from batlab.cli_support import add_db_argument, add_out_argument, db_path
 
 EXAMPLE = "batlab export HX-1004 -o HX-1004.csv"
 
@@ -12,7 +12,7 @@ EXAMPLE = "batlab export HX-1004 -o HX-1004.csv"
 def add_arguments(p: argparse.ArgumentParser) -> None:
     """Add the options of ``batlab export`` to its sub-parser."""
     p.add_argument("serial", nargs="?", default=None, help="one bat (default: every bat)")
-    p.add_argument("-o", "--output", required=True, metavar="FILE.csv", help="CSV file to write")
+    add_out_argument(p, "CSV file to write (required)", "FILE.csv", old="--output")
     add_db_argument(p)
 
 
@@ -33,8 +33,10 @@ def run(args: argparse.Namespace) -> int:
     from batlab.pipeline import history_table, write_csv
     from batlab.registry import open_registry
 
+    if not args.out:  # not argparse's required=: the old --output must satisfy it too
+        raise ValueError("-o/--out FILE.csv is required (the CSV file to write)")
     with open_registry(db_path(args), create=False, readonly=True) as conn:
         table = history_table(conn, args.serial)
-    write_csv(args.output, table)
-    print(f"{len(table)} inspection(s) written to {args.output}")
+    write_csv(args.out, table)
+    print(f"{len(table)} inspection(s) written to {args.out}")
     return 0

@@ -6,6 +6,7 @@ import argparse
 import json
 import sys
 
+from batlab.cli_support import add_out_argument, add_plots_argument
 from batlab.pipeline import IN_TO_M, KG_M2_TO_LB_IN2, LB_TO_KG, MIN_SNR
 
 EXAMPLE = "batlab fit baseline.uff --json"
@@ -29,10 +30,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--mass-kg", type=float, default=None,
                    help="the bat's mass, kg, for the mass-line scaling check")
     p.add_argument("--json", action="store_true", help="print the modes as JSON on stdout")
-    p.add_argument("--plot", metavar="DIR", default=None,
-                   help="write stabilisation.png, synthesis.png and automac.png into DIR")
-    p.add_argument("-o", "--out", metavar="MODES.uff", default=None,
-                   help="write the real mass-normalised modes as UFF 55")
+    add_plots_argument(p, "write stabilisation.png, synthesis.png and automac.png into DIR")
+    add_out_argument(p, "write the real mass-normalised modes as UFF 55", "MODES.uff")
 
 
 def _mode_rows(fit) -> list[dict]:
@@ -105,6 +104,8 @@ def summary(fit) -> dict:
             "mass_kg": rb.mass_kg,
             "x_cg_m": rb.x_cg_m,
             "pitch_inertia_kg_m2": rb.pitch_inertia_kg_m2,
+            "mass_lower_bound_kg": rb.mass_upper_bound_kg,
+            # deprecated (it is a lower bound): kept one release beside mass_lower_bound_kg
             "mass_upper_bound_kg": rb.mass_upper_bound_kg,
         },
     }
@@ -194,8 +195,8 @@ def run(args: argparse.Namespace) -> int:
     if args.out:
         pipeline.write_modes_file(args.out, fit)
         print(f"batlab fit: modes written to {args.out}", file=sys.stderr)
-    if args.plot:
-        for path in pipeline.plot_fit_files(fit, test, args.plot):
+    if args.plots:
+        for path in pipeline.plot_fit_files(fit, test, args.plots):
             print(f"batlab fit: plot {path}", file=sys.stderr)
     if args.json:
         print(json.dumps(summary(fit)))

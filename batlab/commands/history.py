@@ -7,7 +7,7 @@ import json
 from dataclasses import asdict
 
 from batlab.cli_support import add_db_argument, db_path
-from batlab.formatting import STATUS_WORDS
+from batlab.formatting import STATUS_WORDS, p_value_words
 
 EXAMPLE = "batlab history HX-1004 --json"
 
@@ -51,8 +51,8 @@ def run(args: argparse.Namespace) -> int:
         what = STATUS_WORDS.get(r.status, r.status)
         if r.status == "altered" and v.get("region_in"):
             what += f" at {v['region_in'][0]:.1f}-{v['region_in'][1]:.1f} in"
-        p = v.get("confidence")
-        p_s = "" if p is None else f", p = {1 - p:.3g}"
+        said = p_value_words(v)
+        p_s = "" if said is None else f", {said}"
         against = "" if r.reference_seq is None else f", against registration #{r.reference_seq}"
         print(f"  #{r.id} {r.inspected_at[:19]} {r.retest_name or r.retest_sha256[:12]}: "
               f"{what}{p_s}{against}" + (f", report {r.report_path}" if r.report_path else ""))

@@ -16,9 +16,9 @@ from __future__ import annotations
 import argparse
 import json
 
-from batlab.cli_support import add_db_argument, db_path, progress_printer
+from batlab.cli_support import add_db_argument, add_out_argument, db_path, progress_printer
 
-EXAMPLE = ("batlab inspect --serial HX-1004 retest.uff --report report/   (or: --profile "
+EXAMPLE = ("batlab inspect --serial HX-1004 retest.uff -o report/   (or: --profile "
            "profile.csv --meta meta.json --baseline baseline.uff --retest retest.uff --json)")
 
 
@@ -36,9 +36,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                         "temperature_c, tested_on (every key optional)")
     p.add_argument("--false-alarm", type=float, default=0.01,
                    help="false-alarm rate of the decision (default 0.01)")
-    p.add_argument("--report", default=None, metavar="DIR",
-                   help="write an HTML report to DIR/index.html (created if needed; checked "
-                        "writable before any work)")
+    add_out_argument(p, "write the HTML report to DIR/index.html (created if needed; "
+                        "checked writable before any work)", "DIR", old="--report")
     p.add_argument("--plots", default=None, metavar="DIR",
                    help="write the report's figures as PNG files to DIR")
     p.add_argument("--again", action="store_true",
@@ -81,7 +80,7 @@ def run(args: argparse.Namespace) -> int:
     retest = _retest_path(args)
     if not 0 < args.false_alarm < 0.5:
         raise ValueError("--false-alarm must be between 0 and 0.5")
-    for opt, path in (("--report", args.report), ("--plots", args.plots)):
+    for opt, path in (("-o/--out", args.out), ("--plots", args.plots)):
         if path:  # before any work: an unwritable destination fails at once
             check_destination(path, opt)
     stateless = (args.profile, args.meta, args.baseline)
@@ -95,7 +94,7 @@ def run(args: argparse.Namespace) -> int:
             if done is not None:
                 return _print_stored(args, conn, done, retest, progress, readable)
             result = pipeline.inspect_registered(conn, args.serial, retest, args.false_alarm,
-                                                 refit_baseline=bool(args.report or args.plots),
+                                                 refit_baseline=bool(args.out or args.plots),
                                                  progress=progress,
                                                  retest_meta_path=args.retest_meta)
             stored = pipeline.store_inspection(conn, result, retest, args.false_alarm,
@@ -103,7 +102,7 @@ def run(args: argparse.Namespace) -> int:
             progress(f"stored as inspection #{stored.id} of {result.serial} (custody record "
                      f"#{stored.record_seq})")
             _print(args, pipeline.contract_dict(result.serial, result.verdict), readable)
-            if args.report or args.plots:
+            if args.out or args.plots:
                 bat = pipeline.stored_bat(conn, stored)
                 prov = pipeline.provenance(conn, stored=stored)
                 try:
@@ -122,7 +121,7 @@ def run(args: argparse.Namespace) -> int:
         result = pipeline.inspect_files(args.profile, args.meta, args.baseline, retest,
                                         args.false_alarm, progress, args.retest_meta)
         _print(args, pipeline.contract_dict(result.serial, result.verdict), readable)
-        if args.report or args.plots:
+        if args.out or args.plots:
             prov = pipeline.provenance(baseline_sha256=pipeline.file_sha256(args.baseline),
                                        retest_sha256=pipeline.file_sha256(retest))
             meta = pipeline.read_meta_dict(args.meta)
@@ -137,7 +136,7 @@ def _print_stored(args, conn, done, retest: str, progress, readable) -> int:
     progress(f"{retest} was already inspected (inspection #{done.id} of {done.serial}, "
              f"{done.inspected_at}): its stored verdict, not stored again (--again re-runs it)")
     _print(args, pipeline.stored_contract_dict(done.verdict), readable)
-    if args.report or args.plots:
+    if args.out or args.plots:
         path = _report(args, pipeline.stored_report_inputs(conn, done.serial, done.id,
                                                            progress), progress)
         if path is not None:
@@ -153,12 +152,12 @@ def _print(args, out: dict, readable) -> None:
 def _report(args, inputs, progress) -> str | None:
     from batlab.report import write_plots, write_report
 
-    if not args.report:
+    if not args.out:
         progress("writing the plots")
         write_plots(args.plots, inputs)
         progress(f"plots: {args.plots}")
         return None
     progress("writing the report")
-    path = write_report(args.report, inputs, plots_dir=args.plots)
+    path = write_report(args.out, inputs, plots_dir=args.plots)
     progress(f"report: {path}" + (f", plots: {args.plots}" if args.plots else ""))
     return str(path)

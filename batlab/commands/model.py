@@ -6,6 +6,8 @@ import argparse
 import json
 import sys
 
+from batlab.cli_support import add_deprecated_alias
+
 EXAMPLE = "batlab model --profile profile.csv --meta meta.json --beam timoshenko --json"
 
 
@@ -24,7 +26,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--elements", type=int, default=None, help="number of elements (default ~1 in)")
     p.add_argument("--alter", default=None, help="e.g. cork:depth=10,d=1.0,ratio=0.33,plug=1 (in)")
     p.add_argument("--modes", type=int, default=8, help="number of modes to list (incl. rigid)")
-    p.add_argument("--points", type=int, default=16,
+    add_deprecated_alias(p, "--points", "--n-points N", "n_points", type=int)
+    p.add_argument("--n-points", type=int, default=16, metavar="N",
                    help="number of test points to suggest (default 16; the barrel's last 14 in "
                         "get a row every 1.5-2 in, the accelerometer 1.5 in from the end)")
     p.add_argument("--json", action="store_true", help="print JSON on stdout")
@@ -52,7 +55,7 @@ def run(args: argparse.Namespace) -> int:
     rotary = None if args.rotary_inertia is None else args.rotary_inertia == "on"
     model = pipeline.bat_model(profile, material, beam=args.beam, rotary_inertia=rotary,
                                n_elements=args.elements, alter=args.alter)
-    out = pipeline.summarise_model(model, n_modes=args.modes, n_points=args.points)
+    out = pipeline.summarise_model(model, n_modes=args.modes, n_points=args.n_points)
     if args.json:
         print(json.dumps(out))
     else:

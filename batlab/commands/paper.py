@@ -4,7 +4,8 @@ from __future__ import annotations
 
 import argparse
 import json
-import sys
+
+from batlab.cli_support import add_plots_argument, progress_printer
 
 EXAMPLE = "batlab paper --json"
 
@@ -16,8 +17,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--seed", type=int, default=0, help="noise seed")
     p.add_argument("--modes", type=int, default=6, help="elastic modes used (default 6)")
     p.add_argument("--json", action="store_true", help="print JSON on stdout")
-    p.add_argument("--plot", metavar="DIR", nargs="?", const="paper_figures", default=None,
-                   help="write Figures 2 and 3 as PNG into DIR (default DIR: paper_figures)")
+    add_plots_argument(p, "write Figures 2 and 3 as PNG into DIR (default DIR: "
+                          "paper_figures)", nargs="?", const="paper_figures")
 
 
 def run(args: argparse.Namespace) -> int:
@@ -38,11 +39,13 @@ def run(args: argparse.Namespace) -> int:
 
     if args.noise < 0 or not 2 <= args.modes <= 10:
         raise ValueError("--noise must be >= 0 and --modes between 2 and 10")
-    print("running SEREP + MSSO + refinement on the paper's bat ...", file=sys.stderr)
+    progress = progress_printer("paper")
+    progress("running SEREP + MSSO + refinement on the paper's bat")
     case = run_paper_case(args.modes, args.noise, args.seed)
-    if args.plot:
-        for path in plot_figures(case, args.plot):
-            print(f"wrote {path}", file=sys.stderr)
+    progress("done")
+    if args.plots:
+        for path in plot_figures(case, args.plots):
+            progress(f"wrote {path}")
     if args.json:
         out = dict(case.final)
         out["modes_used"] = args.modes

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import json
+from pathlib import Path
 
 from batlab.cli_support import add_db_argument, db_path, progress_printer
 
@@ -37,14 +38,26 @@ def run(args: argparse.Namespace) -> int:
         Exit code: 0 (bad input raises ValueError or OSError; ``batlab.cli`` prints
         it in one line and exits 2).
     """
-    from batlab.pipeline import LBF_IN3_TO_KG_M3, PSI_TO_PA, register_files
-    from batlab.registry import open_registry, shown
+    from batlab.pipeline import (
+        LBF_IN3_TO_KG_M3,
+        PSI_TO_PA,
+        prepare_registration,
+        read_bat_files,
+        store_registration,
+    )
+    from batlab.registry import has_bat, is_url, open_registry, shown
 
     progress = progress_printer("register")
     path = db_path(args)
+    _, meta = read_bat_files(args.profile, args.meta)  # refused at the door: no registry made
+    if not args.replace and (is_url(path) or Path(path).is_file()):  # fail fast, before the fit
+        with open_registry(path) as conn:
+            if has_bat(conn, meta.serial):
+                raise ValueError(f"bat {meta.serial!r} is already registered (use --replace)")
+    prepared = prepare_registration(args.profile, args.meta, args.baseline, args.serial,
+                                    progress)
     with open_registry(path) as conn:
-        done = register_files(conn, args.profile, args.meta, args.baseline, args.serial,
-                              args.replace, progress)
+        done = store_registration(conn, prepared, args.baseline, args.replace, progress)
     rec = done.record
     out = {"serial": rec.serial, "db": shown(path), "registered_at": rec.registered_at,
            "baseline": rec.baseline_name, "baseline_sha256": rec.baseline_sha256,

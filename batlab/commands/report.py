@@ -4,9 +4,9 @@ from __future__ import annotations
 
 import argparse
 
-from batlab.cli_support import add_db_argument, db_path, progress_printer
+from batlab.cli_support import add_db_argument, add_out_argument, db_path, progress_printer
 
-EXAMPLE = "batlab report HX-1004 --inspection 3 --out report-HX-1004-3"
+EXAMPLE = "batlab report HX-1004 --inspection 3 -o report-HX-1004-3"
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -14,8 +14,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("serial", help="the bat's serial number")
     p.add_argument("--inspection", type=int, default=None, metavar="N",
                    help="inspection number (see `batlab history S`; default the latest)")
-    p.add_argument("--out", default=None, metavar="DIR",
-                   help="write DIR/index.html (default ./report-SERIAL-N)")
+    add_out_argument(p, "write DIR/index.html (default ./report-SERIAL-N)", "DIR")
     p.add_argument("--plots", default=None, metavar="DIR",
                    help="also write the figures as PNG files to DIR")
     add_db_argument(p)

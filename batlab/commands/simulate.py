@@ -6,8 +6,10 @@ import argparse
 import json
 import sys
 
+from batlab.cli_support import add_deprecated_alias, add_out_argument, progress_printer
+
 EXAMPLE = ("batlab simulate --profile profile.csv --meta meta.json --alter "
-           "cork:depth=10,d=1.0 --seed 1 --out retest.uff")
+           "cork:depth=10,d=1.0 --seed 1 -o retest.uff")
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -15,11 +17,13 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--profile", help="profile.csv (default: the paper's bat)")
     p.add_argument("--meta", help="meta.json: wood and test points (default: the paper's white "
                                   "birch, said on stderr)")
-    p.add_argument("--out", default=None, help="output file (.uff, .csv or .npz)")
-    p.add_argument("--case", default=None, metavar="DIR",
+    add_out_argument(p, "the test file to write (.uff, .csv or .npz), or with --case the "
+                        "folder", "PATH")
+    p.add_argument("--case", nargs="?", const=True, default=False, metavar="DIR",
                    help="instead of one test: a random nuisance-rich bat as a lab hands it over "
                         "(profile.csv, meta.json, baseline.uff, retest.uff, retest.json, "
-                        "truth.json) in DIR; see --kind, --nuisances, --integrity, --seed")
+                        "truth.json) in the folder -o; see --kind, --nuisances, --integrity, "
+                        "--seed (--case DIR: deprecated, use --case -o DIR)")
     p.add_argument("--kind", default="none",
                    help="--case: alteration of the re-test: none, cork, deep, empty, end_plug, "
                         "partial, small, neutral")
@@ -35,7 +39,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--moisture", type=float, default=0.0,
                    help="moisture-content change, percentage points (E -2 %%, mass +1 %% each)")
     p.add_argument("--seed", type=int, default=None, help="noise seed (reproducible)")
-    p.add_argument("--points", default=None,
+    add_deprecated_alias(p, "--points", "--points-in", "points_in")
+    p.add_argument("--points-in", default=None,
                    help="impact points, inches from the knob, comma-separated (default: meta's "
                         "points_in, else every 2 in)")
     p.add_argument("--e-over-g", type=float, default=None,
@@ -59,8 +64,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--json", action="store_true", help="print a JSON summary on stdout")
 
 
-def run_case(args) -> int:
-    """`--case DIR`: one random bat of the nuisance-rich fleet, written as lab files."""
+def run_case(args, folder: str) -> int:
+    """`--case -o DIR`: one random bat of the nuisance-rich fleet, written as lab files."""
     from batlab import pipeline
 
     if args.nuisances == "all":
@@ -70,14 +75,14 @@ def run_case(args) -> int:
     else:
         nuisances = tuple(n.strip() for n in args.nuisances.split(",") if n.strip())
     paths, expected = pipeline.simulate_field_case(
-        args.seed, args.kind, nuisances, args.integrity, args.case,
-        progress=lambda msg: print(msg, file=sys.stderr))
+        args.seed, args.kind, nuisances, args.integrity, folder,
+        progress=progress_printer("simulate"))
     summary = {k: str(v) for k, v in paths.items() if v is not None}
     summary["expected"] = expected
     if args.json:
         print(json.dumps(summary))
     else:
-        print(f"wrote {args.case}: {', '.join(sorted(summary))}")
+        print(f"wrote {folder}: {', '.join(sorted(summary))}")
     return 0
 
 
@@ -95,12 +100,16 @@ def run(args: argparse.Namespace) -> int:
         Exit code: 0 (bad input raises ValueError or OSError; ``batlab.cli`` prints
         it in one line and exits 2).
     """
-    if args.case:
+    if isinstance(args.case, str):  # the old --case DIR
+        print("batlab simulate: warning: --case DIR is deprecated and goes in the next "
+              "release: use --case -o DIR", file=sys.stderr)
         if args.out:
-            raise ValueError("give --out (one test) or --case DIR (a bat's files), not both")
-        return run_case(args)
+            raise ValueError("give --case -o DIR, not both --case DIR and -o")
+        return run_case(args, args.case)
     if not args.out:
-        raise ValueError("--out is required (or --case DIR)")
+        raise ValueError("-o/--out is required (a test file, or with --case a folder)")
+    if args.case:
+        return run_case(args, args.out)
     import numpy as np
 
     from batlab import pipeline
@@ -111,11 +120,12 @@ def run(args: argparse.Namespace) -> int:
     meta_points_m = pipeline.meta_points_m(args.meta) if args.meta else None
     material = pipeline.wood(args.meta, args.e_over_g, note_printer("simulate")).scaled(
         args.E_scale, args.density_scale)
-    if args.points:
+    if args.points_in:
         try:
-            points = np.array([float(v) for v in args.points.split(",")]) * IN_TO_M
+            points = np.array([float(v) for v in args.points_in.split(",")]) * IN_TO_M
         except ValueError:
-            raise ValueError(f"--points {args.points!r}: not a comma-separated list") from None
+            raise ValueError(f"--points-in {args.points_in!r}: not a comma-separated "
+                             "list") from None
     elif meta_points_m is not None and meta_points_m.size:
         points = meta_points_m
     else:
@@ -130,7 +140,8 @@ def run(args: argparse.Namespace) -> int:
         beam=args.beam, alter=args.alter, moisture_pct=args.moisture, zeta1=args.zeta,
         rel_noise=args.noise_pct / 100)
     freq = np.arange(0.0, args.fmax + args.df / 2, args.df)
-    print(f"simulating {points.size} impact points, {freq.size} lines ...", file=sys.stderr)
+    progress = progress_printer("simulate")
+    progress(f"simulating {points.size} impact points, {freq.size} lines")
     test = pipeline.simulate_bat_test(bat, freq, seed=args.seed)
     pipeline.write_frf(args.out, test)
     summary = {"out": str(args.out),

@@ -27,11 +27,14 @@ from batlab.pipeline.inspection import (
     judge,
 )
 from batlab.pipeline.records import FittedTest
+from updating.correlate.measured import driving_mass_line
 from updating.correlate.points import match_points, point_positions_m
 from updating.inspect.retest_meta import conditions_from_dict
-from updating.model.profile import make_profile
+from updating.model import plausible
+from updating.model.lab_input import BatMeta
+from updating.model.profile import Profile, make_profile
 from updating.model.reference import BatReference
-from updating.model.units import LB_TO_KG
+from updating.model.units import LB_TO_KG, PSI_TO_PA
 
 
 @dataclass(frozen=True)
@@ -57,6 +60,20 @@ def registered_weight_kg(bat: reg.BatRecord) -> float | None:
     """Return a registered bat's weight from its meta.json, kg (None when not weighed)."""
     weight = bat.meta.get("weight_lb")
     return None if weight is None else float(weight) * LB_TO_KG
+
+
+def baseline_mass_line(profile: Profile, meta: BatMeta, baseline: FittedTest) -> str | None:
+    """Check the baseline's driving-point mass line against the profile and scale weight.
+
+    ``updating.model.plausible.check_mass_line``; None when it is plausible, or the bat was
+    not weighed, or the test has no driving point or mass line.
+    """
+    row = driving_mass_line(baseline.fit)
+    if row is None or meta.weight_kg is None:
+        return None
+    d = baseline.fit.driving_index
+    return plausible.check_mass_line(float(row[d]), profile.x_m, profile.diameter_m,
+                                     meta.weight_kg, float(baseline.fit.x_m[d]))
 
 
 def prepare_registration(
@@ -86,6 +103,12 @@ def prepare_registration(
     baseline = fit_file(Path(baseline_path).name, test, meta.weight_kg, progress=progress)
     progress("calibrating the reference model to the baseline (diagnose)")
     diagnosis = calibrate_baseline(profile, meta, baseline)
+    slip = plausible.check_baseline(diagnosis.reference.E_pa / PSI_TO_PA, meta.species,
+                                    diagnosis.extended.rms_pct, diagnosis.warnings,
+                                    str(baseline_path), meta.serial,
+                                    baseline_mass_line(profile, meta, baseline))
+    if slip:
+        raise ValueError(slip)
     record = reg.BatRecord(
         serial=meta.serial, profile_x_m=profile.x_m.tolist(),
         profile_diameter_m=profile.diameter_m.tolist(), meta=meta.extra, species=meta.species,
@@ -122,6 +145,31 @@ def register_files(
         if reg.has_bat(conn, meta.serial):
             raise ValueError(f"bat {meta.serial!r} is already registered (use --replace)")
     done = prepare_registration(profile_path, meta_path, baseline_path, serial, progress)
+    return store_registration(conn, done, baseline_path, replace, progress)
+
+
+def store_registration(conn: sqlite3.Connection, done: Registration, baseline_path,
+                       replace: bool = False, progress: Progress = quiet) -> Registration:
+    """Store a prepared registration with a copy of its baseline file.
+
+    Parameters
+    ----------
+    conn : sqlite3.Connection
+        The registry.
+    done : Registration
+        ``prepare_registration``'s result.
+    baseline_path : str or os.PathLike
+        The baseline test file.
+    replace : bool
+        Replace a registered bat of that serial.
+    progress : Progress
+        Receives one-line messages.
+
+    Returns
+    -------
+    Registration
+        The stored record, the fitted baseline and its diagnosis.
+    """
     content = Path(baseline_path).read_bytes()
     stored = reg.add_bat(conn, done.record, Path(baseline_path).name, content, replace=replace)
     progress(f"registered {stored.serial} (baseline sha256 {stored.baseline_sha256[:12]})")

@@ -37,6 +37,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from updating.inspect.finding import Finding, describe
+from updating.inspect.words import chance, what_to_check
 from updating.model.units import IN_TO_M
 
 F_FLOOR = 10.0
@@ -194,8 +195,8 @@ def _another_bat(e: Evidence) -> list[str]:
 
 
 def _grip(e: Evidence) -> list[str]:
-    return [f"{e.finding_text}: a grip substance, legal under Rule 3.02(c); no alteration "
-            f"(F = {e.F:.1f}){e.weight_note}"]
+    return [f"{e.finding_text}: a grip substance, legal under Rule 3.02(c); no "
+            f"alteration{e.weight_note}"]
 
 
 def _grip_past(e: Evidence) -> list[str]:
@@ -205,50 +206,51 @@ def _grip_past(e: Evidence) -> list[str]:
 
 def _altered(e: Evidence) -> list[str]:
     beyond = "" if not e.held_core else (
-        f"; with {', '.join(e.held_core)} at its physical bound, but no drift even three "
-        f"times beyond the physical bounds explains it (F = {e.F_wide:.1f})")
+        f"; not even {what_to_check(e.held_core)} changed three times further than it "
+        "physically can would explain it")
     return [f"the change between the tests is not one moisture, temperature, the "
-            f"accelerometer or a grip can make (F = {e.F:.1f}, p = {e.p_value:.1e})"
+            f"accelerometer or a grip can make ({chance(e.p_value)})"
             f"{e.weight_note}{beyond}", f"it fits {e.finding_text}"]
 
 
 def _altered_or_drift(e: Evidence) -> list[str]:
-    return [f"the change between the tests fits {e.finding_text}, but only with "
-            f"{', '.join(e.held_core)} at its physical bound: an alteration and that drift "
-            "cannot be told apart; weigh the bat, give retest.json (weight, "
+    return [f"the change between the tests fits {e.finding_text}, but also fits "
+            f"{what_to_check(e.held_core)} changed as far as it physically can: an alteration and "
+            "that change cannot be told apart; weigh the bat, give retest.json (weight, "
             "accelerometer mass, temperature) and re-test after a week at the "
             "baseline's conditions"]
 
 
 def _unexplained(e: Evidence) -> list[str]:
-    return [f"the tests differ locally beyond noise (F = {e.F:.1f}, {e.finding_text}), but "
-            "not as any alteration or legal change does: look the bat over (cracks, "
+    return [f"the tests differ locally beyond noise ({e.finding_text}; {chance(e.p_value)}), "
+            "but not as any alteration or legal change does: look the bat over (cracks, "
             "repairs, something attached), check the accelerometer's mounting and re-test"]
 
 
 def _weight(e: Evidence) -> list[str]:
     return [f"the weight changed by {100 * np.expm1(e.dlnw):+.1f} %, more than moisture "
-            f"does, and the tests differ (F = {e.F:.1f}), but no alteration surely explains "
-            f"it (best: {e.finding_text}): check that the re-test is of this bat and "
+            f"does, and the tests differ ({chance(e.p_value)}), but no alteration surely "
+            f"explains it (best: {e.finding_text}): check that the re-test is of this bat and "
             "re-weigh it"]
 
 
 def _small(e: Evidence) -> list[str]:
-    return [f"the tests differ beyond noise (F = {e.F:.1f}) but only as {e.finding_text} "
+    return [f"the tests differ beyond noise ({chance(e.p_value)}) but only as {e.finding_text} "
             "would, too small to be surely an alteration of that kind" f"{e.weight_note}"]
 
 
 def _drift_beyond_bounds(e: Evidence) -> list[str]:
-    return [f"the drift between the tests is beyond physical bounds "
-            f"({', '.join(e.held_null)} at its bound): re-test at the baseline's "
-            "conditions (same accelerometer, temperature, after the wood has settled)"]
+    return [f"the re-test differs from the baseline beyond physical bounds of what "
+            f"moisture, temperature and the set-up do: check {what_to_check(e.held_null)}, "
+            "then re-test at the baseline's conditions (same accelerometer, temperature, "
+            "after the wood has settled)"]
 
 
 def _drift(e: Evidence) -> list[str]:
     grip = "" if e.grip is None else (
         f"; {describe(e.grip)}: a grip substance, legal under Rule 3.02(c)")
     return [f"the change between the tests is what moisture, temperature and the "
-            f"accelerometer make (F = {e.F:.2f}, p = {e.p_value:.2f}){e.weight_note}{grip}"]
+            f"accelerometer make ({chance(e.p_value)}){e.weight_note}{grip}"]
 
 
 @dataclass(frozen=True)

@@ -100,7 +100,7 @@ def suggest_points(
         if n_points - row.size >= MIN_FREE_POINTS:
             break
     else:
-        raise ValueError(f"--points {n_points}: at least {row.size + MIN_FREE_POINTS} points "
+        raise ValueError(f"--n-points {n_points}: at least {row.size + MIN_FREE_POINTS} points "
                          "are needed to cover the barrel")
     cand = np.round(np.arange(END_MARGIN_IN, row[0] - FREE_GRID_IN + 1e-9, FREE_GRID_IN), 2)
     all_in = np.concatenate([row, cand])

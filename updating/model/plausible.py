@@ -2,15 +2,19 @@
 
 Each check returns None or a one-line message naming the file and the key. A value off by a
 common unit factor gets its likely cause, e.g. ``weight_lb 873.6 looks like grams: 1.926 lb?``.
+After the baseline's fit and calibration, ``check_baseline`` says in a few lines why it cannot
+be this bat's (another bat's, or one of the same length but heavier: ``check_mass_line``).
 Handbook values: Wood Handbook (FPL-GTR-282, 2021), table 5-3a, 12 % moisture; weight density
 = SG * 0.0361 lbf/in^3.
 """
 
 from __future__ import annotations
 
+import re
+
 import numpy as np
 
-from updating.model.units import IN_TO_M
+from updating.model.units import IN_TO_M, LB_TO_KG
 
 LENGTH_IN = (24.0, 42.0)
 DIAMETER_IN = (0.5, 2.75)
@@ -155,3 +159,139 @@ def check_points(points_m: np.ndarray, x_m: np.ndarray, tol_m: float, label: str
         return (f"{label}: points_in has {points_m.min() / IN_TO_M:.4g} in, before the "
                 "knob end")
     return None
+
+
+MAX_BASELINE_RMS_PCT = 2.0
+"""Largest RMS frequency miss of a bat's own calibrated baseline: the simulated fleet's are
+under 0.3 %, another bat's (profile unlike this one) several %."""
+_AT_LIMIT = re.compile(r"parameter (\w+) = (\S+) is at its (upper|lower) bound")
+_LAB_NAMES = {"E": "the modulus (Pa)", "rho": "the density (kg/m^3)", "e_over_g": "E/G",
+              "sensor_g": "the accelerometer's mass (g)",
+              "bungee_kn_per_m": "the bungees' stiffness (kN/m)",
+              "g_ratio": "the two grain planes' stiffness ratio", "theta": "the grain angle"}
+SENSOR_MAX_KG = 0.015
+"""Heaviest accelerometer (with its cable) a lab puts on a bat, kg."""
+MASS_LINE_REL = 0.05
+"""Allowed miss of the driving-point mass line beyond the accelerometer's range: calibration
+and wood density not uniform (the simulated fleet's baselines: within -1.6 % to +2.8 %)."""
+
+
+def rigid_flexibility(x_m: np.ndarray, diameter_m: np.ndarray, weight_kg: float,
+                      x_drive_m: float, sensor_kg: float = 0.0) -> float:
+    """Return the rigid-body flexibility of a free bat at its driving point, 1/kg.
+
+    The mass line's value there, a(x_d) = 1/M + (x_d - x_c)^2 / I, for the profile's solid
+    of revolution at uniform density weighing ``weight_kg``, with an accelerometer of
+    ``sensor_kg`` at the driving point (Ewins, Modal Testing, 2000, sec. 4.3: the lower
+    residual of a free body's driving-point accelerance).
+
+    Parameters
+    ----------
+    x_m, diameter_m : ndarray
+        The profile's stations from the knob end and the diameters there, m.
+    weight_kg : float
+        The bat's mass, kg.
+    x_drive_m : float
+        The driving point (accelerometer) from the knob end, m.
+    sensor_kg : float
+        The accelerometer's mass, kg.
+
+    Returns
+    -------
+    float
+        a(x_d), 1/kg.
+    """
+    x = np.linspace(x_m[0], x_m[-1], 2001)
+    area = np.pi / 4 * np.interp(x, x_m, diameter_m) ** 2
+    dm = weight_kg * area / area.sum()
+    mass = weight_kg + sensor_kg
+    x_c = (dm @ x + sensor_kg * x_drive_m) / mass
+    inertia = dm @ (x - x_c) ** 2 + sensor_kg * (x_drive_m - x_c) ** 2
+    return 1.0 / mass + (x_drive_m - x_c) ** 2 / inertia
+
+
+def check_mass_line(a_drive_per_kg: float, x_m: np.ndarray, diameter_m: np.ndarray,
+                    weight_kg: float, x_drive_m: float) -> str | None:
+    """Check a test's driving-point mass line against the bat's profile and scale weight.
+
+    A bat of the same length but heavier (or lighter) gives a mass line smaller (larger) in
+    proportion: the accelerometer (0 to ``SENSOR_MAX_KG``) and a calibration error of
+    ``MASS_LINE_REL`` are allowed.
+
+    Parameters
+    ----------
+    a_drive_per_kg : float
+        The measured mass line at the driving point, 1/kg.
+    x_m, diameter_m : ndarray
+        The profile's stations and diameters, m.
+    weight_kg : float
+        meta.json's weight, kg.
+    x_drive_m : float
+        The driving point from the knob end, m.
+
+    Returns
+    -------
+    str or None
+        One line (the bat's weight the mass line implies), None when plausible.
+    """
+    hi = rigid_flexibility(x_m, diameter_m, weight_kg, x_drive_m) * (1 + MASS_LINE_REL)
+    lo = rigid_flexibility(x_m, diameter_m, weight_kg, x_drive_m, SENSOR_MAX_KG) * (
+        1 - MASS_LINE_REL)
+    if lo <= a_drive_per_kg <= hi:
+        return None
+    implied_lb = weight_kg * rigid_flexibility(x_m, diameter_m, weight_kg, x_drive_m) \
+        / a_drive_per_kg / LB_TO_KG
+    return (f"its mass line ({a_drive_per_kg:.4g} 1/kg at the driving point, {lo:.4g}-"
+            f"{hi:.4g} expected) says the bat weighs about {implied_lb:.3g} lb, not "
+            f"meta.json's weight_lb {weight_kg / LB_TO_KG:.4g}")
+
+
+def check_baseline(e_psi: float, species: str, rms_pct: float, warnings, label: str,
+                   serial: str, mass_line: str | None = None) -> str | None:
+    """Check that a calibrated baseline can be the bat that profile.csv and meta.json describe.
+
+    Another bat's baseline shows as a calibrated modulus outside the species' range
+    (``handbook_range``), a model of this profile that misses the frequencies by more than
+    ``MAX_BASELINE_RMS_PCT``, a fitted parameter held at its bound, or a driving-point mass
+    line that the bat at its scale weight cannot give (``check_mass_line``).
+
+    Parameters
+    ----------
+    e_psi : float
+        The calibrated modulus, psi.
+    species : str
+        meta.json's species.
+    rms_pct : float
+        RMS frequency error of the calibrated model, %.
+    warnings : iterable of str
+        The calibration's warnings (``updating.diagnose.run.Diagnosis.warnings``).
+    label : str
+        The baseline file, for the message.
+    serial : str
+        The bat's serial, for the message.
+    mass_line : str or None
+        ``check_mass_line``'s message.
+
+    Returns
+    -------
+    str or None
+        A message of a few lines (what is wrong, what to check), None when plausible.
+    """
+    (e_lo, e_hi), _ = handbook_range(species)
+    found = [f"the calibration could match it only with {_LAB_NAMES.get(m[1], m[1])} at its "
+             f"{m[3]} limit ({m[2]})" for m in map(_AT_LIMIT.search, warnings) if m]
+    if mass_line:
+        found.insert(0, mass_line)
+    if not e_lo <= e_psi <= e_hi:
+        found.insert(0, f"its calibrated modulus {e_psi:,.0f} psi is outside "
+                        f"{e_lo:,.0f}-{e_hi:,.0f} psi for {species}")
+    if rms_pct > MAX_BASELINE_RMS_PCT:
+        found.insert(0, f"the model of this profile misses its frequencies by {rms_pct:.2g} % "
+                        f"RMS (a bat's own baseline: under {MAX_BASELINE_RMS_PCT:g} %)")
+    if not found:
+        return None
+    return "\n".join([f"{label}: does not look like the baseline of bat {serial} as "
+                      "profile.csv and meta.json describe it:", *(f"  {f}" for f in found),
+                      f"  check: that {label} is bat {serial}'s test, meta.json's weight_lb "
+                      "and species, profile.csv, and the FRFs' calibration (sensitivity, "
+                      "units); nothing stored"])

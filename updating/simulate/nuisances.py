@@ -13,7 +13,7 @@ re-test and a JSON-able record of what it drew. Magnitudes (docs/method.md, "Rea
 | cup | barrel end cupped 0.25-1 in deep, 1.0-1.6 in across (both tests) |
 | noise | FRF noise 1-2 % (else 0.5 %) |
 | points | 8-20 evenly spaced impact points (else every 2 in) |
-| model_points | the 11-20 points `batlab model --points` suggests for the lab's profile |
+| model_points | the 11-20 points `batlab model --n-points` suggests for the lab's profile |
 | band | 0-2000 Hz for both tests on half the bats (else 0-3200 Hz) |
 | accelerometer | replaced by one of 2-6 g on half the bats, else re-mounted up to 0.1 in off |
 | bungees | re-hung: each bungee's stiffness x 0.7-1.4 |
@@ -115,7 +115,7 @@ def draw_points(rng: np.random.Generator, length_in: float) -> np.ndarray:
 
 
 def draw_model_points(rng: np.random.Generator, profile, material) -> np.ndarray:
-    """Draw the layout `batlab model --points N` suggests (N 11-20), in.
+    """Draw the layout `batlab model --n-points N` suggests (N 11-20), in.
 
     For the lab's profile and the species' handbook wood (Timoshenko, E/G 14).
     """
