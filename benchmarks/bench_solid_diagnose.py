@@ -130,6 +130,10 @@ def report(label: str, out: dict, seconds: float, truth: OrthotropicWood) -> dic
     print(f"  RMS nominal {rms['nominal']:.3f} % -> calibrated {rms['extended']:.3f} % (drop "
           f"{rms['nominal'] - rms['extended']:.3f} pp); named gains sum to {gains:.3f} pp, "
           f"the whole path to {path:.3f} pp")
+    est = out.get("sensor_mass_estimate") or {}
+    parts = [f"{k} {v['mass_g']:.2f} +- {v['std_g']:.2f} g" for k, v in est.items() if v]
+    if parts:
+        print("  accelerometer: " + ", ".join(parts))
     for c in out["causes"]:
         print(f"  cause {c['name']:<18} gain {c['gain_pct']:.3f} pp  {c['value']}")
     for c in out["not_named"]:
@@ -140,7 +144,9 @@ def report(label: str, out: dict, seconds: float, truth: OrthotropicWood) -> dic
     sys.stdout.flush()
     return {"E %": e_err, "E/G 1 %": 100 * (eg1 / 11 - 1), "E/G 2 %": 100 * (eg2 / 15 - 1),
             "angle": cal.get("tap_angle_deg") or float("nan"),
-            "sensor g": cal["sensor_mass_g"] - 1e3 * SENSOR_KG, "RMS nom": rms["nominal"],
+            "sensor g": cal["sensor_mass_g"] - 1e3 * SENSOR_KG,
+            "ML+shift g": ((est.get("combined") or {}).get("mass_g", float("nan"))
+                           - 1e3 * SENSOR_KG), "RMS nom": rms["nominal"],
             "RMS cal": rms["extended"], "named sum": gains,
             "drop": rms["nominal"] - rms["extended"], "s": seconds}
 

@@ -54,6 +54,7 @@ from updating.diagnose.plane_pairs import (
     SEEN_ONCE,
     plane_codes,
 )
+from updating.diagnose.sensor import SensorMass, estimate_sensor_mass
 from updating.model.lab_input import BatMeta
 from updating.model.profile import Profile
 from updating.model.reference import BatReference
@@ -128,6 +129,9 @@ class Diagnosis:
         Measured bending pairs with both planes' members seen.
     n_in_one_peak : int
         Measured modes holding both planes' members in one peak (compared with their mix).
+    sensor : SensorMass | None
+        The accelerometer's mass from the mass line and the mode shifts
+        (``updating.diagnose.sensor``).
     """
 
     measured_hz: np.ndarray
@@ -143,6 +147,7 @@ class Diagnosis:
     warnings: tuple[str, ...] = ()
     n_split: int = 0
     n_in_one_peak: int = 0
+    sensor: SensorMass | None = None
 
     @property
     def causes(self) -> tuple[Step, ...]:
@@ -222,6 +227,7 @@ class Diagnosis:
             "unpaired_hz": [float(f) for f in self.unpaired_hz],
             "warnings": list(self.warnings),
             "reference": ref.to_dict(),
+            **({"sensor_mass_estimate": self.sensor.to_json_dict()} if self.sensor else {}),
         }
 
 
@@ -627,4 +633,5 @@ def diagnose(
     return Diagnosis(obs.freq_hz, meas_idx, obs.model_index, nominal, final,
                      tuple(path + rejected), unpaired, min_gain_pct, reference,
                      fine_element_m, tuple(warnings), obs.n_split,
-                     int(np.sum(obs.codes == BOTH_IN_ONE)))
+                     int(np.sum(obs.codes == BOTH_IN_ONE)),
+                     estimate_sensor_mass(setup, obs, final))
