@@ -126,3 +126,29 @@ def test_pair_in_one_peak_compared_with_the_planes_mix():
         pytest.approx([11.0, 15.0], rel=0.03)
     assert out["rms_error_pct"]["extended"] < 0.05
     assert any("in one peak" in w for w in out["warnings"])
+
+
+@pytest.mark.parametrize("seed", range(4))
+@pytest.mark.parametrize("theta_deg", [30.0, 45.0, 60.0])
+def test_plane_codes_consistent_and_one_peak_told_from_a_lone_member(seed, theta_deg):
+    """Four split pairs (plane 1 the higher member, amplitudes cos / sin theta of the model's,
+    1 % noise) and mode 1 seen once: every pair gets the same frequency order; a peak holding
+    both planes (full amplitude) is told from one plane's member (the larger, max(cos, sin))."""
+    from updating.diagnose.plane_pairs import BOTH_IN_ONE, PLANE_1, PLANE_2, SEEN_ONCE, plane_codes
+
+    rng = np.random.default_rng(seed)
+    th = np.radians(theta_deg)
+    model_norm = np.array([6.0, 4.8, 4.5, 4.4, 4.3])
+    f = np.array([140.0, 500.0, 506.0, 980.0, 1000.0, 1510.0, 1557.0, 2114.0, 2206.0])
+    r = np.array([0, 1, 1, 2, 2, 3, 3, 4, 4])
+    amp = np.r_[1.0, np.tile([np.sin(th), np.cos(th)], 4)]  # (low: plane 2, high: plane 1)
+    for first, expect in ((1.0, BOTH_IN_ONE), (max(np.cos(th), np.sin(th)), SEEN_ONCE)):
+        amp[0] = first
+        norm = 0.97 * model_norm[r] * amp * (1 + 0.01 * rng.standard_normal(r.size))
+        code = plane_codes(f, norm, r, model_norm)
+        assert code[0] == expect
+        plane1_high = np.all(code[2::2] == PLANE_1) and np.all(code[1::2] == PLANE_2)
+        plane1_low = np.all(code[1::2] == PLANE_1) and np.all(code[2::2] == PLANE_2)
+        # plane 1 the larger over all pairs; at 45 degrees either order, but one for all
+        allowed = {30.0: plane1_high, 45.0: plane1_high or plane1_low, 60.0: plane1_low}
+        assert allowed[theta_deg]

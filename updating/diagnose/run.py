@@ -54,7 +54,7 @@ from updating.diagnose.plane_pairs import (
     SEEN_ONCE,
     plane_codes,
 )
-from updating.diagnose.sensor import SensorMass, estimate_sensor_mass
+from updating.diagnose.sensor import SensorMass, estimate_sensor_mass, sensor_note
 from updating.model.lab_input import BatMeta
 from updating.model.profile import Profile
 from updating.model.reference import BatReference
@@ -627,11 +627,13 @@ def diagnose(
     refuse = refuse_causes(warnings)
     warnings += limits(obs, final, setup.solid_corrections is not None, setup, ml_set_aside)
     warnings += data_sheet_check(setup, obs, final)
+    sensor = estimate_sensor_mass(setup, obs, final)
+    if np.isfinite(sensor.combined.std_kg):
+        warnings.append(sensor_note(sensor, final))
     if refuse:  # 6. no cause is named from a pairing that cannot be trusted
         warnings.append("causes not named: the pairing or the calibration cannot be trusted")
         path = [replace(s, role="calibration") if s.named else s for s in path]
     return Diagnosis(obs.freq_hz, meas_idx, obs.model_index, nominal, final,
                      tuple(path + rejected), unpaired, min_gain_pct, reference,
                      fine_element_m, tuple(warnings), obs.n_split,
-                     int(np.sum(obs.codes == BOTH_IN_ONE)),
-                     estimate_sensor_mass(setup, obs, final))
+                     int(np.sum(obs.codes == BOTH_IN_ONE)), sensor)

@@ -86,3 +86,27 @@ def estimate_sensor_mass(setup: Setup, obs: Observations, final: DiagnosisFit) -
     shifts = sensor_mass_from_shifts(rel, 1e3 * sol.dlnf[0, idx], sigma)
     combined = combine_masses([e for e in (ml, shifts) if e is not None])
     return SensorMass(ml, shifts, combined)
+
+
+def sensor_note(estimate: SensorMass, final: DiagnosisFit) -> str:
+    """Say what the mass line and the mode shifts give together, against the calibrated model.
+
+    They disagree when the calibrated model's accelerometer lies more than 2.5 of the
+    combined estimate's standard uncertainties from it (the fitted frequencies' model error,
+    taken as noise by the fit, pulls it).
+    """
+    def text(e: MassEstimate) -> str:
+        return f"{1e3 * e.mass_kg:.2f} +- {1e3 * e.std_kg:.2f} g"
+
+    parts = [f"mass line {text(estimate.mass_line)}"] if estimate.mass_line else []
+    if np.isfinite(estimate.shifts.std_kg):
+        parts.append(f"mode shifts {text(estimate.shifts)}")
+    fitted = 1e3 * final.state.sensor_mass_kg if "sensor_mass" in final.active else 0.0
+    c = estimate.combined
+    agree = abs(fitted - 1e3 * c.mass_kg) <= 2.5 * 1e3 * c.std_kg
+    verdict = ("agrees" if agree else
+               "disagrees: the model's frequency error, taken as noise by the fit, pulls it; "
+               "trust the combined value")
+    return (f"accelerometer from the mass line and the mode shifts together: {text(c)} "
+            f"({', '.join(parts)}); the calibrated model's {fitted:.2f} g {verdict}")
+
