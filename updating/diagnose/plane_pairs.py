@@ -1,12 +1,11 @@
 """Which bending plane each measured mode belongs to, and which peaks hold both planes.
 
 Wood's two bending planes differ in shear stiffness, so every bending pair splits the same
-way: the stiffer plane's member is the higher one in every pair. A split pair's members are
-therefore assigned by frequency, the same way in all pairs: plane 1 is the higher member when
-the higher members are the larger ones over all pairs (the product of the amplitude ratios
-|y_high| / |y_low| is at least 1), else the lower. Tapped at 45 degrees, where the amplitudes
-tie, the assignment stays consistent (by amplitude alone, noise would swap the planes from one
-pair to the next).
+way: the stiffer plane's member is the higher one in every pair. Plane 1 is the stiffer plane
+(for wood the radial, L-R plane): the higher member of every split pair, whatever the
+amplitudes, and the tap angle theta is measured from it (above 45 degrees when the tap is
+nearer plane 2). By amplitude (the larger member plane 1's) noise swapped the planes from
+one pair to the next when tapped at 45 degrees, where the amplitudes tie.
 
 A mode seen once is either one plane's member (the other was not found) or a peak holding
 both (a split below its half-power width, fitted as one mode). Their amplitudes tell them
@@ -52,9 +51,7 @@ def plane_codes(
     pairs = [p[np.argsort(freq_hz[p])] for p in pairs if p.size == 2]  # (low, high)
     if not pairs:
         return code
-    low, high = np.array(pairs).T
-    high_first = np.sum(np.log(norm[high] / norm[low])) >= 0
-    one, two = (high, low) if high_first else (low, high)
+    two, one = np.array(pairs).T
     code[one], code[two] = PLANE_1, PLANE_2
     kappa = np.median(np.hypot(norm[one], norm[two]) / model_norm[model_index[one]])
     theta = np.arctan(np.median(norm[two] / norm[one]))
