@@ -5,7 +5,8 @@ in data_samples: the handbook wood of meta.json with E_L 5 % above the handbook'
 E/G_LR = 11, E/G_LT = 15, planar grain, a 3 g accelerometer on the axis at the barrel-end
 driving point (the last test point, 1 in from the end). Its roving-hammer FRFs
 (updating.simulate.solid_test: bending modes of both planes tapped at 30 degrees from the
-radial plane, the rigid body on two 150 N/m bungees, 0.5-1.4 % damping rising with
+radial plane by default, --theta for others: at 45 degrees the first pair is one peak;
+0 is a single-plane test; the rigid body on two 150 N/m bungees, 0.5-1.4 % damping rising with
 frequency, 0.5 % relative and 0.1 % floor noise, 0-3200 Hz at 0.5 Hz) are written to a UFF
 file with meta.json (the scale weight: the solid without its accelerometer) and the profile
 the lab would measure on the solid bat (a hexahedral mesh of revolution turns each step into
@@ -22,7 +23,7 @@ states), the RMS error before and after, the named causes and their gains agains
 drop, the time. The 3D truth's modes are cached (an .npz keyed by every input, under
 $BATLAB_CACHE or ~/.cache/batlab): the first run solves them (about a minute per bat).
 
-    OPENBLAS_NUM_THREADS=1 python benchmarks/bench_solid_diagnose.py [--seeds N ...]
+    OPENBLAS_NUM_THREADS=1 python benchmarks/bench_solid_diagnose.py [--seeds N] [--theta D]
 """
 
 from __future__ import annotations
@@ -129,6 +130,10 @@ def report(label: str, out: dict, seconds: float, truth: OrthotropicWood) -> dic
     print(f"  RMS nominal {rms['nominal']:.3f} % -> calibrated {rms['extended']:.3f} % (drop "
           f"{rms['nominal'] - rms['extended']:.3f} pp); named gains sum to {gains:.3f} pp, "
           f"the whole path to {path:.3f} pp")
+    est = out.get("sensor_mass_estimate") or {}
+    parts = [f"{k} {v['mass_g']:.2f} +- {v['std_g']:.2f} g" for k, v in est.items() if v]
+    if parts:
+        print("  accelerometer: " + ", ".join(parts))
     for c in out["causes"]:
         print(f"  cause {c['name']:<18} gain {c['gain_pct']:.3f} pp  {c['value']}")
     for c in out["not_named"]:
@@ -139,12 +144,15 @@ def report(label: str, out: dict, seconds: float, truth: OrthotropicWood) -> dic
     sys.stdout.flush()
     return {"E %": e_err, "E/G 1 %": 100 * (eg1 / 11 - 1), "E/G 2 %": 100 * (eg2 / 15 - 1),
             "angle": cal.get("tap_angle_deg") or float("nan"),
-            "sensor g": cal["sensor_mass_g"] - 1e3 * SENSOR_KG, "RMS nom": rms["nominal"],
+            "sensor g": cal["sensor_mass_g"] - 1e3 * SENSOR_KG,
+            "ML+shift g": ((est.get("combined") or {}).get("mass_g", float("nan"))
+                           - 1e3 * SENSOR_KG), "RMS nom": rms["nominal"],
             "RMS cal": rms["extended"], "named sum": gains,
             "drop": rms["nominal"] - rms["extended"], "s": seconds}
 
 
-def run(bat: Path, seed: int, exact_steps: bool, with_sheet: bool = True) -> list:
+def run(bat: Path, seed: int, exact_steps: bool, with_sheet: bool = True,
+        theta_deg: float = THETA_DEG) -> list:
     given = read_profile_csv(bat / "profile.csv")
     profile = solid_profile(given)
     meta_raw = json.loads((bat / "meta.json").read_text())
@@ -154,7 +162,7 @@ def run(bat: Path, seed: int, exact_steps: bool, with_sheet: bool = True) -> lis
     points = np.asarray(meta.points_m)
     t0 = time.perf_counter()
     modes = cached_solid_modes(profile, truth, float(points[-1]))
-    test = tap_test_frf(modes, points, points.size - 1, THETA_DEG, seed=seed)
+    test = tap_test_frf(modes, points, points.size - 1, theta_deg, seed=seed)
     print(f"3D truth: {modes.n_dof} DOF, {np.sum(np.char.startswith(modes.kind, 'bend'))} "
           f"bending modes to {modes.freq_hz.max():.0f} Hz, mass {modes.rigid[0]:.4f} kg "
           f"with the accelerometer; {time.perf_counter() - t0:.0f} s (cache: {cache_dir()})")
@@ -175,7 +183,8 @@ def run(bat: Path, seed: int, exact_steps: bool, with_sheet: bool = True) -> lis
                 raw["accelerometer_mass_g"] = sheet
             (folder / "meta.json").write_text(json.dumps(raw))
             out, seconds = diagnose_cli(folder, solid)
-            rows.append((f"{bat.name} seed {seed}: {label}", report(label, out, seconds, truth)))
+            rows.append((f"{bat.name} {theta_deg:g} deg seed {seed}: {label}",
+                         report(label, out, seconds, truth)))
     return rows
 
 
@@ -185,14 +194,19 @@ def main() -> None:
     ap.add_argument("--no-sheet", action="store_true",
                     help="skip the run with the data-sheet accelerometer mass")
     ap.add_argument("--bats", nargs="*", default=["smooth_bat", "paper_bat"])
+    ap.add_argument("--theta", type=float, nargs="*", default=[THETA_DEG],
+                    help="tap angles from the radial plane, deg (0: one plane)")
     ap.add_argument("--exact-steps", action="store_true",
                     help="give diagnose the paper's exact steps, not the solid's tapers")
     args = ap.parse_args()
     rows = []
     for name in args.bats:
         for seed in args.seeds:
-            print(f"\n=== {name} (seed {seed}{', exact steps' if args.exact_steps else ''})")
-            rows += run(ROOT / "data_samples" / name, seed, args.exact_steps, not args.no_sheet)
+            for theta in args.theta:
+                print(f"\n=== {name} (seed {seed}, tapped at {theta:g} deg"
+                      f"{', exact steps' if args.exact_steps else ''})")
+                rows += run(ROOT / "data_samples" / name, seed, args.exact_steps,
+                            not args.no_sheet, theta)
     print("\nsummary (errors against the truth; sensor in g, the rest in %)")
     keys = list(rows[0][1])
     print(f"{'run':<62}" + "".join(f"{k:>10}" for k in keys))

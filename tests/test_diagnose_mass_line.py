@@ -79,6 +79,36 @@ def test_barrel_end_accelerometer_recovered_from_the_frf_test(sensor_g, e_scale,
     assert ref.E_pa / bat.material.E_pa - 1 == pytest.approx(0.0, abs=0.005)
     assert result.extended.std("sensor_g") < 0.5
     assert any(w.startswith("mass line at the driving point") for w in result.warnings)
+    # the mass line and the mode shifts, combined: within their stated uncertainty
+    est = result.sensor
+    for e in (est.mass_line, est.combined):
+        assert abs(1e3 * e.mass_kg - sensor_g) <= max(3 * 1e3 * e.std_kg, 0.05)
+    assert 1e3 * est.combined.std_kg < 0.5 and est.shifts.std_kg > est.combined.std_kg
+
+
+@settings(max_examples=5, deadline=None, derandomize=True)
+@given(sensor_g=st.floats(1.0, 8.0), e_over_g=st.floats(9.0, 16.0))
+def test_sensor_mass_from_exact_mass_line_and_mode_shifts(sensor_g, e_over_g):
+    """A hidden accelerometer at the barrel-end driving point: its mass comes back from the
+    exact mass line (1 / a_d - 1 / a_0, exact) and from the exact modes' shifts against the
+    bat without it, with a modulus error on top (d f / f = -1/2 m phi(x_s)^2, to first order
+    in m: within a few %)."""
+    from ema.shapes.mass_line import sensor_mass_from_mass_line, sensor_mass_from_shifts
+    from updating.diagnose.model import modal_sensitivities
+
+    setup = Setup(PROFILE, HANDBOOK, None, POINTS, POINTS[-1])
+    active = frozenset({"shear_deformation", "sensor_mass"})
+    state = State(HANDBOOK.E_pa, HANDBOOK.rho_kg_m3, e_over_g, 1e-3 * sensor_g)
+    bare = State(HANDBOOK.E_pa, HANDBOOK.rho_kg_m3, e_over_g, 0.0)
+    g = rigid_flexibility(setup, active, state)[0]
+    a0 = rigid_flexibility(setup, active, bare)[0][-1]
+    ml = sensor_mass_from_mass_line(g, POINTS, POINTS[-1], 1e-4, a0)
+    assert 1e3 * ml.mass_kg == pytest.approx(sensor_g, rel=1e-6)
+    with_sensor = modal_sensitivities(setup, active, state, 6)
+    without = modal_sensitivities(setup, active, bare, 6, ("sensor_g",))
+    rel = np.log(1.004 * with_sensor.elastic_hz / without.elastic_hz)  # E 0.8 % high
+    shifts = sensor_mass_from_shifts(rel, 1e3 * without.dlnf[0], 1e-5)
+    assert 1e3 * shifts.mass_kg == pytest.approx(sensor_g, rel=0.05)
 
 
 @pytest.mark.parametrize("sheet_g, agree", [(4.0, True), (7.0, False)])

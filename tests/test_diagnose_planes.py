@@ -100,3 +100,53 @@ def test_solid_pass_does_not_claim_beam_theory_for_beam_data():
     assert corr.shape[0] == 2 and np.all(np.abs(corr) < 0.05)
     assert "beam_theory" not in [c.name for c in result.causes]
     assert result.reference.E_pa == pytest.approx(WOOD.E_pa, rel=0.01)
+
+
+def test_pair_in_one_peak_compared_with_the_planes_mix():
+    """A roving-hammer FRF test tapped at 45 degrees (virtual rig, two planes, E/G 11 and 15):
+    the first pair, split less than its peak's width, is fitted as one mode; diagnose
+    compares it with the two planes' mix, assigns the split pairs' members to their planes
+    the same way in every pair (the amplitudes tie), names `two_planes` and recovers E and
+    both E/G."""
+    from ema.modal_fit import fit_test
+    from updating.correlate.measured import from_fit
+    from updating.simulate.virtual_bat import simulate_test
+
+    bat = VirtualBat(PROFILE, WOOD, POINTS, sensor_mass_kg=3e-3, bungee_k_n_per_m=150.0,
+                     e_over_g_t=15.0, theta_deg=45.0)
+    fit = fit_test(simulate_test(bat, seed=11))
+    measured = from_fit(fit, POINTS[bat.sensor_point()])
+    result = diagnose(PROFILE, meta_for(WOOD), measured, fit.suspension_freq_hz)
+    out = result.to_json_dict()
+    two = next(c for c in out["causes"] if c["name"] == "two_planes")
+    assert two["value"]["pairs_in_one_peak"] >= 1 and two["value"]["pairs_split"] >= 3
+    assert two["rms_before_pct"] - two["rms_after_pct"] > 0.3
+    assert result.reference.E_pa == pytest.approx(WOOD.E_pa, rel=0.01)
+    assert sorted([out["calibrated"]["E_over_G"], out["calibrated"]["E_over_G_plane2"]]) == \
+        pytest.approx([11.0, 15.0], rel=0.03)
+    assert out["rms_error_pct"]["extended"] < 0.05
+    assert any("in one peak" in w for w in out["warnings"])
+
+
+@pytest.mark.parametrize("seed", range(4))
+@pytest.mark.parametrize("theta_deg", [30.0, 45.0, 60.0])
+def test_plane_codes_consistent_and_one_peak_told_from_a_lone_member(seed, theta_deg):
+    """Four split pairs (plane 1 the higher member, amplitudes cos / sin theta of the model's,
+    1 % noise) and mode 1 seen once: plane 1 is the higher member of every pair, at 60 degrees
+    too (its members the smaller); a peak holding both planes (full amplitude) is told from
+    one plane's member (the larger, max(cos, sin))."""
+    from updating.diagnose.plane_pairs import BOTH_IN_ONE, PLANE_1, PLANE_2, SEEN_ONCE, plane_codes
+
+    rng = np.random.default_rng(seed)
+    th = np.radians(theta_deg)
+    model_norm = np.array([6.0, 4.8, 4.5, 4.4, 4.3])
+    f = np.array([140.0, 500.0, 506.0, 980.0, 1000.0, 1510.0, 1557.0, 2114.0, 2206.0])
+    r = np.array([0, 1, 1, 2, 2, 3, 3, 4, 4])
+    amp = np.r_[1.0, np.tile([np.sin(th), np.cos(th)], 4)]  # (low: plane 2, high: plane 1)
+    for first, expect in ((1.0, BOTH_IN_ONE), (max(np.cos(th), np.sin(th)), SEEN_ONCE)):
+        amp[0] = first
+        norm = 0.97 * model_norm[r] * amp * (1 + 0.01 * rng.standard_normal(r.size))
+        code = plane_codes(f, norm, r, model_norm)
+        assert code[0] == expect
+        # plane 1 the stiffer (higher) member in every pair, whatever the amplitudes
+        assert np.all(code[2::2] == PLANE_1) and np.all(code[1::2] == PLANE_2)

@@ -184,3 +184,106 @@ def low_band_mass_line(
         if second_pass is not None:
             lo, low = start, second_pass
     return MassLineEstimate(low[:, 0].copy(), (lo, hi))
+
+
+@dataclass(frozen=True)
+class MassEstimate:
+    """An estimate of a mass and its standard uncertainty, kg."""
+
+    mass_kg: float
+    std_kg: float
+
+
+def sensor_mass_from_mass_line(
+    mass_line: np.ndarray, x_m: np.ndarray, x_drive_m: float, sigma: float,
+    bare_drive: float,
+) -> MassEstimate:
+    """Estimate the accelerometer's mass from the driving point's mass line.
+
+    The mass line is a straight line in x (module docstring); its value at the driving point,
+    a_d, is the rigid-body flexibility of the bat with its accelerometer there. A point mass
+    m_s at the driving point adds m_s [1, x_d][1, x_d]^T to the rigid-body mass matrix R, so
+    (Sherman-Morrison) a_d = a_0 / (1 + m_s a_0) with a_0 that of the bare bat, and
+
+        m_s = 1 / a_d - 1 / a_0,    std(m_s) = std(a_d) / a_d^2,
+
+    std(a_d) that of the fitted line at x_d with ``sigma`` per point.
+
+    Parameters
+    ----------
+    mass_line : ndarray
+        (n,) the driving point's row of the measured mass line, 1/kg.
+    x_m : ndarray
+        (n,) node positions, m.
+    x_drive_m : float
+        The driving point (the accelerometer), m.
+    sigma : float
+        Standard uncertainty of one entry of the row, 1/kg.
+    bare_drive : float
+        a_0: the bare bat's mass line at the driving point (from its mass properties), 1/kg.
+
+    Returns
+    -------
+    MassEstimate
+        The accelerometer's mass, kg.
+    """
+    x = np.asarray(x_m, dtype=float)
+    design = np.column_stack([np.ones(x.size), x - x_drive_m])
+    coef, *_ = np.linalg.lstsq(design, np.asarray(mass_line, dtype=float), rcond=None)
+    a_d = float(coef[0])
+    std_a = sigma * float(np.sqrt(np.linalg.inv(design.T @ design)[0, 0]))
+    return MassEstimate(1.0 / a_d - 1.0 / bare_drive, std_a / a_d**2)
+
+
+def sensor_mass_from_shifts(
+    rel_shift: np.ndarray, per_kg: np.ndarray, sigma_rel: float,
+) -> MassEstimate:
+    """Estimate the accelerometer's mass from every mode's frequency shift at its node.
+
+    A point mass m_s at x_s shifts mode r by d f_r / f_r = -1/2 m_s phi_r(x_s)^2 (phi_r
+    mass-normalised, Rayleigh), a pattern over the modes that a modulus error, the same
+    fraction for every mode, does not have. Weighted least squares of
+
+        ln(f_r / f_r^0) = c + s_r m_s,    s_r = -1/2 phi_r(x_s)^2,
+
+    over the modes, c free (the modulus), with ``sigma_rel`` per mode; the uncertainty is the
+    fit's (at least ``sigma_rel``'s, more when the modes scatter about the line more).
+
+    Parameters
+    ----------
+    rel_shift : ndarray
+        (r,) ln(f_r / f_r^0): measured frequencies against the model's without the
+        accelerometer.
+    per_kg : ndarray
+        (r,) s_r = d ln f_r / d m_s, 1/kg.
+    sigma_rel : float
+        Standard uncertainty of one relative shift.
+
+    Returns
+    -------
+    MassEstimate
+        The accelerometer's mass, kg (uncertainty infinite with fewer than three modes or
+        a shift pattern no different from a modulus's).
+    """
+    b, s = np.asarray(rel_shift, dtype=float), np.asarray(per_kg, dtype=float)
+    spread = s - s.mean()
+    ss = float(spread @ spread)
+    if b.size < 3 or ss <= 0:
+        return MassEstimate(0.0, float("inf"))
+    m = float(spread @ (b - b.mean()) / ss)
+    resid = b - b.mean() - m * spread
+    scale2 = max(sigma_rel**2, float(resid @ resid) / (b.size - 2))
+    return MassEstimate(m, float(np.sqrt(scale2 / ss)))
+
+
+def combine_masses(estimates: list[MassEstimate]) -> MassEstimate:
+    """Combine independent estimates weighted by their inverse variances.
+
+    m = sum(m_i / s_i^2) / sum(1 / s_i^2), std = sum(1 / s_i^2)^(-1/2).
+    """
+    w = np.array([1.0 / e.std_kg**2 if e.std_kg > 0 else np.inf for e in estimates])
+    m = np.array([e.mass_kg for e in estimates])
+    if np.any(np.isinf(w)):
+        exact = np.isinf(w)
+        return MassEstimate(float(np.mean(m[exact])), 0.0)
+    return MassEstimate(float(w @ m / w.sum()), float(1.0 / np.sqrt(w.sum())))

@@ -66,10 +66,11 @@ class Observations:
     sigma_b : float
         Their relative uncertainty.
     code : np.ndarray | None
-        (m,) 0 / 1: the larger / smaller member of a split pair (two bending planes seen), 2: a
-        mode seen once; None: all seen once.
+        (m,) 0 / 1: plane 1's / plane 2's member of a split pair (two bending planes seen), 2: a
+        mode seen once, 3: a peak holding both planes' members (compared with their mix)
+        (updating.diagnose.plane_pairs); None: all seen once.
     combined : np.ndarray | None
-        (n_points, m) for the larger member of a pair its shape scaled to carry the pair's
+        (n_points, m) for plane 1's member of a pair its shape scaled to carry the pair's
         amplitude sqrt(|y_1|^2 + |y_2|^2) (what a one-plane model predicts), else the measured
         shape; None: the shapes.
     mass_line : np.ndarray | None
@@ -117,8 +118,9 @@ def columns(
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Map measured modes to model columns.
 
-    A one-plane model predicts a pair once (the larger member, with the pair's combined
-    shape), the two-plane model each member (module docstring of updating.diagnose.model).
+    A one-plane model predicts a pair once (plane 1's member, with the pair's combined
+    shape), the two-plane model each member, and a peak holding both with the planes' mix
+    (module docstring of updating.diagnose.model).
 
     Returns
     -------
@@ -131,7 +133,7 @@ def columns(
     """
     code = obs.codes
     if sol.n_planes == 2:
-        k = sol.elastic_hz.size // 3
+        k = sol.elastic_hz.size // 4
         rows = np.arange(code.size)
         return obs.model_index + k * code, rows, obs.shapes
     rows = np.flatnonzero(code != 1)

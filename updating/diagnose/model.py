@@ -25,7 +25,8 @@ Two planes: the model's modes are the union of each plane's (same E, density, se
 bungees; E/G and E/G g_ratio); a tap and a response along the angle theta see plane 1's mode
 shapes times cos(theta) and plane 2's times sin(theta) (residue cos^2 / sin^2). Columns of
 the solution: plane 1 scaled, plane 2 scaled, plane 1 unscaled (for a mode seen once, whose
-measured shape carries the whole pair's amplitude).
+measured shape carries the whole pair's amplitude), and the planes' mix (for a pair whose
+split is below its peak's width, fitted as one mode: updating.diagnose.planes).
 
 Modal sensitivities of mass-normalised modes with the full modal basis (Fox & Kapoor 1968;
 exact for distinct eigenvalues):
@@ -46,6 +47,7 @@ from functools import cached_property
 
 import numpy as np
 
+from updating.diagnose.planes import plane_mix
 from updating.model.assembly import (
     BatModel,
     assemble,
@@ -250,7 +252,7 @@ class ModalSensitivities:
     dshapes : np.ndarray
         (p, n_points, k) d shape / d parameter at the test points.
     n_planes : int
-        2 for the two-plane model, whose columns are 3 k (module docstring).
+        2 for the two-plane model, whose columns are 4 k (module docstring).
     """
 
     elastic_hz: np.ndarray
@@ -353,7 +355,7 @@ def modal_sensitivities(
 ) -> ModalSensitivities:
     """Lowest ``n_elastic`` elastic modes of the model, with sensitivities to ``names``.
 
-    With 'two_planes' the solution has 3 k columns (module docstring); with 'beam_theory'
+    With 'two_planes' the solution has 4 k columns (module docstring); with 'beam_theory'
     the frequencies carry the solid's corrections (1 + c_r), constant in the parameters.
     """
     one = solve_plane(setup, active, state, n_elastic, names, 0)
@@ -367,15 +369,20 @@ def modal_sensitivities(
     two = solve_plane(setup, active, state, n_elastic, names, 1)
     s = effective_state(setup, active, state)
     c, sn = np.cos(s.theta_rad), np.sin(s.theta_rad)
-    shapes = np.hstack([c * one.shapes, sn * two.shapes, one.shapes])
-    dshapes = np.concatenate([c * one.dshapes, sn * two.dshapes, one.dshapes], axis=2)
-    if "theta" in names:
-        j = names.index("theta")
-        dshapes[j] = np.hstack([-sn * one.shapes, c * two.shapes, np.zeros_like(one.shapes)])
+    j = names.index("theta") if "theta" in names else None
+    drive = int(np.argmin(np.abs(setup.points_m - setup.sensor_x_m)))
+    f1, f2 = one.elastic_hz * factor[0], two.elastic_hz * factor[1]
+    mix = plane_mix((f1, f2), (one.shapes, two.shapes), (one.dlnf, two.dlnf),
+                    (one.dshapes, two.dshapes), s.theta_rad, j, drive)
+    shapes = np.hstack([c * one.shapes, sn * two.shapes, one.shapes, mix.shapes])
+    dshapes = np.concatenate([c * one.dshapes, sn * two.dshapes, one.dshapes, mix.dshapes],
+                             axis=2)
+    if j is not None:
+        dshapes[j, :, :3 * k] = np.hstack([-sn * one.shapes, c * two.shapes,
+                                           np.zeros_like(one.shapes)])
     return ModalSensitivities(
-        np.concatenate([one.elastic_hz * factor[0], two.elastic_hz * factor[1],
-                        one.elastic_hz * factor[0]]),
-        one.low_hz, shapes, np.hstack([one.dlnf, two.dlnf, one.dlnf]), one.dlnf_low, dshapes,
+        np.concatenate([f1, f2, f1, mix.freq_hz]), one.low_hz, shapes,
+        np.hstack([one.dlnf, two.dlnf, one.dlnf, mix.dlnf]), one.dlnf_low, dshapes,
         n_planes=2)
 
 

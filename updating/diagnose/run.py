@@ -47,6 +47,14 @@ from updating.diagnose.model import (
     rigid_flexibility,
 )
 from updating.diagnose.pairing_check import checked_pairing, pairing_warnings, refuse_causes
+from updating.diagnose.plane_pairs import (
+    BOTH_IN_ONE,
+    PLANE_1,
+    PLANE_2,
+    SEEN_ONCE,
+    plane_codes,
+)
+from updating.diagnose.sensor import SensorMass, estimate_sensor_mass, sensor_note
 from updating.model.lab_input import BatMeta
 from updating.model.profile import Profile
 from updating.model.reference import BatReference
@@ -119,6 +127,11 @@ class Diagnosis:
         is named) and the limits of the calibration.
     n_split : int
         Measured bending pairs with both planes' members seen.
+    n_in_one_peak : int
+        Measured modes holding both planes' members in one peak (compared with their mix).
+    sensor : SensorMass | None
+        The accelerometer's mass from the mass line and the mode shifts
+        (``updating.diagnose.sensor``).
     """
 
     measured_hz: np.ndarray
@@ -133,6 +146,8 @@ class Diagnosis:
     fine_element_m: float = FINE_ELEMENT_IN * IN_TO_M
     warnings: tuple[str, ...] = ()
     n_split: int = 0
+    n_in_one_peak: int = 0
+    sensor: SensorMass | None = None
 
     @property
     def causes(self) -> tuple[Step, ...]:
@@ -172,7 +187,8 @@ class Diagnosis:
         if name == "two_planes":
             eg2 = ref.e_over_g_plane2
             return ({"E_over_G_plane2": eg2, "E_over_G": ref.e_over_g,
-                     "tap_angle_deg": ref.tap_angle_deg, "pairs_split": self.n_split},
+                     "tap_angle_deg": ref.tap_angle_deg, "pairs_split": self.n_split,
+                     "pairs_in_one_peak": self.n_in_one_peak},
                     {"E_over_G_plane2": eg2 * rel_std("ln_g_ratio"),
                      "tap_angle_deg": float(np.degrees(rel_std("theta")))})
         if name == "beam_theory":
@@ -211,6 +227,7 @@ class Diagnosis:
             "unpaired_hz": [float(f) for f in self.unpaired_hz],
             "warnings": list(self.warnings),
             "reference": ref.to_dict(),
+            **({"sensor_mass_estimate": self.sensor.to_json_dict()} if self.sensor else {}),
         }
 
 
@@ -223,7 +240,9 @@ def observations(
     One-to-one pairing by MAC first (or in frequency order when the shapes are unreliable:
     ``pairing_check``); with a MAC pairing, a measured mode left over whose shape matches an
     already paired model mode (MAC >= min_mac) within ``max_split`` in frequency of its
-    partner is the other bending plane's member of that pair (a split pair).
+    partner is the other bending plane's member of that pair (a split pair). Each mode's
+    plane, and whether a mode seen once holds both planes, by
+    ``updating.diagnose.plane_pairs.plane_codes``.
 
     Returns
     -------
@@ -258,16 +277,12 @@ def observations(
     meas_idx, model_idx = meas_idx[order], model_idx[order]
     f = measured.freq_hz[meas_idx]
     y = measured.shapes[:, meas_idx]
-    code = np.full(meas_idx.size, 2)
-    combined = y.copy()
     norm = np.linalg.norm(y, axis=0)
-    for r in np.unique(model_idx):
-        both = np.flatnonzero(model_idx == r)
-        if both.size == 2:
-            big, small = both[np.argsort(-norm[both])]
-            code[big], code[small] = 0, 1
-            if norm[big] > 0:
-                combined[:, big] = y[:, big] * np.hypot(norm[big], norm[small]) / norm[big]
+    code = plane_codes(f, norm, model_idx, np.linalg.norm(nominal.shapes, axis=0))
+    combined = y.copy()
+    for one in np.flatnonzero((code == PLANE_1) & (norm > 0)):
+        two = np.flatnonzero((model_idx == model_idx[one]) & (code == PLANE_2))[0]
+        combined[:, one] = y[:, one] * np.hypot(norm[one], norm[two]) / norm[one]
     sigma_f = 5e-4
     if measured.freq_std_hz is not None and np.all(np.isfinite(measured.freq_std_hz)):
         sigma_f = max(1e-4, float(np.median(measured.freq_std_hz[meas_idx] / f)))
@@ -482,11 +497,16 @@ def limits(obs: Observations, final: DiagnosisFit, solid_tried: bool,
         out.append("each bending mode was seen once: the two bending planes are not resolved "
                    "(tapped in a grain plane, or a split below the frequency resolution); "
                    "two_planes not assessed")
-    elif np.any(code == 2):
-        hz = ", ".join(f"{f:.0f}" for f in obs.freq_hz[code == 2])
+    elif np.any(code == SEEN_ONCE):
+        hz = ", ".join(f"{f:.0f}" for f in obs.freq_hz[code == SEEN_ONCE])
         out.append(f"modes at {hz} Hz were seen once (the other bending plane's member was "
                    "not found); they are compared with the first plane's model at full "
                    "amplitude")
+    if obs.n_split and np.any(code == BOTH_IN_ONE):
+        hz = ", ".join(f"{f:.0f}" for f in obs.freq_hz[code == BOTH_IN_ONE])
+        out.append(f"modes at {hz} Hz hold both bending planes' members in one peak (split "
+                   "below its width, the full pair's amplitude): each is compared with the "
+                   "two planes' mix (updating.diagnose.planes)")
     for name, v in zip(final.names, final.x, strict=True):
         lo, hi = BOUNDS[name]
         label = PARAMETER_LABELS[name]
@@ -607,9 +627,13 @@ def diagnose(
     refuse = refuse_causes(warnings)
     warnings += limits(obs, final, setup.solid_corrections is not None, setup, ml_set_aside)
     warnings += data_sheet_check(setup, obs, final)
+    sensor = estimate_sensor_mass(setup, obs, final)
+    if np.isfinite(sensor.combined.std_kg):
+        warnings.append(sensor_note(sensor, final))
     if refuse:  # 6. no cause is named from a pairing that cannot be trusted
         warnings.append("causes not named: the pairing or the calibration cannot be trusted")
         path = [replace(s, role="calibration") if s.named else s for s in path]
     return Diagnosis(obs.freq_hz, meas_idx, obs.model_index, nominal, final,
                      tuple(path + rejected), unpaired, min_gain_pct, reference,
-                     fine_element_m, tuple(warnings), obs.n_split)
+                     fine_element_m, tuple(warnings), obs.n_split,
+                     int(np.sum(obs.codes == BOTH_IN_ONE)), sensor)

@@ -1,0 +1,112 @@
+"""The accelerometer's mass from the mass line and the mode shifts together.
+
+Two independent views of the mass at the driving point (ema.shapes.mass_line):
+
+- the driving point's mass line, against the bare bat's (the profile at the density the
+  scale weight gives, ``rigid_flexibility`` without the accelerometer): m = 1/a_d - 1/a_0;
+- every mode's frequency shift at the accelerometer's node, d ln f_r = -1/2 m phi_r(x_s)^2,
+  against the calibrated model without the accelerometer, with E free (a shift common to
+  every mode is the modulus's). The calibrated model's residual RMS is counted in each
+  mode's uncertainty: what the model family lacks bounds what the shifts can say.
+
+They are combined weighted by their inverse variances. The mass line alone is the sharper
+(about 0.1 g on a bat); the shifts check it, and carry the estimate when the test gave no
+mass line.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from ema.shapes.mass_line import (
+    MassEstimate,
+    combine_masses,
+    sensor_mass_from_mass_line,
+    sensor_mass_from_shifts,
+)
+from updating.diagnose.calibration import DiagnosisFit, Observations, columns
+from updating.diagnose.model import Setup, modal_sensitivities, rigid_flexibility
+
+
+@dataclass(frozen=True)
+class SensorMass:
+    """The accelerometer's mass, kg: from the mass line, from the shifts, and combined.
+
+    ``mass_line`` is None when the test gave none.
+    """
+
+    mass_line: MassEstimate | None
+    shifts: MassEstimate
+    combined: MassEstimate
+
+    def to_json_dict(self) -> dict:
+        """Return the grams and standard uncertainties (null where not estimated)."""
+        def grams(e: MassEstimate | None) -> dict | None:
+            if e is None or not np.isfinite(e.std_kg):
+                return None
+            return {"mass_g": 1e3 * e.mass_kg, "std_g": 1e3 * e.std_kg}
+
+        return {"mass_line": grams(self.mass_line), "mode_shifts": grams(self.shifts),
+                "combined": grams(self.combined)}
+
+
+def estimate_sensor_mass(setup: Setup, obs: Observations, final: DiagnosisFit) -> SensorMass:
+    """Estimate the accelerometer's mass from the test's mass line and mode shifts.
+
+    Parameters
+    ----------
+    setup : Setup
+        The bat and its test.
+    obs : Observations
+        The paired measured modes and the mass line.
+    final : DiagnosisFit
+        The calibrated model (its extensions and parameter values; the accelerometer is
+        switched on and set to 0 for the shifts).
+
+    Returns
+    -------
+    SensorMass
+        The two estimates and their combination.
+    """
+    active = final.active | {"sensor_mass", "density"}
+    bare = replace(final.state, sensor_mass_kg=0.0)
+    drive = int(np.argmin(np.abs(setup.points_m - setup.sensor_x_m)))
+    ml = None
+    if obs.mass_line is not None:
+        a0 = rigid_flexibility(setup, active, bare)[0][drive]
+        ml = sensor_mass_from_mass_line(obs.mass_line, setup.points_m, setup.sensor_x_m,
+                                        obs.sigma_ml, float(a0))
+    sol = modal_sensitivities(setup, final.active | {"sensor_mass"}, bare, obs.n_model_modes,
+                              ("sensor_g",))
+    idx = columns(sol, obs)[0]
+    rel = np.log(obs.freq_hz / sol.elastic_hz[idx])
+    sigma = float(np.hypot(obs.sigma_f, final.rms_pct / 100))
+    shifts = sensor_mass_from_shifts(rel, 1e3 * sol.dlnf[0, idx], sigma)
+    combined = combine_masses([e for e in (ml, shifts) if e is not None])
+    return SensorMass(ml, shifts, combined)
+
+
+def sensor_note(estimate: SensorMass, final: DiagnosisFit) -> str:
+    """Say what the mass line and the mode shifts give together, against the calibrated model.
+
+    They disagree when the calibrated model's accelerometer lies more than 2.5 of the
+    combined estimate's standard uncertainties from it (the fitted frequencies' model error,
+    taken as noise by the fit, pulls it).
+    """
+    def text(e: MassEstimate) -> str:
+        return f"{1e3 * e.mass_kg:.2f} +- {1e3 * e.std_kg:.2f} g"
+
+    parts = [f"mass line {text(estimate.mass_line)}"] if estimate.mass_line else []
+    if np.isfinite(estimate.shifts.std_kg):
+        parts.append(f"mode shifts {text(estimate.shifts)}")
+    fitted = 1e3 * final.state.sensor_mass_kg if "sensor_mass" in final.active else 0.0
+    c = estimate.combined
+    agree = abs(fitted - 1e3 * c.mass_kg) <= 2.5 * 1e3 * c.std_kg
+    verdict = ("agrees" if agree else
+               "disagrees: the model's frequency error, taken as noise by the fit, pulls it; "
+               "trust the combined value")
+    return (f"accelerometer from the mass line and the mode shifts together: {text(c)} "
+            f"({', '.join(parts)}); the calibrated model's {fitted:.2f} g {verdict}")
+
