@@ -21,6 +21,7 @@ from updating.msso.update import update_elements
 from updating.simulate.alterations import KINDS, AlterationKind
 from updating.simulate.field_fleet import FieldKind, draw_case
 from updating.simulate.integrity import INTEGRITY, Integrity
+from updating.simulate.rulebook import RULEBOOK_KINDS
 
 MODEL = build_model(paper_profile(), paper_material(), beam="timoshenko", n_elements=12)
 
@@ -54,7 +55,7 @@ def test_unknown_strings_are_refused_with_the_choices(word):
     if word != "auto":
         with pytest.raises(ValueError, match="auto, a number > 0 or None"):
             check_prior_sigma(word)
-    if word not in (*KINDS, "none"):
+    if word not in (*KINDS, *RULEBOOK_KINDS, "none"):
         with pytest.raises(ValueError, match="unknown alteration kind.*cork"):
             draw_case(np.random.default_rng(0), word)
 
