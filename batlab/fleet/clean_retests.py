@@ -83,16 +83,17 @@ class CleanRetest:
     drawn: dict
 
 
-def _true_wood(rng: np.random.Generator, profile, nominal, points_m, weight_lb):
-    """Draw the board: E within +-15 % of the handbook, density to meta.json's weight.
+def _weighed(base: VirtualBat, weight_lb: float | None, rng: np.random.Generator) -> VirtualBat:
+    """Scale the bat's density to meta.json's weight (else draw it within +-8 %).
 
-    Without a registered weight the density is drawn within +-8 % of the handbook's.
+    The bare bat (its billet gradients and cupped end included) then weighs ``weight_lb``;
+    mass is linear in the density, so one scaling is exact.
     """
-    e_scale = rng.uniform(0.85, 1.15)
     if weight_lb is None:
-        return nominal.scaled(e_scale, rng.uniform(0.92, 1.08))
-    nominal_lb, _ = scale_reading(VirtualBat(profile, nominal, points_m))
-    return nominal.scaled(e_scale, float(weight_lb) / nominal_lb)
+        factor = rng.uniform(0.92, 1.08)
+    else:
+        factor = float(weight_lb) / scale_reading(bare(base))[0]
+    return replace(base, material=base.material.scaled(1.0, factor))
 
 
 def draw_bat(rng: np.random.Generator, profile, nominal, meta: dict) -> CleanBat:
@@ -115,21 +116,22 @@ def draw_bat(rng: np.random.Generator, profile, nominal, meta: dict) -> CleanBat
         The bat, its registered meta.json and what its re-tests keep.
     """
     points_m = np.sort(np.asarray(meta["points_in"], dtype=float)) * IN_TO_M
-    wood = _true_wood(rng, profile, nominal, points_m, meta.get("weight_lb"))
-    rec: dict = {"e_scale": wood.E_pa / nominal.E_pa,
-                 "rho_scale": wood.rho_kg_m3 / nominal.rho_kg_m3}
+    rec: dict = {"e_scale": rng.uniform(0.85, 1.15)}
     length_m = profile.length_m
     billet, rec["billet"] = nz.draw_billet(rng, length_m)
     t_field, _, rec["temperature"] = nz.draw_temperature(rng, length_m)
     eg_r, eg_t, theta, _, rec["planes"] = nz.draw_planes(rng)
     cup, rec["cup"] = nz.draw_cup(rng)
     rec["noise"], rec["fmax_hz"] = nz.draw_noise(rng), nz.draw_band(rng)
-    base = VirtualBat(profile, replace(wood, e_over_g=eg_r), points_m,
+    wood = replace(nominal.scaled(rec["e_scale"], 1.0), e_over_g=eg_r)
+    base = VirtualBat(profile, wood, points_m,
                       sensor_offset_m=rng.uniform(-0.05, 0.05) * IN_TO_M,
                       sensor_mass_kg=rng.uniform(0.002, 0.006),
                       bungee_k_n_per_m=rng.uniform(100.0, 400.0), rel_noise=rec["noise"],
                       wood=nz.combine(billet, t_field), cavities=(cup,), e_over_g_t=eg_t,
                       theta_deg=theta)
+    base = _weighed(base, meta.get("weight_lb"), rng)
+    rec["rho_scale"] = base.material.rho_kg_m3 / nominal.rho_kg_m3
     registered = dict(meta)
     if meta.get("weight_lb") is not None:
         weight_lb, _ = scale_reading(bare(base))
