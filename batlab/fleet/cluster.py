@@ -2,7 +2,8 @@
 
 ``connect`` opens a client on a running scheduler (``tcp://HOST:PORT``) or, without one, on a
 ``distributed.LocalCluster`` sized to the machine: one worker process per core, one thread
-each (batlab's matrices are small; BLAS threads only contend). ``ordered_map`` submits one
+each (batlab's matrices are small; BLAS threads only contend), without the workers'
+statistical profiler (it samples every task's stack every 10 ms). ``ordered_map`` submits one
 task per item and returns the results in item order whatever order they finish in; each
 finished item can be handed to ``on_result`` (the client storing verdicts as they come), and
 progress (count, rate, elapsed time) goes to ``progress`` about every ``every_s`` seconds.
@@ -41,14 +42,16 @@ def connect(scheduler: str | None = None, workers: int | None = None) -> Iterato
     distributed.Client
         The client.
     """
+    import dask
     from distributed import Client, LocalCluster
 
     if scheduler:
         with Client(scheduler, timeout="20s") as client:
             yield client
         return
-    with LocalCluster(n_workers=workers or local_workers(), threads_per_worker=1,
-                      processes=True, dashboard_address=None, host="127.0.0.1") as cluster, \
+    with dask.config.set({"distributed.worker.profile.enabled": False}), \
+            LocalCluster(n_workers=workers or local_workers(), threads_per_worker=1,
+                         processes=True, dashboard_address=None, host="127.0.0.1") as cluster, \
             Client(cluster) as client:
         yield client
 
