@@ -129,8 +129,9 @@ def inspect_fleet(client, db, jobs: list[RetestJob], false_alarm: float,
                 return {"serial": job.serial, "retest": job.retest_path, "error": result}
             stored = pipeline.store_inspection(conn, result, job.retest_path, false_alarm,
                                                retest_meta=job.retest_meta_path is not None)
-            progress(f"{job.serial}: {result.verdict.status} (inspection #{stored.id})")
-            return pipeline.contract_dict(result.serial, result.verdict)
+            out = pipeline.contract_dict(result.serial, result.verdict)
+            progress(f"{job.serial}: {out['status']} (stored as inspection #{stored.id})")
+            return out
 
         done = ordered_map(client, partial(inspect_job, str(db), false_alarm),
                            [jobs[i] for i in todo], "re-test", progress, store)
