@@ -68,7 +68,8 @@ class Registered:
     registration : Registration
         Its registration (record, fitted baseline, calibrated reference).
     case : InspectionCase
-        The inspection's case with the baseline's place taken by every re-test.
+        The case ``inspect --serial`` builds from the registry (profile, reference, baseline
+        modes, registered conditions and weight), its re-test left None for each re-test.
     """
 
     bat: CleanBat
@@ -78,7 +79,11 @@ class Registered:
 
 @cache
 def registration(spec: BatSpec) -> Registered:
-    """Draw, simulate and register the calibration's bat (once per process and spec)."""
+    """Draw, simulate and register the calibration's bat (once per process and spec).
+
+    The baseline's FRF noise has the study's seed; meta.json is the lab's with the scale's
+    reading of this bat's weight.
+    """
     profile = pipeline.bat_profile(spec.profile_path)
     nominal = pipeline.wood(spec.meta_path, None)
     meta = pipeline.read_meta_dict(spec.meta_path)

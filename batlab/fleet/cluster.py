@@ -49,10 +49,10 @@ def connect(scheduler: str | None = None, workers: int | None = None) -> Iterato
         with Client(scheduler, timeout="20s") as client:
             yield client
         return
+    local = {"n_workers": workers or local_workers(), "threads_per_worker": 1, "processes": True,
+             "host": "127.0.0.1", "dashboard_address": "127.0.0.1:0"}  # any free port
     with dask.config.set({"distributed.worker.profile.enabled": False}), \
-            LocalCluster(n_workers=workers or local_workers(), threads_per_worker=1,
-                         processes=True, dashboard_address=None, host="127.0.0.1") as cluster, \
-            Client(cluster) as client:
+            LocalCluster(**local) as cluster, Client(cluster) as client:
         yield client
 
 
