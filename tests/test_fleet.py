@@ -42,7 +42,10 @@ def test_summary_counts_alarms_and_reads_the_tail():
     rows = [{"index": i + 1, "grip": None, "status": "altered" if i in hidden else
              "not_altered", "F": 30.0 + i if i in hidden else float(rng.uniform(0, 3)),
              "p": 1e-6 if i in hidden else float(rng.uniform(0.05, 1))} for i in range(n)]
+    rows[int(rng.choice([i for i in range(n) if i not in hidden]))].update(
+        status="inconclusive", F=float("nan"), p=float("nan"))  # judged before the F test
     out = summary(rows, BatSpec("profile.csv", "meta.json", 1))
+    assert out["inconclusive"] == 1 and np.isfinite(out["tail"]["F_quantiles"]["50"])
     assert out["false_alarms"] == 3 and out["n"] == n
     assert out["alarm_indices"] == [i + 1 for i in hidden]
     assert sorted(r["index"] for r in out["tail"]["largest_F"][:3]) == [i + 1 for i in hidden]

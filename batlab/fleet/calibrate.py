@@ -183,7 +183,8 @@ def tail(rows: list[dict], k: int = 5) -> dict:
     Parameters
     ----------
     rows : list of dict
-        ``inspect_clean``'s rows.
+        ``inspect_clean``'s rows (those without a finite F, such as a refused or an
+        inconclusive re-test judged before the test, are left out).
     k : int
         How many extreme values to list.
 
@@ -193,11 +194,12 @@ def tail(rows: list[dict], k: int = 5) -> dict:
         The ``k`` largest F with their bats' indices, the ``k`` smallest p-values, and the
         50, 90, 99 and 99.9 % quantiles of F and 1, 10 and 50 % of p.
     """
-    scored = [r for r in rows if r.get("F") is not None]
+    scored = [r for r in rows if r.get("F") is not None and np.isfinite(r["F"])]
+    with_p = [r for r in scored if r.get("p") is not None and np.isfinite(r["p"])]
     f = np.array([r["F"] for r in scored])
-    p = np.array([r["p"] for r in scored if r.get("p") is not None])
+    p = np.array([r["p"] for r in with_p])
     by_f = sorted(scored, key=lambda r: -r["F"])[:k]
-    by_p = sorted((r for r in scored if r.get("p") is not None), key=lambda r: r["p"])[:k]
+    by_p = sorted(with_p, key=lambda r: r["p"])[:k]
     out = {"largest_F": [{"index": r["index"], "F": r["F"], "status": r["status"]} for r in by_f],
            "smallest_p": [{"index": r["index"], "p": r["p"], "status": r["status"]}
                           for r in by_p]}
