@@ -91,15 +91,14 @@ def _inspect(args: argparse.Namespace) -> int:
 
 
 def _calibrate(args: argparse.Namespace) -> int:
-    from batlab import pipeline
-    from batlab.fleet.calibrate import BatSpec, run_calibration, summary
+    from batlab.fleet.calibrate import BatSpec, read_bat, run_calibration, summary
     from batlab.fleet.cluster import connect
 
     if not (args.profile and args.meta and args.n):
         raise ValueError("fleet calibrate: give --profile, --meta and --n")
     progress = progress_printer("fleet calibrate")
-    serial = pipeline.read_meta_dict(args.meta).get("serial")
     spec = BatSpec(str(args.profile), str(args.meta), args.seed, args.false_alarm)
+    serial = read_bat(spec)[2].get("serial")  # a bad file fails here, before any work
     rows_file = open(args.out, "w") if args.out else None  # noqa: SIM115 (closed below)
     t0 = time.perf_counter()
     try:

@@ -77,6 +77,28 @@ class Registered:
     case: object
 
 
+def read_bat(spec: BatSpec) -> tuple:
+    """Read the calibration's bat: its profile, meta.json's handbook wood and meta.json.
+
+    Called by the client before any work is sent, so a bad file fails at once, naming it.
+
+    Returns
+    -------
+    profile : Profile
+        profile.csv.
+    nominal : Material
+        meta.json's handbook wood.
+    meta : dict
+        meta.json's content (with its ``points_in``).
+    """
+    profile = pipeline.bat_profile(spec.profile_path)
+    nominal = pipeline.wood(spec.meta_path, None)
+    meta = pipeline.read_meta_dict(spec.meta_path)
+    if not meta.get("points_in"):
+        raise ValueError(f"{spec.meta_path}: no points_in (the impact points) to test at")
+    return profile, nominal, meta
+
+
 @cache
 def registration(spec: BatSpec) -> Registered:
     """Draw, simulate and register the calibration's bat (once per process and spec).
@@ -84,11 +106,7 @@ def registration(spec: BatSpec) -> Registered:
     The baseline's FRF noise has the study's seed; meta.json is the lab's with the scale's
     reading of this bat's weight.
     """
-    profile = pipeline.bat_profile(spec.profile_path)
-    nominal = pipeline.wood(spec.meta_path, None)
-    meta = pipeline.read_meta_dict(spec.meta_path)
-    if not meta.get("points_in"):
-        raise ValueError(f"{spec.meta_path}: no points_in (the impact points) to test at")
+    profile, nominal, meta = read_bat(spec)
     bat = draw_bat(np.random.default_rng(child_seed(spec.seed, 0)), profile, nominal, meta)
     with tempfile.TemporaryDirectory(prefix="batlab-calibrate-") as tmp:
         meta_path = Path(tmp) / "meta.json"
