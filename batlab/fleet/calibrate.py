@@ -4,9 +4,13 @@ The bat (``clean_retests.draw_bat``) is drawn from child 0 of ``SeedSequence(see
 baseline simulated, written as the lab's files and registered by the pipeline's own steps
 (``pipeline.prepare_registration``: the baseline's modal fit and the reference's
 calibration) once per worker process (``registration`` caches it). Re-test ``i`` (1-based)
-is drawn from child ``i`` (``child_seed``), simulated, written as a UFF file and read back,
+is drawn from child ``i`` (``child_seed``), simulated, written as a test file and read back,
 fitted and judged as ``batlab inspect --serial`` judges it (``pipeline.fit_file``,
 ``pipeline.judge``) with its retest.json; no subprocess, no registry write.
+
+The tests are written as NPZ (the same doubles a binary UFF holds): pyuff's UFF writer leaves
+its last text handle to be closed by the garbage collector, and in a Dask worker (whose
+monitors hold frames) that handle was flushed late, out of order, twice in our runs.
 """
 
 from __future__ import annotations
@@ -111,7 +115,7 @@ def registration(spec: BatSpec) -> Registered:
     with tempfile.TemporaryDirectory(prefix="batlab-calibrate-") as tmp:
         meta_path = Path(tmp) / "meta.json"
         meta_path.write_text(json.dumps(bat.meta))
-        base_path = Path(tmp) / "baseline.uff"
+        base_path = Path(tmp) / "baseline.npz"
         pipeline.write_frf(base_path, simulate_test(bat.baseline, bat.freq_hz,
                                                     seed=int(spec.seed) % 2**31))
         done = pipeline.prepare_registration(spec.profile_path, meta_path, base_path)
@@ -147,7 +151,7 @@ def inspect_clean(spec: BatSpec, i: int) -> dict:
     retest = draw_retest(np.random.default_rng(child_seed(spec.seed, i)), reg.bat)
     row = {"index": i, "grip": retest.grip}
     with tempfile.TemporaryDirectory(prefix="batlab-calibrate-") as tmp:
-        path = Path(tmp) / "retest.uff"
+        path = Path(tmp) / "retest.npz"
         pipeline.write_frf(path, simulate_test(retest.bat, reg.bat.freq_hz,
                                                seed=retest.noise_seed))
         try:
