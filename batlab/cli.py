@@ -73,6 +73,8 @@ COMMANDS: dict[str, Command] = {
                                "then batlab's refinement"),
     "fit": _command("fit", "fit natural frequencies, damping and mass-normalised mode shapes "
                            "to a test's FRFs"),
+    "fleet": _command("fleet", "inspect a folder of re-tests, or calibrate a bat's false-alarm "
+                               "rate, on a Dask cluster"),
     "check-rig": _command("check-rig", "check the test rig on a reference bar: measured modes, "
                                        "damping and mass line against the bar's model"),
 }

@@ -2,7 +2,8 @@
 
     python benchmarks/bench_detection.py [--bats 6] [--diameters 0.5,0.75,1.0,1.25]
         [--lengths 3,6,9,12] [--ratio 0.3] [--kinds deep,empty,end_plug,partial,small,neutral]
-        [--lab-clean 100] [--lab-bats 0] [--seed 2] [--workers 2] [--no-retest-meta]
+        [--lab-clean 100] [--lab-bats 0] [--seed 2] [--workers 2] [--scheduler ADDR]
+        [--no-retest-meta]
         [--out rows.json]
 
 Paired design on nuisance-rich virtual bats (``updating.simulate.field_fleet``, every
@@ -45,7 +46,7 @@ from pathlib import Path  # noqa: E402
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from batlab.fleet.jobs import detection_jobs, detection_rows  # noqa: E402
-from batlab.fleet.runner import pool_map, save_rows  # noqa: E402
+from batlab.fleet.runner import fleet_map, save_rows  # noqa: E402
 from updating.simulate.detection import detection_report, lab_only_report  # noqa: E402
 from updating.simulate.lab_methods import clean_balance_limit_in  # noqa: E402
 
@@ -67,7 +68,10 @@ def main(argv=None) -> int:
     ap.add_argument("--lab-bats", type=int, default=0,
                     help="further bats for the lab's methods alone (readings only, cheap)")
     ap.add_argument("--seed", type=int, default=2)
-    ap.add_argument("--workers", type=int, default=2, help="processes (at most 2)")
+    ap.add_argument("--workers", type=int, default=None,
+                    help="local Dask worker processes (default: one per core)")
+    ap.add_argument("--scheduler", default=None, metavar="ADDRESS",
+                    help="a running Dask scheduler (tcp://HOST:PORT) instead of a local cluster")
     ap.add_argument("--no-retest-meta", action="store_true")
     ap.add_argument("--out", default=None, help="write the result rows (JSON) here")
     args = ap.parse_args(argv)
@@ -79,7 +83,8 @@ def main(argv=None) -> int:
         print(lab_only_report(args.lab_bats, args.seed + 1, grid, args.ratio, kinds, limit))
         return 0
     jobs = detection_jobs(args.bats, args.seed, grid, args.ratio, kinds, args.no_retest_meta)
-    rows = [r for bat in pool_map(detection_rows, jobs, args.workers, "bat") for r in bat]
+    rows = [r for bat in fleet_map(detection_rows, jobs, args.workers, "bat", args.scheduler)
+            for r in bat]
     save_rows(args.out, rows)
     limit = clean_balance_limit_in(args.lab_clean, args.seed)
     print(f"\n## Detection ({args.bats} bats, {len(rows)} re-tests, seed {args.seed}, "

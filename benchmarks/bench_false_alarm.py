@@ -1,7 +1,8 @@
 """False alarms on a nuisance-rich virtual fleet of unaltered bats, through `batlab inspect`.
 
     python benchmarks/bench_false_alarm.py [--n 40] [--alone 3] [--integrity 2] [--seed 1]
-                                           [--workers 2] [--no-retest-meta] [--out rows.json]
+                                           [--workers 2] [--scheduler ADDR] [--no-retest-meta]
+                                           [--out rows.json]
 
 Groups of unaltered bats (``updating.simulate.field_fleet.draw_case``), each bat's files
 written as a lab hands them over and inspected statelessly by the real command
@@ -35,7 +36,7 @@ from pathlib import Path  # noqa: E402
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from batlab.fleet.jobs import false_alarm_row, false_alarm_row_without_meta  # noqa: E402
-from batlab.fleet.runner import pool_map, save_rows  # noqa: E402
+from batlab.fleet.runner import fleet_map, save_rows  # noqa: E402
 from updating.simulate.scoring import false_alarm_plan, false_alarm_summary  # noqa: E402
 
 
@@ -46,7 +47,10 @@ def main(argv=None) -> int:
     ap.add_argument("--integrity", type=int, default=2,
                     help="bats per data-integrity slip (default 2)")
     ap.add_argument("--seed", type=int, default=1)
-    ap.add_argument("--workers", type=int, default=2, help="processes (at most 2)")
+    ap.add_argument("--workers", type=int, default=None,
+                    help="local Dask worker processes (default: one per core)")
+    ap.add_argument("--scheduler", default=None, metavar="ADDRESS",
+                    help="a running Dask scheduler (tcp://HOST:PORT) instead of a local cluster")
     ap.add_argument("--no-retest-meta", action="store_true",
                     help="do not pass retest.json (weight, accelerometer mass, temperature)")
     ap.add_argument("--out", default=None, help="write the result rows (JSON) here")
@@ -54,7 +58,7 @@ def main(argv=None) -> int:
 
     jobs = false_alarm_plan(args.n, args.alone, args.integrity, args.seed)
     fn = false_alarm_row_without_meta if args.no_retest_meta else false_alarm_row
-    rows = pool_map(fn, jobs, args.workers, "bat")
+    rows = fleet_map(fn, jobs, args.workers, "bat", args.scheduler)
     save_rows(args.out, rows)
     table, checks = false_alarm_summary(rows)
     print(f"\n## False alarms ({len(rows)} bats, seed {args.seed}, retest.json "

@@ -3,7 +3,7 @@
 For each kind (clean bats, the legal grips, pine tar past 18 in, nails, shaved, flattened
 and grooved barrels, wax coats, and core kinds of ``updating.simulate.alterations``), N
 realistic bats (``updating.simulate.field_fleet.draw_case``, every nuisance at random) are
-written as the lab's files and inspected through the real command in this process
+written as the lab's files and inspected through the real command in a Dask worker
 (``batlab inspect ... --json``, ``batlab.fleet.runner``), with retest.json and,
 for the first ``--without`` of them, the same bats without it. One JSON line per bat on
 stdout (kind, truth, status, reasons, region_in, finding, time); progress and a table per
@@ -29,7 +29,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 import numpy as np  # noqa: E402
 
-from batlab.fleet.runner import inspect_args, pool_map, timed  # noqa: E402
+from batlab.fleet.runner import fleet_map, inspect_args, timed  # noqa: E402
 from updating.simulate.field_fleet import draw_case, write_case  # noqa: E402
 from updating.simulate.scoring import verdict_row  # noqa: E402
 
@@ -121,7 +121,10 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--without", type=int, default=3,
                     help="of these, how many also without retest.json")
     ap.add_argument("--seed", type=int, default=2400)
-    ap.add_argument("--workers", type=int, default=2, help="processes (at most 2)")
+    ap.add_argument("--workers", type=int, default=None,
+                    help="local Dask worker processes (default: one per core)")
+    ap.add_argument("--scheduler", default=None, metavar="ADDRESS",
+                    help="a running Dask scheduler (tcp://HOST:PORT) instead of a local cluster")
     ap.add_argument("--summary", default=None, help="summarise a JSON-lines file and stop")
     args = ap.parse_args(argv)
     if args.summary:
@@ -131,7 +134,7 @@ def main(argv: list[str] | None = None) -> int:
     jobs = [(kind, args.seed + 1000 * k + i, meta)
             for k, kind in enumerate(args.kinds) for meta in (True, False)
             for i in range(args.per_kind if meta else min(args.without, args.per_kind))]
-    rows = pool_map(one, jobs, args.workers, "bat")
+    rows = fleet_map(one, jobs, args.workers, "bat", args.scheduler)
     for row in rows:
         print(json.dumps(row, default=float))
     print(table(rows), file=sys.stderr)

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from batlab.fleet import jobs
-from batlab.fleet.runner import pool_map
+from batlab.fleet.runner import fleet_map
 from updating.simulate.detection import detection_report
 from updating.simulate.field_fleet import draw_case
 from updating.simulate.integrity import INTEGRITY
@@ -65,7 +65,7 @@ def table_counts(text: str) -> list[list[int]]:
 
 
 def test_false_alarm_one_bat_through_the_command():
-    rows = pool_map(jobs.false_alarm_row, false_alarm_plan(1, 0, 0, seed=1), 1, "bat")
+    rows = fleet_map(jobs.false_alarm_row, false_alarm_plan(1, 0, 0, seed=1), 1, "bat")
     table, checks = false_alarm_summary(rows)
     (bats, *counts), = table_counts(table)
     assert bats == 1 and sum(counts) == 1
@@ -76,7 +76,7 @@ def test_false_alarm_one_bat_through_the_command():
 
 def test_detection_one_bat_through_the_registry():
     plan = jobs.detection_jobs(1, 2, [(1.0, 10.0)], 0.3, [], no_retest_meta=False)
-    rows = [r for bat in pool_map(jobs.detection_rows, plan, 1, "bat") for r in bat]
+    rows = [r for bat in fleet_map(jobs.detection_rows, plan, 1, "bat") for r in bat]
     assert [r["kind"] for r in rows] == ["none", "cork"]
     assert all(r["status"] in STATUSES for r in rows)
     assert [r["truth"]["grid"] for r in rows] == [False, True]

@@ -1,4 +1,4 @@
-"""Run `batlab` commands in this process and spread work over a process pool.
+"""Run `batlab` commands in this process and spread work over a Dask cluster.
 
 Each bat's files are inspected by the real command (``batlab.cli.main``), as a lab runs it::
 
@@ -6,7 +6,8 @@ Each bat's files are inspected by the real command (``batlab.cli.main``), as a l
     batlab register ... ; batlab inspect --serial S R.uff [--retest-meta J] --json
 
 ``--retest-meta`` is passed only when this batlab's inspect knows it. Work is spread over
-at most ``MAX_WORKERS`` processes; progress goes to stderr.
+a Dask cluster (``fleet_map``: a local one sized to the machine, or a running scheduler);
+progress goes to stderr.
 """
 
 from __future__ import annotations
@@ -15,7 +16,6 @@ import argparse
 import contextlib
 import io
 import json
-import multiprocessing
 import sys
 import time
 from collections.abc import Callable, Iterable
@@ -23,8 +23,6 @@ from pathlib import Path
 
 from batlab.cli import build_parser
 from batlab.cli import main as batlab_main
-
-MAX_WORKERS = 2
 
 
 def run_batlab(args: list) -> tuple[int, dict | None, str]:
@@ -114,51 +112,46 @@ def _note_line(label: str, done: int, total: int, res, seconds: float) -> str:
     return f"  {label} {done}/{total} ({what}) {seconds:.0f} s"
 
 
-def pool_map(fn: Callable, items: Iterable, workers: int, label: str) -> list:
-    """Map ``fn`` over ``items`` in at most ``MAX_WORKERS`` processes.
+def fleet_map(fn: Callable, items: Iterable, workers: int | None = None, label: str = "bat",
+              scheduler: str | None = None) -> list:
+    """Map ``fn`` over ``items`` on a Dask cluster (``batlab.fleet.cluster``).
 
     Parameters
     ----------
     fn : callable
-        A module-level function (it is sent to forked workers).
+        A module-level function (sent to the workers by reference).
     items : iterable
-        Its arguments, one call each.
-    workers : int
-        Processes asked for (1: in this process).
+        Its arguments, one task each.
+    workers : int or None
+        The local cluster's worker processes (default: one per core); ignored with
+        ``scheduler``.
     label : str
         What an item is, for the progress lines on stderr (one per finished item).
+    scheduler : str or None
+        A running Dask scheduler's address; None: a local cluster.
 
     Returns
     -------
     list
         The results in item order.
     """
-    items = list(items)
-    workers = max(1, min(workers, MAX_WORKERS, len(items) or 1))
-    results = [None] * len(items)
-    t0 = time.perf_counter()
+    from batlab.fleet.cluster import connect, ordered_map
 
-    def note(i, res):
-        results[i] = res
-        done = sum(r is not None for r in results)
+    items = list(items)
+    if not items:
+        return []
+    t0, done = time.perf_counter(), 0
+
+    def note(_: int, res):
+        nonlocal done
+        done += 1
         print(_note_line(label, done, len(items), res, time.perf_counter() - t0),
               file=sys.stderr, flush=True)
+        return res
 
-    if workers == 1:
-        for i, item in enumerate(items):
-            note(i, fn(item))
-        return results
-    ctx = multiprocessing.get_context("fork")
-    with ctx.Pool(workers) as pool:
-        for i, res in pool.imap_unordered(_indexed, [(fn, i, it) for i, it in enumerate(items)]):
-            note(i, res)
-    return results
-
-
-def _indexed(job):
-    """Call ``fn(item)`` of a ``(fn, i, item)`` job; return ``(i, result)``."""
-    fn, i, item = job
-    return i, fn(item)
+    with connect(scheduler, workers) as client:
+        return ordered_map(client, fn, items, label,
+                           lambda line: print(f"  {line}", file=sys.stderr, flush=True), note)
 
 
 def save_rows(path: str | None, rows: list[dict]) -> None:

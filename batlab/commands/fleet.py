@@ -1,0 +1,147 @@
+"""`batlab fleet`: a fleet's work spread over a Dask cluster (docs/scale.md).
+
+    batlab fleet inspect DIR --db DB [--scheduler tcp://HOST:PORT] [--json]
+    batlab fleet calibrate --profile P --meta M --n N [--seed S] [--scheduler ...] [--json]
+                           [-o rows.jsonl]
+
+``inspect`` judges every ``SERIAL.uff`` of DIR (``SERIAL.json``: its retest.json) against
+the registry as ``batlab inspect --serial`` does and stores each verdict; ``--json`` prints
+the list of the objects ``batlab inspect --json`` prints (a refused re-test:
+``{"serial", "retest", "error"}``, and exit 1). ``calibrate`` inspects N simulated clean
+re-tests of one bat (every nuisance and legal grip) and bounds its false-alarm rate.
+Without ``--scheduler`` a local cluster sized to the machine does the work; progress goes
+to stderr.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import time
+
+from batlab.cli_support import add_db_argument, db_path, progress_printer
+
+EXAMPLE = ("batlab fleet calibrate --profile profile.csv --meta meta.json --n 3000 --seed 1 "
+           "--json   (or: batlab fleet inspect retests/ --db lab.sqlite --json)")
+
+
+def add_arguments(p: argparse.ArgumentParser) -> None:
+    """Add the options of ``batlab fleet`` to its sub-parser."""
+    p.add_argument("action", choices=["inspect", "calibrate"],
+                   help="inspect: every SERIAL.uff of DIR against the registry, stored; "
+                        "calibrate: the false-alarm rate on N clean re-tests of one bat")
+    p.add_argument("folder", nargs="?", default=None, metavar="DIR",
+                   help="inspect: the folder of SERIAL.uff re-tests (SERIAL.json beside)")
+    p.add_argument("--scheduler", default=None, metavar="ADDRESS",
+                   help="a running Dask scheduler (tcp://HOST:PORT); default: a local "
+                        "cluster, one worker process per core")
+    add_db_argument(p)
+    p.add_argument("--profile", default=None, help="calibrate: the bat's profile.csv")
+    p.add_argument("--meta", default=None, help="calibrate: the bat's meta.json (points_in)")
+    p.add_argument("--n", type=int, default=None, help="calibrate: clean re-tests to inspect")
+    p.add_argument("--seed", type=int, default=0, help="calibrate: the study's seed (default 0)")
+    p.add_argument("-o", "--out", default=None, metavar="ROWS_JSONL",
+                   help="calibrate: also write one JSON line per clean re-test here, as "
+                        "each finishes")
+    p.add_argument("--false-alarm", type=float, default=0.01,
+                   help="false-alarm rate of the decision (default 0.01)")
+    p.add_argument("--json", action="store_true", help="print the result as JSON on stdout")
+
+
+def run(args: argparse.Namespace) -> int:
+    """Run ``batlab fleet inspect`` or ``batlab fleet calibrate``.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The options ``add_arguments`` defines.
+
+    Returns
+    -------
+    int
+        Exit code: 0, or 1 when a re-test of ``inspect`` was refused (bad input raises
+        ValueError or OSError; ``batlab.cli`` prints it in one line and exits 2).
+    """
+    if not 0 < args.false_alarm < 0.5:
+        raise ValueError("--false-alarm must be between 0 and 0.5")
+    if args.action == "inspect":
+        return _inspect(args)
+    return _calibrate(args)
+
+
+def _inspect(args: argparse.Namespace) -> int:
+    from batlab.fleet.cluster import connect
+    from batlab.fleet.inspect_fleet import inspect_fleet, retest_jobs
+    from batlab.formatting import readable
+
+    if not args.folder:
+        raise ValueError("fleet inspect: give the folder of SERIAL.uff re-tests")
+    progress = progress_printer("fleet inspect")
+    jobs = retest_jobs(args.folder)
+    db = db_path(args)
+    with connect(args.scheduler) as client:
+        progress(f"{len(jobs)} re-test(s) on {_describe(client)}")
+        out = inspect_fleet(client, db, jobs, args.false_alarm, progress)
+    if args.json:
+        print(json.dumps(out))
+    else:
+        for o in out:
+            print(o["error"] if "error" in o else readable(o), end="\n\n")
+    return 1 if any("error" in o for o in out) else 0
+
+
+def _calibrate(args: argparse.Namespace) -> int:
+    from batlab.fleet.calibrate import BatSpec, read_bat, run_calibration, summary
+    from batlab.fleet.cluster import connect
+
+    if not (args.profile and args.meta and args.n):
+        raise ValueError("fleet calibrate: give --profile, --meta and --n")
+    progress = progress_printer("fleet calibrate")
+    spec = BatSpec(str(args.profile), str(args.meta), args.seed, args.false_alarm)
+    serial = read_bat(spec)[2].get("serial")  # a bad file fails here, before any work
+    rows_file = open(args.out, "w") if args.out else None  # noqa: SIM115 (closed below)
+    t0 = time.perf_counter()
+    try:
+        with connect(args.scheduler) as client:
+            cores = sum(client.nthreads().values())
+            progress(f"{args.n} clean re-tests of {serial} on {_describe(client)}")
+            rows = run_calibration(client, spec, args.n, progress,
+                                   None if rows_file is None else _row_writer(rows_file))
+    finally:
+        if rows_file is not None:
+            rows_file.close()
+    wall = time.perf_counter() - t0
+    out = summary(rows, spec, serial)
+    cpu = sorted(r["cpu_s"] for r in rows)
+    progress(f"{wall:.0f} s on {cores} core(s): {wall * cores / len(rows):.2f} core-s a bat; "
+             f"CPU {sum(cpu) / len(cpu):.2f} s a bat (median {cpu[len(cpu) // 2]:.2f} s)")
+    print(json.dumps(out) if args.json else _words(out))
+    return 0
+
+
+def _row_writer(file):
+    """Return ``write(row)``: one JSON line in ``file``, flushed (a long run's rows survive)."""
+    def write(row: dict) -> None:
+        print(json.dumps(row), file=file, flush=True)
+
+    return write
+
+
+def _describe(client) -> str:
+    """Word a cluster: its scheduler and worker threads."""
+    return f"{client.scheduler.address} ({sum(client.nthreads().values())} worker thread(s))"
+
+
+def _words(out: dict) -> str:
+    """Word a calibration's summary for a reader."""
+    t = out["tail"]
+    lines = [f"{out['serial']}: {out['n']} clean re-tests (seed {out['seed']}, false-alarm "
+             f"rate {out['false_alarm']:g})",
+             f"  called altered: {out['false_alarms']}; inconclusive: {out['inconclusive']}; "
+             f"refused: {out['refused']}",
+             f"  false-alarm rate below {out['false_alarm_upper95']:.2e} (95 % upper bound, "
+             "Clopper-Pearson)"]
+    if t.get("smallest_p"):
+        lines.append("  smallest p: " + ", ".join(f"{r['p']:.2g} (#{r['index']})"
+                                                  for r in t["smallest_p"]))
+    return "\n".join(lines)

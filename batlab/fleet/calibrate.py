@@ -1,0 +1,282 @@
+"""`batlab fleet calibrate`'s work: clean re-tests of one bat inspected against its registration.
+
+The bat (``clean_retests.draw_bat``) is drawn from child 0 of ``SeedSequence(seed)``, its
+baseline simulated, written as the lab's files and registered by the pipeline's own steps
+(``pipeline.prepare_registration``: the baseline's modal fit and the reference's
+calibration) once per worker process (``registration`` caches it). Re-test ``i`` (1-based)
+is drawn from child ``i`` (``child_seed``), simulated, written as a test file and read back,
+fitted and judged as ``batlab inspect --serial`` judges it (``pipeline.fit_file``,
+``pipeline.judge``) with its retest.json; no subprocess, no registry write.
+
+The tests are written as NPZ (the same doubles a binary UFF holds): pyuff's UFF writer leaves
+its last text handle to be closed by the garbage collector, and in a Dask worker (whose
+monitors hold frames) that handle was flushed late, out of order, twice in our runs.
+"""
+
+from __future__ import annotations
+
+import json
+import tempfile
+import time
+from dataclasses import dataclass, replace
+from functools import cache, partial
+from pathlib import Path
+
+import numpy as np
+
+import batlab.pipeline as pipeline
+from batlab.fleet.clean_retests import CleanBat, draw_bat, draw_retest
+from batlab.fleet.cluster import ordered_map
+from batlab.pipeline.registered import Registration, registered_weight_kg
+from batlab.registry import decode_modes
+from updating.inspect.retest_meta import conditions_from_dict
+from updating.simulate.virtual_bat import simulate_test
+
+
+@dataclass(frozen=True)
+class BatSpec:
+    """What names a calibration's bat: its lab files and the study's seed.
+
+    Attributes
+    ----------
+    profile_path, meta_path : str
+        profile.csv and meta.json.
+    seed : int
+        The study's seed.
+    false_alarm : float
+        The decision's false-alarm rate.
+    """
+
+    profile_path: str
+    meta_path: str
+    seed: int
+    false_alarm: float = 0.01
+
+
+def child_seed(seed: int, i: int) -> np.random.SeedSequence:
+    """Return child ``i`` of ``SeedSequence(seed)``, as ``SeedSequence(seed).spawn(i + 1)[i]``.
+
+    Made without spawning the ``i`` before it, so any worker draws bat ``i`` alone.
+    """
+    return np.random.SeedSequence(seed, spawn_key=(i,))
+
+
+@dataclass(frozen=True)
+class Registered:
+    """A worker's cached registration of the calibration's bat.
+
+    Attributes
+    ----------
+    bat : CleanBat
+        The bat as drawn.
+    registration : Registration
+        Its registration (record, fitted baseline, calibrated reference).
+    case : InspectionCase
+        The case ``inspect --serial`` builds from the registry (profile, reference, baseline
+        modes, registered conditions and weight), its re-test left None for each re-test.
+    """
+
+    bat: CleanBat
+    registration: Registration
+    case: object
+
+
+def read_bat(spec: BatSpec) -> tuple:
+    """Read the calibration's bat: its profile, meta.json's handbook wood and meta.json.
+
+    Called by the client before any work is sent, so a bad file fails at once, naming it.
+
+    Returns
+    -------
+    profile : Profile
+        profile.csv.
+    nominal : Material
+        meta.json's handbook wood.
+    meta : dict
+        meta.json's content (with its ``points_in``).
+    """
+    profile = pipeline.bat_profile(spec.profile_path)
+    nominal = pipeline.wood(spec.meta_path, None)
+    meta = pipeline.read_meta_dict(spec.meta_path)
+    if not meta.get("points_in"):
+        raise ValueError(f"{spec.meta_path}: no points_in (the impact points) to test at")
+    return profile, nominal, meta
+
+
+@cache
+def registration(spec: BatSpec) -> Registered:
+    """Draw, simulate and register the calibration's bat (once per process and spec).
+
+    The baseline's FRF noise has the study's seed; meta.json is the lab's with the scale's
+    reading of this bat's weight.
+    """
+    profile, nominal, meta = read_bat(spec)
+    bat = draw_bat(np.random.default_rng(child_seed(spec.seed, 0)), profile, nominal, meta)
+    with tempfile.TemporaryDirectory(prefix="batlab-calibrate-") as tmp:
+        meta_path = Path(tmp) / "meta.json"
+        meta_path.write_text(json.dumps(bat.meta))
+        base_path = Path(tmp) / "baseline.npz"
+        pipeline.write_frf(base_path, simulate_test(bat.baseline, bat.freq_hz,
+                                                    seed=int(spec.seed) % 2**31))
+        done = pipeline.prepare_registration(spec.profile_path, meta_path, base_path)
+    record = done.record
+    baseline = pipeline.FittedTest(done.baseline.name, done.baseline.test, done.baseline.fit,
+                                   decode_modes(record.modes))
+    case = pipeline.InspectionCase(
+        record.serial, profile, done.diagnosis.reference, baseline, None,
+        conditions_from_dict(record.meta, f"registered bat {record.serial}"),
+        registered_weight_kg(record))
+    return Registered(bat, done, case)
+
+
+def inspect_clean(spec: BatSpec, i: int) -> dict:
+    """Draw clean re-test ``i`` (1-based) of the calibration's bat and inspect it.
+
+    Parameters
+    ----------
+    spec : BatSpec
+        The bat and the study's seed.
+    i : int
+        The re-test's index (its seed is ``child_seed(spec.seed, i)``).
+
+    Returns
+    -------
+    dict
+        index, status ("not_altered", "inconclusive", "altered" or "refused"), reasons, the
+        statistic F and its p-value, the grip, and the seconds spent (simulation and
+        inspection).
+    """
+    t0, cpu0 = time.perf_counter(), time.process_time()
+    reg = registration(spec)
+    retest = draw_retest(np.random.default_rng(child_seed(spec.seed, i)), reg.bat)
+    row = {"index": i, "grip": retest.grip}
+    with tempfile.TemporaryDirectory(prefix="batlab-calibrate-") as tmp:
+        path = Path(tmp) / "retest.npz"
+        pipeline.write_frf(path, simulate_test(retest.bat, reg.bat.freq_hz,
+                                               seed=retest.noise_seed))
+        try:
+            test = pipeline.read_frf(path)
+            fitted = pipeline.fit_file(path.name, test, reg.case.weight_kg)
+            case = replace(reg.case, retest=fitted)
+            verdict = pipeline.judge(case, spec.false_alarm, conditions_from_dict(
+                retest.retest_meta, "retest.json")).verdict
+        except ValueError as exc:  # refused, as `batlab inspect` refuses it
+            row.update(status="refused", reasons=[str(exc)], F=None, p=None,
+                       seconds=time.perf_counter() - t0, cpu_s=time.process_time() - cpu0)
+            return row
+    out = pipeline.contract_dict(reg.case.serial, verdict)
+    fit = verdict.details.fit
+    row.update(status=out["status"], reasons=out["reasons"], F=verdict.statistic,
+               p=None if fit is None else fit.p_value, seconds=time.perf_counter() - t0,
+               cpu_s=time.process_time() - cpu0)
+    return row
+
+
+def upper95(false_alarms: int, n: int) -> float:
+    """Return the one-sided 95 % Clopper-Pearson upper bound of a false-alarm rate.
+
+    The rate p whose chance of ``false_alarms`` or fewer alarms in ``n`` bats is 5 %:
+    ``beta.ppf(0.95, k + 1, n - k)``; at zero alarms ``1 - 0.05 ** (1 / n)`` (about 3 / n).
+
+    Parameters
+    ----------
+    false_alarms : int
+        Clean bats called altered.
+    n : int
+        Clean bats inspected.
+
+    Returns
+    -------
+    float
+        The upper bound (1 when every bat was an alarm).
+    """
+    from scipy.stats import beta
+
+    if n <= 0:
+        raise ValueError("no clean bat inspected: no bound")
+    if false_alarms >= n:
+        return 1.0
+    return float(beta.ppf(0.95, false_alarms + 1, n - false_alarms))
+
+
+def tail(rows: list[dict], k: int = 5) -> dict:
+    """Summarise the statistic's tail over the inspected bats.
+
+    Parameters
+    ----------
+    rows : list of dict
+        ``inspect_clean``'s rows (those without a finite F, such as a refused or an
+        inconclusive re-test judged before the test, are left out).
+    k : int
+        How many extreme values to list.
+
+    Returns
+    -------
+    dict
+        The ``k`` largest F with their bats' indices, the ``k`` smallest p-values, and the
+        50, 90, 99 and 99.9 % quantiles of F and 1, 10 and 50 % of p.
+    """
+    scored = [r for r in rows if r.get("F") is not None and np.isfinite(r["F"])]
+    with_p = [r for r in scored if r.get("p") is not None and np.isfinite(r["p"])]
+    f = np.array([r["F"] for r in scored])
+    p = np.array([r["p"] for r in with_p])
+    by_f = sorted(scored, key=lambda r: -r["F"])[:k]
+    by_p = sorted(with_p, key=lambda r: r["p"])[:k]
+    out = {"largest_F": [{"index": r["index"], "F": r["F"], "status": r["status"]} for r in by_f],
+           "smallest_p": [{"index": r["index"], "p": r["p"], "status": r["status"]}
+                          for r in by_p]}
+    if f.size:
+        out["F_quantiles"] = {f"{q:g}": float(np.quantile(f, q / 100)) for q in (50, 90, 99, 99.9)}
+    if p.size:
+        out["p_quantiles"] = {f"{q:g}": float(np.quantile(p, q / 100)) for q in (1, 10, 50)}
+    return out
+
+
+def summary(rows: list[dict], spec: BatSpec, serial: str | None = None) -> dict:
+    """Count the alarms of a calibration's rows and bound the false-alarm rate.
+
+    Parameters
+    ----------
+    rows : list of dict
+        ``inspect_clean``'s rows, one per clean re-test.
+    spec : BatSpec
+        The calibration's bat and seed.
+    serial : str or None
+        The bat's serial.
+
+    Returns
+    -------
+    dict
+        n, false_alarms (clean bats called altered), inconclusive, refused,
+        false_alarm_upper95 (one-sided Clopper-Pearson, ``upper95``), confidence, the
+        statuses per grip, the statistic's ``tail``, serial, seed and false_alarm.
+    """
+    status = [r["status"] for r in rows]
+    grips: dict = {}
+    for r in rows:
+        g = grips.setdefault(r["grip"] or "none", {})
+        g[r["status"]] = g.get(r["status"], 0) + 1
+    alarms = status.count("altered")
+    return {"n": len(rows), "false_alarms": alarms, "inconclusive": status.count("inconclusive"),
+            "refused": status.count("refused"), "not_altered": status.count("not_altered"),
+            "false_alarm_upper95": upper95(alarms, len(rows)), "confidence": 0.95,
+            "alarm_indices": [r["index"] for r in rows if r["status"] == "altered"],
+            "by_grip": grips, "tail": tail(rows), "serial": serial, "seed": spec.seed,
+            "false_alarm": spec.false_alarm}
+
+
+def run_calibration(client, spec: BatSpec, n: int, progress, on_row=None) -> list[dict]:
+    """Inspect clean re-tests 1..n of the bat on the cluster; their rows in index order.
+
+    ``on_row(row)`` sees each row as it comes back (a file of rows, say).
+    """
+    if n < 1:
+        raise ValueError(f"--n {n}: at least one clean bat")
+
+    def keep(_: int, row: dict) -> dict:
+        if on_row is not None:
+            on_row(row)
+        return row
+
+    return ordered_map(client, partial(inspect_clean, spec), list(range(1, n + 1)),
+                       "clean bat", progress, keep)
