@@ -48,6 +48,7 @@ import numpy as np
 
 from updating.inspect.details import PositionScan
 from updating.inspect.model import E_PER_POINT, MASS_PER_POINT, ChangeParams, ChangePredictor
+from updating.inspect.parallel import fork_map
 from updating.inspect.segments import Segment
 from updating.inspect.sensitivity import predicted_change
 from updating.lsq import LsqSolution, solve_bounded
@@ -654,7 +655,7 @@ def fit_core(
             starts.append(seeds[i])
         if len(starts) == n_starts:
             break
-    fits = [fit_bounded(fun, s, lo, hi, space, diff, MAX_NFEV_START) for s in starts]
+    fits = fork_map(lambda s: fit_bounded(fun, s, lo, hi, space, diff, MAX_NFEV_START), starts)
     best = min(fits, key=lambda f: f.rss)
     scan = PositionScan(tuple(float(n) for n in norms),
                         tuple((float(s[N_NULL]), float(s[N_NULL + 1])) for s in starts),
