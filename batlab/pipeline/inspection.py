@@ -14,7 +14,6 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -23,15 +22,14 @@ from batlab.pipeline.records import FittedTest
 from ema.io.frf_data import FrfTest
 from updating.correlate import fitted
 from updating.correlate.points import match_points, point_positions_m, reorder
+from updating.diagnose.calibrate_baseline import calibrate
+from updating.diagnose.run import Diagnosis
 from updating.inspect.retest_meta import RetestConditions, conditions_from_dict
 from updating.inspect.run import inspect
 from updating.inspect.verdict import Verdict
 from updating.model.lab_input import BatMeta
 from updating.model.profile import Profile
 from updating.model.reference import BatReference
-
-if TYPE_CHECKING:  # the calibration (and scipy.stats) only where a baseline is calibrated
-    from updating.diagnose.run import Diagnosis
 
 
 @dataclass(frozen=True)
@@ -154,8 +152,6 @@ def calibrate_baseline(profile: Profile, meta: BatMeta, baseline: FittedTest) ->
     Diagnosis
         The diagnosis; ``.reference`` is the calibrated reference.
     """
-    from updating.diagnose.calibrate_baseline import calibrate
-
     return calibrate(profile, meta, baseline.modes,
                      getattr(baseline.fit, "suspension_freq_hz", None))
 
