@@ -1,6 +1,7 @@
-"""Hidden-effect benchmark of the inspection: random bats, half of them altered.
+"""Hidden-effect benchmark of the inspection: random bats, half of them altered; or its speed.
 
     python benchmarks/bench_inspect.py [--bats 24] [--null 40] [--seed 1]
+    python benchmarks/bench_inspect.py --serial [--runs 5]
 
 Each bat comes from updating.simulate.fleet (a truth model richer than the reference; moisture
 drift and a re-mounted accelerometer between the tests; a good calibration's reference), its
@@ -8,6 +9,12 @@ modes with realistic noise from simulate_modes. Prints the confusion table, the 
 of the altered bats, the time per inspection, and the false-alarm rate measured on ``--null``
 further unaltered bats. Targets (issue "Inspect"): verdicts right >= 90 %, no false alarm,
 core start within 1.5 in, diameter within 15 %, fill ratio within 25 %.
+
+``--serial`` times the registry form instead (issue #26, "under a second"): ``batlab demo``
+registers the built-in bat once, then ``batlab inspect --serial DEMO-34A retest.uff --again
+--json`` runs ``--runs`` times as a new process each (imports, re-test fit, inspection, the
+verdict stored); prints each run's wall and CPU time (children's user + system, which a
+loaded machine inflates less) and their medians.
 """
 
 from __future__ import annotations
@@ -17,7 +24,10 @@ import os
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")  # small matrices: threads only contend
 
 import argparse  # noqa: E402
+import resource  # noqa: E402
+import subprocess  # noqa: E402
 import sys  # noqa: E402
+import tempfile  # noqa: E402
 import time  # noqa: E402
 from pathlib import Path  # noqa: E402
 
@@ -117,12 +127,46 @@ def run_case(seed: int, kind: str) -> dict:
     return row
 
 
+def _batlab(args: list[str]) -> tuple[float, float]:
+    """Run ``python -m batlab ARGS`` (output discarded); its (wall, CPU) time, s."""
+    before = resource.getrusage(resource.RUSAGE_CHILDREN)
+    t0 = time.perf_counter()
+    subprocess.run([sys.executable, "-m", "batlab", *args], check=True,
+                   stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    wall = time.perf_counter() - t0
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    cpu = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
+    return wall, cpu
+
+
+def time_serial(runs: int) -> None:
+    """Time ``batlab inspect --serial`` on the demo registry (module docstring)."""
+    with tempfile.TemporaryDirectory(prefix="bench-inspect-") as tmp:
+        _batlab(["demo", "--out", tmp])
+        args = ["inspect", "--serial", "DEMO-34A", str(Path(tmp) / "retest.uff"), "--db",
+                str(Path(tmp) / "registry.sqlite"), "--again", "--json"]
+        times = []
+        for i in range(runs):
+            times.append(_batlab(args))
+            print(f"  run {i + 1}/{runs}: wall {times[-1][0]:.2f} s, CPU {times[-1][1]:.2f} s",
+                  file=sys.stderr)
+    wall, cpu = np.median(np.array(times), axis=0)
+    print(f"batlab inspect --serial: median wall {wall:.2f} s, median CPU {cpu:.2f} s "
+          f"({runs} runs)")
+
+
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--serial", action="store_true",
+                    help="time batlab inspect --serial on the demo registry instead")
+    ap.add_argument("--runs", type=int, default=5, help="--serial: runs timed")
     ap.add_argument("--bats", type=int, default=24)
     ap.add_argument("--null", type=int, default=40, help="extra unaltered bats (false alarms)")
     ap.add_argument("--seed", type=int, default=1)
     args = ap.parse_args()
+    if args.serial:
+        time_serial(args.runs)
+        return 0
 
     rows = []
     for i in range(args.bats):

@@ -74,7 +74,6 @@ def run(args: argparse.Namespace) -> int:
     from batlab import pipeline
     from batlab.formatting import readable
     from batlab.registry import open_registry
-    from batlab.report import check_destination
 
     progress = progress_printer("inspect")
     retest = _retest_path(args)
@@ -82,6 +81,8 @@ def run(args: argparse.Namespace) -> int:
         raise ValueError("--false-alarm must be between 0 and 0.5")
     for opt, path in (("-o/--out", args.out), ("--plots", args.plots)):
         if path:  # before any work: an unwritable destination fails at once
+            from batlab.report import check_destination  # (plotting: only for a report)
+
             check_destination(path, opt)
     stateless = (args.profile, args.meta, args.baseline)
     if args.serial:

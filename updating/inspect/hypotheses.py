@@ -47,8 +47,10 @@ from dataclasses import dataclass
 import numpy as np
 
 from updating.inspect.details import PositionScan
-from updating.inspect.model import E_PER_POINT, MASS_PER_POINT, ChangeParams
+from updating.inspect.model import E_PER_POINT, MASS_PER_POINT, ChangeParams, ChangePredictor
+from updating.inspect.parallel import fork_map
 from updating.inspect.segments import Segment
+from updating.inspect.sensitivity import predicted_change
 from updating.lsq import LsqSolution, solve_bounded
 from updating.lsq import covariance as lsq_covariance
 from updating.model.profile import Profile
@@ -455,41 +457,88 @@ def plane_shape_shift(diff: Differences, x: np.ndarray) -> np.ndarray | float:
     return diff.plane_shape_sens * float(x[6])
 
 
-def residual_function(
-    predict, diff: Differences, space: ParamSpace, sigma_rel: SigmaRel,
-) -> Callable[[np.ndarray], np.ndarray]:
-    """Build the weighted residual function of x.
+@dataclass(frozen=True)
+class Residual:
+    """The weighted residual of a change fit as a function of x, and its Jacobian.
 
-    x -> weighted residual (measured minus predicted change), length n_data, then the
-    null parameters' prior residuals (N_NULL).
+    ``residual(x)``: measured minus predicted change, weighted, length n_data, then the null
+    parameters' prior residuals (N_NULL). ``jacobian(x, upper)``: its derivative from modal
+    sensitivities (``sensitivity.predicted_change``), one eigen-solution for all columns.
     """
-    def fun(x: np.ndarray) -> np.ndarray:
-        params = space.params(np.asarray(x, dtype=float))
-        f, phi = predict(params)
-        f, phi = f[diff.model_index], phi[:, diff.model_index]
-        phi = phi * np.sign(np.einsum("ij,ij->j", phi, diff.phi0))
+
+    predict: ChangePredictor
+    diff: Differences
+    space: ParamSpace
+    sigma_rel: SigmaRel
+
+    def __call__(self, x: np.ndarray) -> np.ndarray:
+        """Return the weighted residual at x."""
+        x = np.asarray(x, dtype=float)
+        params = self.space.params(x)
+        f, phi = self.predict(params)
+        idx = self.diff.model_index
+        f, phi = f[idx], phi[:, idx]
+        phi = phi * np.sign(np.einsum("ij,ij->j", phi, self.diff.phi0))
+        mass = None if self.diff.dlnw is None else self.predict.wood_mass_kg(params)
+        return self.weigh(x, f, phi, mass)
+
+    def weigh(self, x: np.ndarray, f: np.ndarray, phi: np.ndarray,
+              mass_kg: float | None) -> np.ndarray:
+        """Return the weighted residual of predicted paired frequencies, aligned shapes, mass.
+
+        Affine in ln f, the shapes, ln(mass) and x (``jacobian`` relies on it).
+        """
+        diff = self.diff
         rf = (diff.dlnf - np.log(f / diff.f0) - plane_shift(diff, x)) / diff.sigma_lnf
         rs = (diff.dpsi - (phi - diff.phi0) - plane_shape_shift(diff, x)) / (
-            sigma_rel * diff.psi_scale)
+            self.sigma_rel * diff.psi_scale)
         parts = [rf, rs.ravel()]
         if diff.dlnw is not None:
-            dw = np.log(predict.wood_mass_kg(params) / diff.mass0_kg)
+            dw = np.log(mass_kg / diff.mass0_kg)
             parts.append(np.array([(diff.dlnw - dw) / WEIGHT_SIGMA_REL]))
-        parts.append(space.bounds.prior_residual(np.asarray(x, dtype=float)))
+        parts.append(self.space.bounds.prior_residual(x))
         return np.concatenate(parts)
 
-    return fun
+    def jacobian(self, x: np.ndarray, upper: np.ndarray) -> np.ndarray:
+        """Return the Jacobian at x, (len(residual), len(x)).
+
+        Each parameter stepped by ``DIFF_STEP`` (back from ``upper``) in the matrices only
+        (``sensitivity.predicted_change``); since ``weigh`` is affine in what the modes give,
+        a column is weigh's change for the first-order change of the modes, over the step.
+        """
+        x = np.asarray(x, dtype=float)
+        params = self.space.params(x)
+        h = np.where(x + DIFF_STEP <= upper, DIFF_STEP, -DIFF_STEP)
+        xs = [x + h[i] * np.eye(x.size)[i] for i in range(x.size)]
+        steps = [(self.space.params(xi), float(hi)) for xi, hi in zip(xs, h, strict=True)]
+        pc = predicted_change(self.predict, params, steps)
+        idx = self.diff.model_index
+        phi = pc.shapes[:, idx]
+        sign = np.sign(np.einsum("ij,ij->j", phi, self.diff.phi0))
+        d_lnf, d_phi = pc.d_lnf[idx], pc.d_shapes[:, idx] * sign[None, :, None]
+        f, phi = pc.freq_hz[idx], phi * sign
+        mass = d_lnm = None
+        if self.diff.dlnw is not None:
+            mass = self.predict.wood_mass_kg(params)
+            d_lnm = [np.log(self.predict.wood_mass_kg(p) / mass) / hi for p, hi in steps]
+        r0 = self.weigh(x, f, phi, mass)
+        J = np.empty((r0.size, x.size))
+        for i in range(x.size):
+            mi = None if mass is None else mass * np.exp(h[i] * d_lnm[i])
+            J[:, i] = (self.weigh(xs[i], f * np.exp(h[i] * d_lnf[:, i]),
+                                  phi + h[i] * d_phi[:, :, i], mi) - r0) / h[i]
+        return J
 
 
-def forward_jacobian(fun: Callable, upper: np.ndarray) -> Callable:
-    """Build the Jacobian function of x.
+def residual_function(
+    predict, diff: Differences, space: ParamSpace, sigma_rel: SigmaRel,
+) -> Residual:
+    """Build the weighted residual function of x (``Residual``)."""
+    return Residual(predict, diff, space, sigma_rel)
 
-    x -> forward-difference Jacobian of ``fun`` with the absolute step ``DIFF_STEP``
-    (backward where the step would cross ``upper``); reuses fun(x) of the last call at x.
 
-    scipy's relative steps shrink with |x|: a parameter started at 1e-9 (just inside a
-    bound) got a 1e-13 step and a Jacobian swamped by the eigen-solver's rounding.
-    """
+def solver_functions(fun: Residual, upper: np.ndarray) -> tuple[Callable, Callable]:
+    """Return (residual, Jacobian) for the solver; the residual of the last x is reused."""
     last: dict = {}
 
     def f(x: np.ndarray) -> np.ndarray:
@@ -499,20 +548,10 @@ def forward_jacobian(fun: Callable, upper: np.ndarray) -> Callable:
             last[key] = fun(x)
         return last[key]
 
-    def jac(x: np.ndarray) -> np.ndarray:
-        f0 = f(np.asarray(x, dtype=float))
-        J = np.empty((f0.size, x.size))
-        for i in range(x.size):
-            h = DIFF_STEP if x[i] + DIFF_STEP <= upper[i] else -DIFF_STEP
-            xi = np.array(x, dtype=float)
-            xi[i] += h
-            J[:, i] = (fun(xi) - f0) / h
-        return J
-
-    return f, jac
+    return f, lambda x: fun.jacobian(x, upper)
 
 
-def fit_bounded(fun: Callable, x0: np.ndarray, lower: np.ndarray, upper: np.ndarray,
+def fit_bounded(fun: Residual, x0: np.ndarray, lower: np.ndarray, upper: np.ndarray,
                 space: ParamSpace, diff: Differences, max_nfev: int | None = None) -> ChangeFit:
     """Fit x within bounds.
 
@@ -520,7 +559,7 @@ def fit_bounded(fun: Callable, x0: np.ndarray, lower: np.ndarray, upper: np.ndar
     x0, moved at least 1 % of the range inside the bounds: the first trust region is |x0|,
     so a start a hair inside a bound (x0 ~ 1e-9) would crawl.
     """
-    f, jac = forward_jacobian(fun, upper)
+    f, jac = solver_functions(fun, upper)
     res = solve_bounded(f, x0, lower, upper, jac=jac, margin=0.01 * (upper - lower),
                         held_within=HELD_WITHIN * (upper - lower),
                         x_scale=1.0, ftol=1e-6, xtol=1e-6, max_nfev=max_nfev)
@@ -616,7 +655,7 @@ def fit_core(
             starts.append(seeds[i])
         if len(starts) == n_starts:
             break
-    fits = [fit_bounded(fun, s, lo, hi, space, diff, MAX_NFEV_START) for s in starts]
+    fits = fork_map(lambda s: fit_bounded(fun, s, lo, hi, space, diff, MAX_NFEV_START), starts)
     best = min(fits, key=lambda f: f.rss)
     scan = PositionScan(tuple(float(n) for n in norms),
                         tuple((float(s[N_NULL]), float(s[N_NULL + 1])) for s in starts),

@@ -38,6 +38,7 @@ from updating.inspect.hypotheses import (
     residual_function,
 )
 from updating.inspect.model import ChangeParams
+from updating.inspect.parallel import fork_map
 from updating.inspect.segments import Segment, coverage, element_masses_kg
 from updating.model.profile import Profile
 from updating.model.units import IN_TO_M
@@ -246,7 +247,8 @@ def fit_segment(predict, diff: Differences, space: SegmentSpace, sigma_rel: Sigm
     lo, hi = space.lower(), space.upper()
     if starts is None:
         starts = distinct_best(segment_scan(predict, diff, space, sigma_rel, null), n_starts)
-    fits = [fit_bounded(fun, np.clip(s, lo, hi), lo, hi, space, diff, MAX_NFEV) for s in starts]
+    fits = fork_map(lambda s: fit_bounded(fun, np.clip(s, lo, hi), lo, hi, space, diff,
+                                          MAX_NFEV), starts)
     return min(fits, key=lambda f: f.rss)
 
 

@@ -119,6 +119,35 @@ def wood_system(
     return WoodSystem(model, K, M, Kb, 2 * idx, tuple(K_ends), tuple(M_ends), t)
 
 
+@dataclass(frozen=True)
+class StateMatrices:
+    """One state of the bat as the eigen-problem sees it.
+
+    Attributes
+    ----------
+    K, M : numpy.ndarray
+        (n_dof, n_dof) stiffness, N/m, and mass, kg, with the bungees and the accelerometer.
+    dofs : numpy.ndarray
+        (4,) the degrees of freedom of the element holding the accelerometer.
+    n : numpy.ndarray
+        (4,) its consistent point vector there (``assembly.point_vector``).
+    point_rows : numpy.ndarray
+        Rows of the test points' transverse displacements.
+    """
+
+    K: np.ndarray
+    M: np.ndarray
+    dofs: np.ndarray
+    n: np.ndarray
+    point_rows: np.ndarray
+
+    def sensor_vector(self) -> np.ndarray:
+        """Return the accelerometer's point vector over every degree of freedom, (n_dof,)."""
+        v = np.zeros(self.K.shape[0])
+        v[self.dofs] = self.n
+        return v
+
+
 LOCAL_CACHE = 64
 """Local-change matrices a predictor keeps (``ChangePredictor.local``)."""
 
@@ -140,6 +169,8 @@ class ChangePredictor:
         self.drive = int(np.argmin(np.abs(self.points_m - self.sensor_x_m)))
         self._cache: dict[Core | None, WoodSystem] = {}
         self._local: dict = {}
+        self._points: dict = {}
+        self._woods: dict = {}
 
     def at_sensor(self, sensor_x_m: float) -> ChangePredictor:
         """Return the same bat with its accelerometer elsewhere.
@@ -151,6 +182,8 @@ class ChangePredictor:
                               self.n_solve)
         out._cache = self._cache
         out._local = self._local
+        out._points = self._points
+        out._woods = self._woods
         return out
 
     def with_reference(self, reference: BatReference) -> ChangePredictor:
@@ -164,6 +197,10 @@ class ChangePredictor:
             if len(self._cache) > 32:
                 for key in [k for k in self._cache if k is not None]:
                     del self._cache[key]
+                # caches keyed by a system's id: a new system may take a dropped one's id
+                self._local.clear()
+                self._woods.clear()
+                self._points.clear()
             like = None if core is None else self.system(None)
             self._cache[core] = wood_system(self.profile, self.reference, self.points_m, core,
                                             like)
@@ -172,17 +209,24 @@ class ChangePredictor:
     def local(self, ws: WoodSystem, segments: tuple[Segment, ...]):
         """(dK, dM, mass change) of local changes on a wood system, or None for none.
 
-        Cached per (system, segments), at most ``LOCAL_CACHE`` entries: a fit's Jacobian
-        moves one parameter at a time, so most of its columns share the segments.
+        The sum of each segment's change, cached per (system, segment), at most
+        ``LOCAL_CACHE`` entries: a fit's Jacobian moves one parameter at a time, so most of
+        its columns share the segments, and a step of one segment leaves the other's.
         """
         if not segments:
             return None
-        key = (id(ws), segments)
-        if key not in self._local:
-            if len(self._local) >= LOCAL_CACHE:
-                self._local.clear()
-            self._local[key] = segment_change(ws.model, segments)
-        return self._local[key]
+        parts = []
+        for seg in segments:
+            key = (id(ws), seg)
+            if key not in self._local:
+                if len(self._local) >= LOCAL_CACHE:
+                    self._local.clear()
+                self._local[key] = segment_change(ws.model, (seg,))
+            parts.append(self._local[key])
+        if len(parts) == 1:
+            return parts[0]
+        return (sum(p[0] for p in parts), sum(p[1] for p in parts),
+                sum(p[2] for p in parts))
 
     def wood_mass_kg(self, p: ChangeParams) -> float:
         """Return the wood's mass with the changes ``p``, kg."""
@@ -191,16 +235,16 @@ class ChangePredictor:
         added = self.local(ws, p.segments)[2] if p.segments else 0.0
         return p.density_scale * ws.mass_kg(M) + added
 
-    def __call__(self, p: ChangeParams) -> tuple[np.ndarray, np.ndarray]:
-        """Return the frequencies, Hz, and shapes at the points of the bat changed by ``p``."""
+    def matrices(self, p: ChangeParams) -> StateMatrices:
+        """Return K and M of the bat changed by ``p``, with its accelerometer, and where it is."""
         ws = self.system(p.core)
-        K, M = ws.wood_matrices(p.end_moisture_pt)
+        K, M = self._wood(ws, p.end_moisture_pt)
         M = p.density_scale * M
         local = self.local(ws, p.segments)
         if local is not None:  # after moisture's scale: it scales the wood, not a foreign mass
             K, M = K + local[0], M + local[1]
         x = float(np.clip(self.sensor_x_m + p.sensor_shift_m, 0.0, self.profile.length_m))
-        dofs, n = point_vector(ws.model, x)
+        dofs, n = self._point(ws, x)
         # the change may take the calibrated mass below 0 (calibration puts other physics
         # there, the change is relative to it), but not so far that M + m n n^T stops being
         # positive definite (m > -1 / n^T M^-1 n), where the eigen-solution would fail
@@ -211,10 +255,41 @@ class ChangePredictor:
             mass = max(mass, -0.9 / float(v @ np.linalg.solve(M, v)))
         if mass:
             M[np.ix_(dofs, dofs)] += mass * np.outer(n, n)
-        modes = solve_modes(p.stiffness_scale * K + ws.K_bungees, M, None, self.n_solve)
-        shapes = modes.shapes[ws.point_rows]
-        return modes.freq_hz, shapes * driving_point_scale(n @ modes.shapes[dofs],
-                                                           shapes[self.drive])
+        return StateMatrices(p.stiffness_scale * K + ws.K_bungees, M, dofs, n, ws.point_rows)
+
+    def _wood(self, ws: WoodSystem, end_moisture_pt: tuple[float, float]):
+        """Return ``ws.wood_matrices`` (the last few kept: a Jacobian's steps share them)."""
+        key = (id(ws), end_moisture_pt)
+        if key not in self._woods:
+            if len(self._woods) >= LOCAL_CACHE:
+                self._woods.clear()
+            self._woods[key] = ws.wood_matrices(end_moisture_pt)
+        return self._woods[key]
+
+    def _point(self, ws: WoodSystem, x_m: float) -> tuple[np.ndarray, np.ndarray]:
+        """Return ``point_vector`` of the accelerometer at ``x_m`` (the last few kept)."""
+        key = (id(ws), x_m)
+        if key not in self._points:
+            if len(self._points) >= LOCAL_CACHE:
+                self._points.clear()
+            self._points[key] = point_vector(ws.model, x_m)
+        return self._points[key]
+
+    def observe(self, state: StateMatrices, shapes: np.ndarray) -> np.ndarray:
+        """Return the mass-normalised mode ``shapes`` (n_dof, m) as the tests see them.
+
+        The rows of the test points, times the accelerometer's driving-point factor
+        (``driving_point_scale``).
+        """
+        at_points = shapes[state.point_rows]
+        return at_points * driving_point_scale(state.n @ shapes[state.dofs],
+                                               at_points[self.drive])
+
+    def __call__(self, p: ChangeParams) -> tuple[np.ndarray, np.ndarray]:
+        """Return the frequencies, Hz, and shapes at the points of the bat changed by ``p``."""
+        state = self.matrices(p)
+        modes = solve_modes(state.K, state.M, None, self.n_solve)
+        return modes.freq_hz, self.observe(state, modes.shapes)
 
 
 def make_predictor(

@@ -11,8 +11,6 @@ from __future__ import annotations
 from dataclasses import dataclass, replace
 
 import numpy as np
-from scipy.stats import chi2
-from scipy.stats import f as f_dist
 
 from updating.inspect.decision import CONFUSABLE, GRIP_MIN_G, Evidence, is_significant
 from updating.inspect.details import (
@@ -36,6 +34,7 @@ from updating.inspect.hypotheses import (
 from updating.inspect.kinds import N_PARAMS, KindFits, classify, segment_space
 from updating.inspect.local_change import N_SEGMENT, fit_segment
 from updating.inspect.model import ChangePredictor
+from updating.inspect.tails import chi2_ppf, f_sf
 from updating.model.units import IN_TO_M
 
 INITIAL_SHAPE_NOISE = 0.01
@@ -112,7 +111,7 @@ def nested_f(rss_null: float, rss_core: float, q: int, dof: int) -> tuple[float,
     significant); p = P(F_{q, dof} > F).
     """
     F = max(rss_null - rss_core, 0.0) / q / max(rss_core / dof, 1.0)
-    return F, float(f_dist.sf(F, q, dof))
+    return F, f_sf(F, q, dof)
 
 
 @dataclass(frozen=True)
@@ -194,7 +193,7 @@ def _bounds_matter(predict, diff, space, hyp: Hypotheses, n: int,
     wide = fit_null(predict, diff, replace(space, bounds=space.bounds.relaxed()),
                     hyp.sigma_rel, x0=hyp.null.x)
     s2 = max(wide.rss / max(n - N_NULL, 1), 1.0)
-    return (hyp.null.rss - wide.rss) / s2 > chi2.ppf(1 - level, len(held))
+    return (hyp.null.rss - wide.rss) / s2 > chi2_ppf(1 - level, len(held))
 
 
 def _core_beyond_drift(predict, diff, space, hyp: Hypotheses, q: int, dof: int,

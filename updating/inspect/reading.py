@@ -10,7 +10,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.stats import chi2
 
 from updating.correlate.measured import MeasuredModes
 from updating.inspect.changes import RetestPairs
@@ -36,6 +35,7 @@ from updating.inspect.kinds import KindFits
 from updating.inspect.model import ChangePredictor
 from updating.inspect.msso_map import msso_map
 from updating.inspect.nested import Hypotheses, NestedTest
+from updating.inspect.tails import chi2_ppf
 from updating.model.units import IN_TO_M
 
 MAP_MASS_NORMALISED = True
@@ -64,7 +64,7 @@ def _light_fill_reading(predict, diff, space, sigma_rel: np.ndarray, full: Chang
     start_in, end_in = (v / IN_TO_M for v in c.interval_m(length_m))
     where = f"{c.diameter_m / IN_TO_M:.2f} in across at {start_in:.1f}-{end_in:.1f} in from " \
             "the knob end"
-    if (full.rss - partial.rss) / max(partial.rss / dof, 1.0) > chi2.ppf(1 - PARTIAL_LEVEL, 1):
+    if (full.rss - partial.rss) / max(partial.rss / dof, 1.0) > chi2_ppf(1 - PARTIAL_LEVEL, 1):
         filled_in = (c.depth_m - c.plug_m - c.empty_m) / IN_TO_M
         reason = (f"it fits a hole {where} filled at its bottom {filled_in:.1f} in (fill/wood "
                   f"density {c.fill_density_ratio:.2f}) and empty for {c.empty_m / IN_TO_M:.1f}"

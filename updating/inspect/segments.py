@@ -32,7 +32,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from updating.model.assembly import BatModel, place
+from updating.model.assembly import BatModel
 from updating.model.element import ElementParts, element_parts
 from updating.model.sections import section_props
 from updating.msso.core_elements import CoreFactors, core_element_factors
@@ -41,6 +41,9 @@ MIN_DIAMETER_SHARE = 0.2
 """A diameter loss never takes a section below this share of its diameter."""
 N_GAUSS = 4
 """Gauss points per covered element: exact for the cubic shape functions' products."""
+GAUSS_POINTS = np.polynomial.legendre.leggauss(N_GAUSS)
+"""Gauss-Legendre points and weights on [-1, 1] (computed once: a fit integrates thousands of
+segments)."""
 
 
 @dataclass(frozen=True)
@@ -116,7 +119,7 @@ def segment_parts(model: BatModel, seg: Segment) -> tuple[ElementParts, float]:
     lo, hi = nodes[:-1], nodes[1:]
     a, b = np.maximum(lo, seg.x0_m), np.minimum(hi, seg.x1_m)
     elem = np.flatnonzero(b > a)
-    g, gw = np.polynomial.legendre.leggauss(N_GAUSS)
+    g, gw = GAUSS_POINTS
     half = 0.5 * (b[elem] - a[elem])
     x = ((a[elem] + half)[:, None] + half[:, None] * g[None, :]).ravel()
     w = (half[:, None] * gw[None, :]).ravel()
@@ -162,8 +165,13 @@ def segment_change(model: BatModel, segments) -> tuple[np.ndarray, np.ndarray, f
     mass = 0.0
     for seg in segments:
         p, m = segment_parts(model, seg)
-        dK += place(model, p.k_bend) + place(model, p.k_shear)
-        dM += place(model, p.m_trans) + place(model, p.m_rot)
+        touched = np.flatnonzero(np.any(p.m_trans != 0, axis=(1, 2))
+                                 | np.any(p.k_bend != 0, axis=(1, 2))
+                                 | np.any(p.k_shear != 0, axis=(1, 2)))
+        d = model.dofs[touched]
+        at = (d[:, :, None], d[:, None, :])
+        np.add.at(dK, at, (p.k_bend + p.k_shear)[touched])
+        np.add.at(dM, at, (p.m_trans + p.m_rot)[touched])
         mass += m
     return dK, dM, mass
 
