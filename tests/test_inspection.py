@@ -171,13 +171,16 @@ def test_tests_at_different_points_are_refused():
         inspect_retest(case.profile, case.reference, base, moved)
 
 
-@pytest.mark.parametrize("seed,kind,shift_in", [(25, "cork", 0.4), (25, "cork", 0.6),
-                                                (23, "none", 0.4), (24, "none", 0.6)])
-def test_a_core_is_told_apart_from_a_drift_at_its_bound(seed, kind, shift_in):
+@pytest.mark.parametrize("seed,kind,shift_in,at_bound", [
+    (25, "cork", 0.4, True), (25, "cork", 0.6, None), (23, "none", 0.4, None),
+    (24, "none", 0.6, None)])
+def test_a_core_is_told_apart_from_a_drift_at_its_bound(seed, kind, shift_in, at_bound):
     """The accelerometer re-mounted 0.4-0.6 in off, beyond the 0.3 in the drift model allows:
     a cork core, which holds the fitted shift at its bound, is still called altered when no
     drift three times as large explains the change (``_core_beyond_drift``); the same shift
-    on an unaltered bat is never called altered."""
+    on an unaltered bat is never called altered. At 0.6 in the core fit may find an optimum
+    off the bound (the analytic Jacobian reaches F 61 where finite differences stopped at 52):
+    the verdict and region must hold either way."""
     rng = np.random.default_rng(seed)
     case = random_case(rng, kind)
     moved = case.baseline.sensor_offset_m + shift_in * IN_TO_M
@@ -187,7 +190,8 @@ def test_a_core_is_told_apart_from_a_drift_at_its_bound(seed, kind, shift_in):
     if kind == "none":
         assert v.altered is not True, v.reasons
         return
-    assert v.details.fit.core_fit_at_bound == ("sensor_shift_in",)
+    if at_bound:
+        assert v.details.fit.core_fit_at_bound == ("sensor_shift_in",)
     assert v.altered is True, v.reasons
     core, L = case.core, case.profile.length_m
     assert v.region_m[0] == pytest.approx(L - core.depth_m, abs=1.5 * IN_TO_M)
