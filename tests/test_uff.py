@@ -393,3 +393,39 @@ def test_pyuff_is_in_the_pinned_range_whose_private_extractors_ema_io_uses(tmp_p
                                                else b.text)), b.type
             seen.add(b.type)
     assert seen == {15, 55, 58, 164}
+
+
+def _scrambling_writer(monkeypatch, bad_writes):
+    """pyuff's writer, scrambled on its first ``bad_writes`` calls as a late flush of an
+    orphaned handle scrambles it: the file's last 200 bytes land in its middle."""
+    real = pyuff.UFF.write_sets
+    calls = {"n": 0}
+
+    def write_sets(self, dsets, mode="add", force_double=True):
+        real(self, dsets, mode=mode, force_double=force_double)
+        calls["n"] += 1
+        if calls["n"] <= bad_writes:
+            with open(self._filename, "rb") as fh:
+                data = fh.read()
+            mid = len(data) // 2
+            with open(self._filename, "wb") as fh:
+                fh.write(data[:mid] + data[-200:] + data[mid:-200])
+
+    monkeypatch.setattr(pyuff.UFF, "write_sets", write_sets)
+    return calls
+
+
+def test_a_write_that_does_not_read_back_is_written_again(tmp_path, monkeypatch):
+    test = bat_test()
+    calls = _scrambling_writer(monkeypatch, bad_writes=1)
+    write_uff(tmp_path / "t.uff", test)
+    assert calls["n"] == 2
+    _assert_same_test(read_uff(tmp_path / "t.uff"), test, rtol=1e-12)
+
+
+def test_a_write_that_never_reads_back_is_refused_and_nothing_is_left(tmp_path, monkeypatch):
+    test = bat_test()
+    _scrambling_writer(monkeypatch, bad_writes=5)
+    with pytest.raises(OSError, match=r"t\.uff: the written UFF file does not read back"):
+        write_uff(tmp_path / "t.uff", test)
+    assert list(tmp_path.iterdir()) == []

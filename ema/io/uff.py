@@ -20,6 +20,7 @@ Fortran D exponents) goes to pyuff's own 58 extractor.
 
 from __future__ import annotations
 
+import gc
 import io
 import os
 import re
@@ -361,7 +362,30 @@ def write_uff(path: str | os.PathLike, test: FrfTest, binary: bool = True) -> No
                 require_finite(col, f"{where}: {label} {r}/{q}")
                 dsets.append(_dset58(func, int(r), int(q), col, f0, df, test.quantity,
                                      ids, binary, len(dsets) - 1))
-    atomic_write(path, lambda tmp: pyuff.UFF(str(tmp)).write_sets(dsets, mode="overwrite"))
+    atomic_write(path, lambda tmp: _write_checked(tmp, dsets, test, path))
+
+
+def _write_checked(tmp: Path, dsets: list[dict], test: FrfTest, path: Path,
+                   attempts: int = 2) -> None:
+    """Write ``dsets`` to ``tmp`` through pyuff and read it back before it is moved into place.
+
+    pyuff's binary 58 writer reopens the file itself and leaves its last text handle to the
+    garbage collector; where a profiler holds the frame (a Dask worker's statistical profiler)
+    that handle can flush after the next dataset and scramble the file. The file is read back
+    and compared with ``test`` (exact for binary doubles, 1e-9 relative for ASCII); a file that
+    does not read back is written again after a collection, then refused.
+    """
+    for _ in range(attempts):
+        pyuff.UFF(str(tmp)).write_sets(dsets, mode="overwrite")
+        gc.collect()  # close pyuff's orphaned handle now, not at some later flush
+        try:
+            back = read_uff(tmp)
+        except ValueError:
+            continue
+        if back.frf.shape == test.frf.shape and np.allclose(back.frf, test.frf, rtol=1e-9,
+                                                            atol=0.0):
+            return
+    raise OSError(f"{path}: the written UFF file does not read back as the test (pyuff)")
 
 
 def _id_lines(test: FrfTest, f0: float, df: float) -> list[str]:
