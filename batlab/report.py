@@ -25,7 +25,7 @@ from pathlib import Path
 import numpy as np
 
 from batlab.formatting import finding_words, p_value, status_of
-from batlab.pipeline.records import ReportInputs, jsonable
+from batlab.pipeline.records import FORCED_KEY, ReportInputs, jsonable
 from batlab.registry import now_utc
 from batlab.report_check import seal_page
 from ema.io.atomic_write import atomic_write
@@ -496,6 +496,8 @@ def _provenance(r: ReportInputs, generated_at: str) -> list[list]:
         when = pv["inspected_at"][:19].replace("T", " ")
         rows.append(["Inspection", f"#{pv['inspection_id']}, {when} UTC"])
     rows.append(["Species", meta.get("species")])
+    if meta.get(FORCED_KEY):
+        rows.append(["Registered with --force", str(meta[FORCED_KEY])])
     if meta.get("weight_lb") is not None:
         rows.append(["Weight at registration (lb)", _Raw(f"{float(meta['weight_lb']):.4f}")])
     rows.append(["Calibrated wood: E (psi), density (lb/in³), E/G", _Raw(
@@ -523,6 +525,9 @@ def render_html(r: ReportInputs, generated_at: str, figures: dict[str, bytes]) -
              f"<p class='note'>baseline {html.escape(r.baseline.name)}, re-test "
              f"{html.escape(r.retest.name)}</p>",
              f"<div class='verdict {status}'>{html.escape(headline(r))}</div>",
+             *([f"<p class='warn'>This bat was registered with --force although its baseline "
+                f"looked odd: {html.escape(str(r.meta[FORCED_KEY]))}</p>"]
+               if r.meta.get(FORCED_KEY) else []),
              "<h2>The evidence</h2>", _table(None, _facts(r), "facts")]
     parts.append("<h2>Where the bat changed</h2>")
     parts.append(_img(_data_uri(figures["elements"]), "element changes over the bat profile"))

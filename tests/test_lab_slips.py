@@ -216,3 +216,32 @@ def test_simulate_says_its_step_with_the_time(tmp_path, capsys):
     assert main(["simulate", "-o", str(tmp_path / "t.uff"), "--df", "4", "--seed", "1"]) == 0
     err = capsys.readouterr().err
     assert "batlab simulate [" in err and "s]: simulating 16 impact points, 801 lines" in err
+
+
+def test_force_registers_an_odd_baseline_and_every_report_says_so(tmp_path, capsys):
+    """A heavier bat's baseline, refused without --force, is registered with it; the record
+    keeps why it looked odd and the inspection's report shows it on its first screen."""
+    scale = np.random.default_rng().uniform(1.15, 1.25)
+    heavy = tmp_path / "heavy.uff"
+    assert main(["simulate", "--profile", str(SAMPLE / "profile.csv"), "--meta",
+                 str(SAMPLE / "meta.json"), "--density-scale", f"{scale:.4f}", "--seed", "4",
+                 "-o", str(heavy)]) == 0
+    db = tmp_path / "lab.sqlite"
+    args = ["register", "--profile", str(SAMPLE / "profile.csv"), "--meta",
+            str(SAMPLE / "meta.json"), "--baseline", str(heavy), "--db", str(db)]
+    capsys.readouterr()
+    assert main(args) == 2 and not db.exists()
+    capsys.readouterr()
+    assert main([*args, "--force"]) == 0
+    assert "registered with --force although" in capsys.readouterr().err
+    from batlab.registry import get_bat
+
+    with open_registry(db) as conn:
+        why = get_bat(conn, "HX-2001").meta["registered_with_force"]
+    assert "says the bat weighs about" in why
+    report = tmp_path / "report"
+    assert main(["inspect", "--serial", "HX-2001", str(heavy), "--db", str(db),
+                 "-o", str(report)]) == 0
+    page = (report / "index.html").read_text()
+    assert page.index("registered with --force") < page.index("The evidence")
+    assert "Registered with --force" in page

@@ -20,6 +20,11 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--baseline", required=True, help="baseline test (.uff, .csv or .npz)")
     p.add_argument("--replace", action="store_true",
                    help="replace an already registered bat (its inspections are kept)")
+    p.add_argument("--force", action="store_true",
+                   help="register a baseline the after-fit checks find odd (calibration "
+                        "outside the species' range, misfit, mass line off the weight), for a "
+                        "real bat that odd only; the record and every report say so (unit "
+                        "slips in the files are still refused)")
     add_db_argument(p)
     p.add_argument("--json", action="store_true", help="print JSON on stdout")
 
@@ -55,7 +60,7 @@ def run(args: argparse.Namespace) -> int:
             if has_bat(conn, meta.serial):
                 raise ValueError(f"bat {meta.serial!r} is already registered (use --replace)")
     prepared = prepare_registration(args.profile, args.meta, args.baseline, args.serial,
-                                    progress)
+                                    progress, force=args.force)
     with open_registry(path) as conn:
         done = store_registration(conn, prepared, args.baseline, args.replace, progress)
     rec = done.record

@@ -23,6 +23,10 @@ if TYPE_CHECKING:
     from updating.model.reference import BatReference
 
 
+FORCED_KEY = "registered_with_force"
+"""The stored meta's key that holds why a baseline registered with ``--force`` looked odd."""
+
+
 @dataclass(frozen=True)
 class FittedTest:
     """One test file, read and fitted.

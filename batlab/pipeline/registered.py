@@ -26,7 +26,7 @@ from batlab.pipeline.inspection import (
     fit_file,
     judge,
 )
-from batlab.pipeline.records import FittedTest
+from batlab.pipeline.records import FORCED_KEY, FittedTest
 from updating.correlate.measured import driving_mass_line
 from updating.correlate.points import match_points, point_positions_m
 from updating.inspect.retest_meta import conditions_from_dict
@@ -78,9 +78,12 @@ def baseline_mass_line(profile: Profile, meta: BatMeta, baseline: FittedTest) ->
 
 def prepare_registration(
     profile_path, meta_path, baseline_path, serial: str | None = None,
-    progress: Progress = quiet,
+    progress: Progress = quiet, force: bool = False,
 ) -> Registration:
     """Read a new bat's files, fit its baseline and calibrate its reference (nothing stored).
+
+    A baseline that ``plausible.check_baseline`` finds odd is refused unless ``force``; then
+    its message is kept in the record's meta as ``FORCED_KEY``, which every report shows.
 
     Parameters
     ----------
@@ -90,6 +93,8 @@ def prepare_registration(
         The serial the lab gave (must be meta.json's).
     progress : Progress
         Receives one-line messages.
+    force : bool
+        Register an odd baseline anyway (the record says so).
 
     Returns
     -------
@@ -107,11 +112,15 @@ def prepare_registration(
                                     diagnosis.extended.rms_pct, diagnosis.warnings,
                                     str(baseline_path), meta.serial,
                                     baseline_mass_line(profile, meta, baseline))
-    if slip:
+    if slip and not force:
         raise ValueError(slip)
+    stored_meta = dict(meta.extra)
+    if slip:
+        progress(f"registered with --force although: {slip}")
+        stored_meta[FORCED_KEY] = slip
     record = reg.BatRecord(
         serial=meta.serial, profile_x_m=profile.x_m.tolist(),
-        profile_diameter_m=profile.diameter_m.tolist(), meta=meta.extra, species=meta.species,
+        profile_diameter_m=profile.diameter_m.tolist(), meta=stored_meta, species=meta.species,
         reference=diagnosis.reference.to_dict(), modes=reg.encode_modes(baseline.modes))
     return Registration(record, baseline, diagnosis)
 
