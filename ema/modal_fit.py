@@ -46,7 +46,7 @@ import numpy as np
 
 from ema.io.frf_data import FrfTest
 from ema.mode_checks import CLOSE_PAIR, ClosePair, close_pairs, mode_warnings
-from ema.poles.autopoles import MERGE_OVERLAP, auto_poles
+from ema.poles.autopoles import auto_poles, overlapping
 from ema.poles.local_support import (
     MAX_SHIFT,
     MIN_LINES,
@@ -395,8 +395,8 @@ def _peak_confirmed(
             continue
         near = [r for r in rejected if r.reason == "stability" and r.stable_orders >= min_orders
                 and abs(r.freq_hz - fp) <= width and r not in out
-                and not np.any(MERGE_OVERLAP * np.abs(mode_freq_hz - r.freq_hz) < 0.5 * (
-                    mode_damping * mode_freq_hz + r.damping_ratio * r.freq_hz))]
+                and not np.any(overlapping(mode_freq_hz, mode_damping, r.freq_hz,
+                                           r.damping_ratio))]
         if near:
             out.append(max(near, key=lambda r: r.stable_orders))
     return out

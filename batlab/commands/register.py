@@ -48,17 +48,17 @@ def run(args: argparse.Namespace) -> int:
         PSI_TO_PA,
         prepare_registration,
         read_bat_files,
+        require_unregistered,
         store_registration,
     )
-    from batlab.registry import has_bat, is_url, open_registry, shown
+    from batlab.registry import is_url, open_registry, shown
 
     progress = progress_printer("register")
     path = db_path(args)
     _, meta = read_bat_files(args.profile, args.meta)  # refused at the door: no registry made
     if not args.replace and (is_url(path) or Path(path).is_file()):  # fail fast, before the fit
         with open_registry(path) as conn:
-            if has_bat(conn, meta.serial):
-                raise ValueError(f"bat {meta.serial!r} is already registered (use --replace)")
+            require_unregistered(conn, meta.serial)
     prepared = prepare_registration(args.profile, args.meta, args.baseline, args.serial,
                                     progress, force=args.force)
     with open_registry(path) as conn:

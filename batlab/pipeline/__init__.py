@@ -64,7 +64,7 @@ _SOURCES = {
     ),
     "batlab.pipeline.registered": (
         "Registration", "inspect_registered", "prepare_registration", "register_files",
-        "registered_case", "store_registration",
+        "registered_case", "require_unregistered", "store_registration",
     ),
     "batlab.pipeline.stored": (
         "already_inspected", "history_table", "note_report", "provenance", "report_inputs",

@@ -125,6 +125,12 @@ def prepare_registration(
     return Registration(record, baseline, diagnosis)
 
 
+def require_unregistered(conn: sqlite3.Connection, serial: str) -> None:
+    """Raise ValueError when ``serial`` is already registered (a new bat needs --replace)."""
+    if reg.has_bat(conn, serial):
+        raise ValueError(f"bat {serial!r} is already registered (use --replace)")
+
+
 def register_files(
     conn: sqlite3.Connection, profile_path, meta_path, baseline_path,
     serial: str | None = None, replace: bool = False, progress: Progress = quiet,
@@ -150,9 +156,7 @@ def register_files(
         The stored record, the fitted baseline and its diagnosis.
     """
     if not replace:  # fail fast, before the fit (add_bat checks again, under the lock)
-        _, meta = read_bat_files(profile_path, meta_path)
-        if reg.has_bat(conn, meta.serial):
-            raise ValueError(f"bat {meta.serial!r} is already registered (use --replace)")
+        require_unregistered(conn, read_bat_files(profile_path, meta_path)[1].serial)
     done = prepare_registration(profile_path, meta_path, baseline_path, serial, progress)
     return store_registration(conn, done, baseline_path, replace, progress)
 

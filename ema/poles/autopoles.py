@@ -291,6 +291,19 @@ def _partition_poles(
     )
 
 
+def overlapping(
+    f1_hz: np.ndarray | float, zeta1: np.ndarray | float, f2_hz: np.ndarray | float,
+    zeta2: np.ndarray | float,
+) -> np.ndarray | bool:
+    """Return whether two poles sit inside one half-power width (``MERGE_OVERLAP``).
+
+    True where |f2 - f1| x ``MERGE_OVERLAP`` < (zeta1 f1 + zeta2 f2) / 2: one mode, or a pair
+    the data do not resolve. Broadcasts over arrays (Hz, damping ratios).
+    """
+    half = 0.5 * (np.multiply(zeta1, f1_hz) + np.multiply(zeta2, f2_hz))
+    return np.abs(np.subtract(f2_hz, f1_hz)) * MERGE_OVERLAP < half
+
+
 def merge_overlapping(sel: SelectedPoles) -> tuple[SelectedPoles, list[Rejection]]:
     """Keep one mode where two selected poles sit inside one half-power width.
 
@@ -319,9 +332,9 @@ def merge_overlapping(sel: SelectedPoles) -> tuple[SelectedPoles, list[Rejection
             continue
         j = j[-1]
         f1, f2 = sel.freq_hz[j], sel.freq_hz[i]
-        half = 0.5 * (sel.damping_ratio[j] * f1 + sel.damping_ratio[i] * f2)
-        if (f2 - f1) * MERGE_OVERLAP >= half:
+        if not overlapping(f1, sel.damping_ratio[j], f2, sel.damping_ratio[i]):
             continue
+        half = 0.5 * (sel.damping_ratio[j] * f1 + sel.damping_ratio[i] * f2)
         lose, win = (i, j) if sel.count[i] <= sel.count[j] else (j, i)
         keep[lose] = False
         out.append(Rejection(
