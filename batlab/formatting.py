@@ -108,7 +108,8 @@ def finding_words(finding: dict | None, length_in: float | None = None) -> str |
     kind, rule = finding["kind"], finding["rule"]
     if kind == "core":
         fill = r.get("fill_density_ratio")
-        what = f"a bore about {r.get('core_diameter_in', float('nan')):.2f} in across"
+        what = (f"a bore about {r.get('core_diameter_in', float('nan')):.2f} in across and "
+                f"{b - a:.1f} in long")
         if fill is not None:
             what += (", left hollow" if fill < 0.05 else
                      f", filled with material about {fill:.2f} times as dense as the wood")
@@ -119,7 +120,7 @@ def finding_words(finding: dict | None, length_in: float | None = None) -> str |
         return f"{rule}: about {r.get('added_mass_g', 0):.0f} g of a substance over {where}"
     if kind == "material_removed":
         return (f"{rule}: about {r.get('diameter_lost_in', 0):.3f} in of the diameter removed "
-                f"over {where}")
+                f"along {b - a:.1f} in, {where}")
     if kind == "handle_substance":
         text = f"about {r.get('added_mass_g', 0):.0f} g added on the handle, {a:.0f}-{b:.0f} in"
         if finding.get("legal"):

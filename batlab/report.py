@@ -6,11 +6,11 @@ lab manager.
 Drawn from ``ReportInputs`` (the verdict as the registry stores it, the model, both fitted
 tests, meta.json, provenance), so a stored inspection's page can be rebuilt from the registry.
 Contents: one plain sentence (what, where, how much, how sure); the evidence in readable rows;
-element mass (alpha) and stiffness (beta) factors of the core fit and of the MSSO map on one
-shared symmetric scale with the map's noise band, over a to-scale drawing of the bat, and a
-sentence reconciling the two localisations; mass properties; paired modes; driving-point FRFs,
-MAC and stabilisation diagrams; provenance (date, version, species, weight, file hashes,
-custody records). Layout: docs/report.md.
+element mass (alpha) and stiffness (beta) factors of the finding's fit and of the MSSO map on
+one shared symmetric scale with the map's noise band, coloured by sign, over a to-scale drawing
+of the bat with the finding marked, and a sentence reconciling the two localisations; mass
+properties; paired modes; driving-point FRFs, MAC and stabilisation diagrams; provenance (date,
+version, species, weight, file hashes, custody records). Layout: docs/report.md.
 """
 
 from __future__ import annotations
@@ -142,80 +142,229 @@ SCALE_FLOOR = 0.05
 """Element-plot axes show at least +-5 % change: a clean bat's bars stay visibly small."""
 
 
+SIGN_COLOURS = ("#2166ac", "#e08214")
+"""Bar colours by sign (blue, orange; told apart with colour blindness): an element that
+gained (mass added, stiffer), one that lost (mass removed, softer)."""
+SIGN_WORDS = {"alpha": ("mass added", "mass removed"), "beta": ("stiffer", "softer")}
+"""The legend's words for a bar pointing up, down, per panel."""
+FADED = 0.3
+"""Opacity of a map bar inside its noise band (not a change)."""
+REGION_COLOURS = {"altered": "C3", "legal": "#27ae60", "other": "#d4a017"}
+"""Shading of the finding's region: an alteration, a legal grip, anything else (no verdict,
+or a grip past 18 in: clean the bat)."""
+
+
+def shown_finding(v: dict) -> dict | None:
+    """Return the finding the element figure marks, or None.
+
+    The verdict's ``finding`` (an alteration, a grip substance, or what an inconclusive
+    verdict could not tell apart); for an altered record stored before the rulebook (no
+    ``finding``), its core, or a change of no named kind, over its ``region_in``.
+    """
+    f = v.get("finding")
+    if f and f.get("region_in"):
+        return f
+    if status_of(v) != "altered" or not v.get("region_in"):
+        return None
+    core = v.get("core_diameter_in")
+    return {"kind": "core" if core else "local_change", "legal": False,
+            "region_in": v["region_in"], "rule": "altered",
+            "reading": {"core_diameter_in": core} if core else {}}
+
+
+def finding_label(f: dict, status: str) -> tuple[str, str, str]:
+    """Say what a finding is in a few words, for a legend and the drawing of the bat.
+
+    Parameters
+    ----------
+    f : dict
+        The finding (``shown_finding``).
+    status : str
+        The verdict's status.
+
+    Returns
+    -------
+    tuple of str
+        (region's legend label, short words, colour): "finding region: nailed", "nailed";
+        "legal grip (Rule 3.02(c))", "legal grip"; a grip past 18 in says to clean the bat,
+        a finding with no verdict says so.
+    """
+    if f["kind"] == "handle_substance":
+        if f.get("legal"):
+            return "legal grip (Rule 3.02(c))", "legal grip", REGION_COLOURS["legal"]
+        return ("grip past 18 in: clean the bat", "grip past 18 in",
+                REGION_COLOURS["other"])
+    rule = str(f.get("rule") or f["kind"].replace("_", " "))
+    if status == "altered":
+        return f"finding region: {rule}", rule, REGION_COLOURS["altered"]
+    return f"finding region: {rule} (no verdict)", f"{rule}?", REGION_COLOURS["other"]
+
+
+def sign_colours(values: np.ndarray, opacity: np.ndarray | float = 1.0) -> np.ndarray:
+    """Return one RGBA colour per bar: ``SIGN_COLOURS`` by the sign of ``values`` (0 is up)."""
+    from matplotlib.colors import to_rgba_array
+
+    rgba = to_rgba_array(SIGN_COLOURS)[(np.asarray(values) < 0).astype(int)]
+    rgba[:, 3] = opacity
+    return rgba
+
+
+def _map_factors(emap, n: int) -> dict:
+    """Return per factor ("alpha", "beta") the map's values and 2 sigma band, or None.
+
+    None for both without a map of ``n`` elements; a map without standard deviations has
+    a zero band.
+    """
+    if emap is None or emap.alpha.size != n:
+        return {"alpha": None, "beta": None}
+    return {k: (m, 2 * (std if std.size else np.zeros(n)))
+            for k, m, std in (("alpha", emap.alpha, emap.alpha_std),
+                              ("beta", emap.beta, emap.beta_std))}
+
+
+def _bar_panel(ax, x0: np.ndarray, w: np.ndarray, fit: np.ndarray, shown, region) -> list:
+    """Draw one panel's bars, coloured by sign, and return its legend handles.
+
+    Parameters
+    ----------
+    ax : matplotlib.axes.Axes
+        The panel.
+    x0, w : numpy.ndarray
+        (e,) element starts and lengths, in.
+    fit : numpy.ndarray
+        (e,) the fitted change's factors (solid, left half of each element).
+    shown : tuple of numpy.ndarray or None
+        The map's factors and their 2 sigma band (hatched, right half; faded inside the
+        band), or None.
+    region : tuple or None
+        (start_in, end_in, label, colour) of the finding, shaded; or None.
+
+    Returns
+    -------
+    list
+        The noise band's and the region's artists, for a legend.
+    """
+    handles = []
+    if shown is not None:
+        msso, band = shown
+        edges = np.append(x0, x0[-1] + w[-1])
+        b = np.append(band, band[-1])
+        handles.append(ax.fill_between(edges, -b, b, step="post", color="0.6", alpha=0.3, lw=0,
+                                       label="map noise band (±2σ); map bars inside it faded"))
+    ax.bar(x0, fit, width=w / 2 if shown is not None else w, align="edge",
+           color=sign_colours(fit), edgecolor="k", lw=0.4)
+    if shown is not None:
+        opacity = np.where(np.abs(msso) <= band, FADED, 1.0)
+        ax.bar(x0 + w / 2, msso, width=w / 2, align="edge", color=sign_colours(msso,
+               0.15 * opacity), edgecolor=sign_colours(msso, opacity), hatch="////", lw=0.6)
+    if region is not None:
+        a, b2, label, colour = region
+        handles.append(ax.axvspan(a, b2, color=colour, alpha=0.12, lw=0, label=label))
+    ax.axhline(0, color="k", lw=0.6)
+    return handles
+
+
+def _bar_legends(axes, handles: list, has_map: bool) -> None:
+    """Write each panel's legend: its signs' words (and, on the top panel, the rest)."""
+    from matplotlib.patches import Patch
+
+    kinds = [Patch(facecolor="0.85", edgecolor="k", lw=0.4, label="solid: fitted change "
+                   "(how much)")]
+    if has_map:
+        kinds.append(Patch(facecolor="none", edgecolor="0.3", hatch="////", lw=0.6,
+                           label="hatched: element map (where)"))
+    for ax, key, extra in ((axes[0], "alpha", kinds + handles), (axes[1], "beta", [])):
+        signs = [Patch(facecolor=c, edgecolor="k", lw=0.4, label=word)
+                 for c, word in zip(SIGN_COLOURS, SIGN_WORDS[key], strict=True)]
+        ax.legend(handles=signs + extra, fontsize=7, loc="lower left", ncol=3,
+                  bbox_to_anchor=(0.0, 1.0), borderaxespad=0.2, frameon=False)
+
+
+def _profile_panel(ax, r: ReportInputs, f: dict | None, words: str, colour: str) -> None:
+    """Draw the bat to scale (inches) with the test points and what the verdict found.
+
+    A core as its bore (diameter by length); any other finding as its stretch of the
+    outline shaded, under a bracket with the finding's words.
+    """
+    import matplotlib.pyplot as plt
+
+    prof = r.profile
+    x = prof.x_m / IN_TO_M
+    rad = prof.diameter_m / IN_TO_M / 2
+    d_max = 2 * float(rad.max())
+    top = 0.75 * d_max
+    ax.fill_between(x, -rad, rad, color="burlywood", edgecolor="saddlebrown", lw=0.8)
+    if f is not None:
+        a, b = f["region_in"]
+        core_in = (f.get("reading") or {}).get("core_diameter_in") or \
+            r.verdict.get("core_diameter_in")
+        if f["kind"] == "core" and core_in:
+            ax.add_patch(plt.Rectangle((a, -core_in / 2), b - a, core_in, color=colour,
+                                       alpha=0.7, label=f"fitted core ({words})"))
+        else:
+            xs = np.concatenate([[a], x[(x > a) & (x < b)], [b]])
+            rs = np.interp(xs, x, rad)
+            ax.fill_between(xs, -rs, rs, color=colour, alpha=0.55, lw=0,
+                            label=f"{words}, {a:.1f}–{b:.1f} in")
+            y = 0.6 * d_max
+            ax.plot([a, a, b, b], [y - 0.1 * d_max, y, y, y - 0.1 * d_max], color=colour, lw=1.5)
+            ax.text((a + b) / 2, y + 0.04 * d_max, words, ha="center", va="bottom", fontsize=7,
+                    color="k")
+            top = 1.05 * d_max
+    pts = r.baseline.modes.x_m / IN_TO_M
+    ax.plot(pts, np.zeros_like(pts), "k+", ms=5, label="test points")
+    ax.legend(fontsize=7, loc="lower left", ncol=2)
+    ax.set_aspect("equal")
+    ax.set_ylim(-0.75 * d_max, top)
+    ax.set_xlim(-0.5, prof.length_m / IN_TO_M + 0.5)
+    ax.set_xlabel("x from the knob end (in)")
+    ax.set_ylabel("in")
+
+
 def element_figure(r: ReportInputs):
     """Draw the element factors over the bat.
 
     Alpha and beta per element as bars, over the bat's profile drawn to scale (inches):
-    the physical fit's factors (how much; left half of each element) beside the MSSO map
-    (where; right half, hatched) with its +-2 sigma noise band. One symmetric scale, shared
+    the fitted change's factors (how much; left half of each element) beside the MSSO map
+    (where; right half, hatched) with its +-2 sigma noise band, a map bar inside it faded.
+    Each bar is coloured by its sign (``SIGN_COLOURS``: mass added or removed, stiffer or
+    softer). The finding's region (an alteration, a legal grip, what an inconclusive verdict
+    could not tell apart) is shaded with its kind in the legend. One symmetric scale, shared
     by both panels and both kinds of bar, at least +-SCALE_FLOOR: the bars compare by eye and
     noise never fills a clean bat's plot.
     """
     import matplotlib.pyplot as plt
 
-    v, prof = r.verdict, r.profile
+    v = r.verdict
     els = v.get("elements") or []
     x0 = np.array([e["x0_in"] for e in els], dtype=float)
-    x1 = np.array([e["x1_in"] for e in els], dtype=float)
-    fit = {"alpha": np.array([e["alpha"] for e in els], dtype=float),
-           "beta": np.array([e["beta"] for e in els], dtype=float)}
-    w = x1 - x0
-    length_in = prof.length_m / IN_TO_M
-    d_max = float(prof.diameter_m.max()) / IN_TO_M
-    fig, axes = plt.subplots(3, 1, sharex=True, figsize=(10, 6.8),
-                             gridspec_kw={"height_ratios": [2.2, 2.2, 1.0]})
-    region = v.get("region_in") if status_of(v) == "altered" else None
+    w = np.array([e["x1_in"] for e in els], dtype=float) - x0
+    fit = {k: np.array([e[k] for e in els], dtype=float) for k in ("alpha", "beta")}
     emap = stored_details(v).msso.result
-    has_map = emap is not None and emap.alpha.size == len(x0)
-    shown = [fit["alpha"], fit["beta"]]
-    if has_map:
-        msso = {"alpha": emap.alpha, "beta": emap.beta}
-        band = {k: 2 * (std if std.size else np.zeros(len(x0)))
-                for k, std in (("alpha", emap.alpha_std), ("beta", emap.beta_std))}
-        shown += [msso["alpha"], msso["beta"], band["alpha"], band["beta"]]
-    lim = _symmetric_limit(shown, SCALE_FLOOR)
-    for ax, key, name, color in ((axes[0], "alpha", "mass change, alpha", "C0"),
-                                 (axes[1], "beta", "stiffness change, beta", "C1")):
-        if has_map:
-            edges = np.append(x0, x1[-1])
-            b = np.append(band[key], band[key][-1])
-            ax.fill_between(edges, -b, b, step="post", color="0.6", alpha=0.3, lw=0,
-                            label="map noise band (±2σ)")
-        core_bars = ax.bar(x0, fit[key], width=w / 2 if has_map else w, align="edge",
-                           color=color, edgecolor="k", lw=0.4, label="core fit (how much)")
-        if has_map:
-            ax.bar(x0 + w / 2, msso[key], width=w / 2, align="edge",
-                   color="none", edgecolor="C2", hatch="////", lw=0.6,
-                   label="element map (where)")
-            if emap.region_m:
-                a, b2 = emap.region_m
-                ax.axvspan(a / IN_TO_M, b2 / IN_TO_M, fill=False, hatch="..", color="C2",
-                           alpha=0.25, lw=0, label="map region")
-        if region is not None:
-            ax.axvspan(region[0], region[1], color="C3", alpha=0.12, label="fitted core region")
-        ax.axhline(0, color="k", lw=0.6)
+    shown = _map_factors(emap, len(x0))
+    has_map = shown["alpha"] is not None
+    lim = _symmetric_limit([*fit.values(), *(a for m in shown.values() if m for a in m)],
+                           SCALE_FLOOR)
+    f = shown_finding(v)
+    label, words, colour = finding_label(f, status_of(v)) if f else ("", "", "")
+    region = (*f["region_in"], label, colour) if f else None
+    fig, axes = plt.subplots(3, 1, sharex=True, figsize=(10, 7.2),
+                             gridspec_kw={"height_ratios": [2.2, 2.2, 1.2]})
+    handles = []
+    for ax, key, name in ((axes[0], "alpha", "mass change, alpha"),
+                          (axes[1], "beta", "stiffness change, beta")):
+        own = _bar_panel(ax, x0, w, fit[key], shown[key], region)
+        if has_map and emap.region_m:
+            a, b = emap.region_m
+            own.append(ax.axvspan(a / IN_TO_M, b / IN_TO_M, fill=False, hatch="..",
+                                  color="0.4", alpha=0.25, lw=0, label="map region"))
+        handles = own if key == "alpha" else handles
         ax.set_ylim(-lim, lim)
         ax.set_ylabel(name)
         ax.grid(alpha=0.3, axis="y")
-    axes[0].legend(fontsize=7, loc="upper left", ncol=3)
-    axes[1].legend(handles=[core_bars], fontsize=7, loc="upper left")  # its own colour
-    axes[0].set_title("Element changes along the bat (knob at 0)")
-    ax = axes[2]
-    x = prof.x_m / IN_TO_M
-    rad = prof.diameter_m / IN_TO_M / 2
-    ax.fill_between(x, -rad, rad, color="burlywood", edgecolor="saddlebrown", lw=0.8)
-    if region is not None and v.get("core_diameter_in"):
-        rc = float(v["core_diameter_in"]) / 2
-        ax.add_patch(plt.Rectangle((region[0], -rc), region[1] - region[0], 2 * rc, color="C3",
-                                   alpha=0.7, label="fitted core"))
-    pts = r.baseline.modes.x_m / IN_TO_M
-    ax.plot(pts, np.zeros_like(pts), "k+", ms=5, label="test points")
-    ax.legend(fontsize=7, loc="lower left", ncol=2)
-    ax.set_aspect("equal")
-    ax.set_ylim(-0.75 * d_max, 0.75 * d_max)
-    ax.set_xlim(-0.5, length_in + 0.5)
-    ax.set_xlabel("x from the knob end (in)")
-    ax.set_ylabel("in")
+    _bar_legends(axes, handles, has_map)
+    fig.suptitle("Element changes along the bat (knob at 0)", fontsize=11)
+    _profile_panel(axes[2], r, f, words, colour)
     fig.tight_layout()
     return fig
 
@@ -293,7 +442,7 @@ def headline(r: ReportInputs) -> str:
         region, core, fill = v.get("region_in"), v.get("core_diameter_in"), \
             v.get("fill_density_ratio")
         if words:
-            text += f" ({words})"
+            text += f" — {words}"
         elif region:
             size = f"a bore about {core:.2f} in across " if core else "a change "
             text += f": {size}from {region[0]:.1f} to {region[1]:.1f} in from the knob end"
@@ -303,7 +452,8 @@ def headline(r: ReportInputs) -> str:
         rows = mass_rows(r)
         if len(rows) == 3:
             d_oz = (rows[2][1] - rows[0][1]) * 16
-            text += f" ({abs(d_oz):.1f} oz {'lighter' if d_oz < 0 else 'heavier'})"
+            weight = f"{abs(d_oz):.1f} oz {'lighter' if d_oz < 0 else 'heavier'}"
+            text += f"; {weight}" if words else f" ({weight})"
         text += "."
         if p is not None:
             text += f" The evidence is strong: the {chance(p)}."
@@ -321,6 +471,19 @@ def headline(r: ReportInputs) -> str:
     return text
 
 
+def _fit_words(v: dict) -> tuple[str, str, str]:
+    """Name the altered verdict's fit: (its name, what it is, how its change spreads).
+
+    A core (or a record from before the rulebook): "core fit", "the one bore", "a bore's
+    stiffness loss"; any other finding: "fit (nailed)", "the one change of its kind", "a
+    local change".
+    """
+    f = v.get("finding") or {}
+    if f.get("kind", "core") == "core":
+        return "core fit", "the one bore", "a bore's stiffness loss"
+    return f"fit ({f.get('rule')})", "the one change of its kind", "a local change"
+
+
 def regions_note(r: ReportInputs) -> str:
     """Write the two localisations side by side, reconciled or their difference explained."""
     v = r.verdict
@@ -336,31 +499,31 @@ def regions_note(r: ReportInputs) -> str:
     spacing = float(np.median(np.diff(pts))) if pts.size > 1 else float("nan")
     n_modes = len(v.get("modes") or [])
     if fit is None and mreg is None:
-        return ("Neither the core fit nor the element map finds a local change: every "
+        return ("Neither the fit nor the element map finds an alteration: every "
                 "element's map bar stays within its noise band.")
     if fit is None:
         return (f"The element map marks {mreg[0]:.1f}–{mreg[1]:.1f} in, but the decision test, "
                 "which allows for moisture and re-mounting, found the change no larger than an "
                 "unaltered bat's: it is not taken as an alteration.")
+    name, what, spread = _fit_words(v)
     if mreg is None:
-        return (f"The core fit places the change at {fit[0]:.1f}–{fit[1]:.1f} in; no element of "
+        return (f"The {name} places the change at {fit[0]:.1f}–{fit[1]:.1f} in; no element of "
                 "the map rises above its noise band (the map resolves less than the fit, which "
-                "uses every mode at once): the location rests on the core fit.")
+                f"uses every mode at once): the location rests on the {name}.")
     lo, hi = max(fit[0], mreg[0]), min(fit[1], mreg[1])
     if lo >= hi:
-        return (f"The core fit ({fit[0]:.1f}–{fit[1]:.1f} in) and the element map "
+        return (f"The {name} ({fit[0]:.1f}–{fit[1]:.1f} in) and the element map "
                 f"({mreg[0]:.1f}–{mreg[1]:.1f} in) disagree on where the change is: treat the "
                 "location as uncertain and re-test with more points over both regions.")
     inside = mreg[0] <= fit[0] and fit[1] <= mreg[1]
-    return (f"The core fit ({fit[0]:.1f}–{fit[1]:.1f} in) is the one bore that best explains "
+    return (f"The {name} ({fit[0]:.1f}–{fit[1]:.1f} in) is {what} that best explains "
             f"all the frequency changes; the element map ({mreg[0]:.1f}–{mreg[1]:.1f} in) marks "
             "every element whose change stands above its noise band. "
             + ("The fit lies inside the map's region" if inside else
                f"They overlap from {lo:.1f} to {hi:.1f} in")
             + f": the map is wider because {n_modes} modes measured at points "
-            f"{spacing:.1f} in apart cannot pin a change to single elements, and a bore's "
-            "stiffness loss spreads to its neighbours. The core fit's region is the one to "
-            "act on.")
+            f"{spacing:.1f} in apart cannot pin a change to single elements, and {spread} "
+            f"spreads to its neighbours. The {name}'s region is the one to act on.")
 
 
 # --- page ------------------------------------------------------------------------------------
@@ -534,13 +697,15 @@ def render_html(r: ReportInputs, generated_at: str, figures: dict[str, bytes]) -
     note = regions_note(r)
     if note:
         parts.append(f"<p>{html.escape(note)}</p>")
-    parts.append("<p class='note'>Solid bars: the fitted core's change of each element's "
-                 "mass (alpha) and bending stiffness (beta), as fractions "
-                 "(M = M_S + Σ alpha_i m_i, K = K_S + Σ beta_i k_i). Hatched bars: the element "
-                 "map (MSSO) of the re-test against the baseline-updated model with the "
-                 "whole-bat drift and sensor shift removed; its stiffness bars also carry a "
-                 "bore's shear loss, so they are larger than the bending ratio. Grey: the "
-                 "map's ±2σ noise band; a bar inside it is not a change. One symmetric scale "
+    parts.append("<p class='note'>Solid bars: the fitted change (what the verdict found) of "
+                 "each element's mass (alpha) and bending stiffness (beta), as fractions "
+                 "(M = M_S + Σ alpha_i m_i, K = K_S + Σ beta_i k_i). Blue: the element gained "
+                 "(mass added, stiffer); orange: it lost (mass removed, softer). Hatched bars: "
+                 "the element map (MSSO) of the re-test against the baseline-updated model "
+                 "with the whole-bat drift and sensor shift removed; its stiffness bars also "
+                 "carry a bore's shear loss, so they are larger than the bending ratio. Grey: "
+                 "the map's ±2σ noise band; a bar inside it is not a change and is drawn "
+                 "faded. Shaded: the finding's region, named by its kind. One symmetric scale "
                  "for every bar of both panels, at least ±5 %.</p>")
     parts.append("<h2>Mass properties</h2>")
     rows = mass_rows(r)
