@@ -204,3 +204,40 @@ def test_headline_says_rule_and_reading(base, name):
         assert part in text, (part, text)
     assert ("has been altered" in text) == (KINDS[name][0] == "altered")
     assert _nesting(text) <= 1, text
+
+
+def test_record_before_the_rulebook_keeps_its_core(base):
+    """An altered record stored without a ``finding`` (before the rulebook) still shades its
+    region and draws its fitted core, whose diameter is the record's."""
+    import matplotlib.pyplot as plt
+
+    v = base.verdict
+    assert v.get("finding") is None and v["status"] == "altered"
+    a, b = v["region_in"]
+    fig = element_figure(base)
+    try:
+        spans = [p for p in fig.axes[0].patches if p.get_label() == "finding region: altered"]
+        assert len(spans) == 1 and spans[0].get_x() == pytest.approx(a)
+        bores = [p for p in fig.axes[2].patches if "fitted core" in p.get_label()]
+        assert len(bores) == 1
+        assert bores[0].get_height() == pytest.approx(v["core_diameter_in"])
+        assert bores[0].get_width() == pytest.approx(b - a)
+    finally:
+        plt.close(fig)
+
+
+@pytest.mark.parametrize("name", ["core", "inserted_mass", "material_removed"])
+def test_regions_note_names_the_finding(base, name):
+    """The sentence under the figure names the fit of what was found: a bore only for a
+    core."""
+    from batlab.report import regions_note
+
+    r = drawn(base, name, SEEDS[name])
+    a, b = r.verdict["finding"]["region_in"]
+    msso = {**r.verdict["details"]["msso"], "region_m": [(a - 2) * 0.0254, b * 0.0254]}
+    r = replace(r, verdict={**r.verdict, "details": {**r.verdict["details"], "msso": msso}})
+    note = regions_note(r)
+    rule = KINDS[name][1]
+    assert f"{a:.1f}–{b:.1f} in" in note
+    assert ("one bore" in note) == (name == "core")
+    assert (f"fit ({rule})" in note) == (name != "core")
