@@ -20,6 +20,15 @@ is by its physics (../../docs/inspection.md, "The kinds and their signatures"):
 A family is chosen by Akaike's criterion on the weighted residual, RSS / s^2 + 2 k (k its
 parameters, s^2 the generic fit's residual variance per datum, at least 1); the generic
 change is named only when every kind is worse than it by more than ``KIND_MARGIN``.
+
+A core filled more than ``HEAVY_FILL_RATIO`` times as densely as the wood is no wood and no
+cork: a hole full of something heavy adds mass and, when it is too thin to be surely a
+practical core, almost no stiffness, which is what the added-mass family describes with two
+fewer parameters. When that family scores within ``KIND_TIE`` of such a core (Akaike
+differences under about 4 leave both "substantially supported"; Burnham and Anderson,
+*Model Selection and Multimodel Inference*, 2nd ed., 2002, sec. 2.6), the change is read as
+added mass, in grams (``prefer_added_mass``): nails or a coat, not a thin core whose
+diameter the data cannot fix. A dense plug in a wide hole (a practical core) stays a core.
 """
 
 from __future__ import annotations
@@ -42,6 +51,11 @@ HOLLOW_MAX_FILL = 0.1
 """A core whose fill is lighter than this share of the wood is read as hollowed."""
 KIND_MARGIN = 10.0
 """Akaike score by which every kind must trail the generic change for ``local_change``."""
+HEAVY_FILL_RATIO = 2.0
+"""A core's fill/wood density ratio above which the fill is heavier than any bat wood
+(about 0.4-0.75 g/cm^3; the densest woods reach 1.2): metal, or mass standing for a thin core."""
+KIND_TIE = 4.0
+"""Akaike difference within which two families are both supported (module docstring)."""
 
 RULES = {
     "filled": "filled",
@@ -131,6 +145,30 @@ def choose_family(scores: dict[str, float], generic_score: float) -> str:
     """
     best = min(scores, key=scores.get)
     return "local_change" if scores[best] - generic_score > KIND_MARGIN else best
+
+
+def prefer_added_mass(core_fill_ratio: float, practical_core: bool,
+                      scores: dict[str, float]) -> bool:
+    """Tell whether a core chosen by its score is better read as added mass.
+
+    Parameters
+    ----------
+    core_fill_ratio : float
+        The core's mean fill/wood density ratio.
+    practical_core : bool
+        Whether its diameter, less two standard uncertainties, makes a practical core.
+    scores : dict
+        Family name -> Akaike score (``core`` and ``added_mass`` among them).
+
+    Returns
+    -------
+    bool
+        True when the fill is heavier than ``HEAVY_FILL_RATIO`` times the wood, the core
+        is not surely practical and the added-mass family scores within ``KIND_TIE`` of it
+        (module docstring).
+    """
+    return (core_fill_ratio > HEAVY_FILL_RATIO and not practical_core
+            and scores["added_mass"] - scores["core"] <= KIND_TIE)
 
 
 def describe(f: Finding) -> str:

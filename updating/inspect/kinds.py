@@ -5,7 +5,10 @@ significant, the families that are alterations or legal changes are fitted on th
 and the same null: a core bored from the barrel end (``hypotheses.fit_core``), an added mass
 and a loss of diameter (``local_change``), each started from its own scan and from the
 generic change's stretch. The family with the best Akaike score gives the finding
-(``finding``), read with standard uncertainties from its Jacobian.
+(``finding``), read with standard uncertainties from its Jacobian; a core filled heavier
+than any wood and too thin to be surely a practical core, with added mass as well
+supported, is read as added mass
+(``finding.prefer_added_mass``).
 """
 
 from __future__ import annotations
@@ -14,6 +17,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from updating.inspect.decision import kind_supported
 from updating.inspect.finding import (
     RULES,
     Finding,
@@ -22,6 +26,7 @@ from updating.inspect.finding import (
     choose_family,
     core_rule,
     diameter_loss_rule,
+    prefer_added_mass,
 )
 from updating.inspect.hypotheses import (
     N_CORE,
@@ -179,4 +184,9 @@ def classify(predict, diff: Differences, space: ParamSpace, sigma_rel: SigmaRel,
     fit = fits[family]
     cov = covariance(fit, max(n - N_NULL - N_PARAMS[family], 1))
     finding = read_finding(family, fit, space, cov, predict)
+    if family == "core" and prefer_added_mass(finding.reading["fill_density_ratio"],
+                                              kind_supported(finding), scores):
+        family, fit = "added_mass", fits["added_mass"]
+        cov = covariance(fit, max(n - N_NULL - N_PARAMS[family], 1))
+        finding = read_finding(family, fit, space, cov, predict)
     return KindFits(fits, scores, family, finding, fit, cov)
