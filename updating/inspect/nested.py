@@ -230,11 +230,15 @@ def _as_grip(finding: Finding, null: ChangeFit, grip: Finding | None) -> Finding
 
     A change within 18 in of the knob (any family) while H0 reads a grip substance there is
     that substance laid unevenly: legal. Added mass that starts at most ``GRIP_PAST_IN``
-    past 18 in while H0's substance reaches its 18 in bound is the substance spread past
-    the rule: the bat must be cleaned, not an alteration.
+    past 18 in while H0's substance reaches its 18 in bound, or within ``GRIP_GAP_IN`` of
+    where H0's substance ends, is the substance spread past the rule: the bat must be
+    cleaned, not an alteration. (On fleet bats with 1-8 g of pine tar to 19-24 in, H0 read
+    2.3-16.9 in and H1 the rest, 17.5-22.2 in, as 2.9 g: an "insert" next to the grip.)
     """
     start_in, end_in = (v / IN_TO_M for v in finding.region_m)
     reach_held = null.x[8] >= HANDLE_MAX_IN - 0.1 and null.x[7] >= GRIP_MIN_G
+    if grip is not None:
+        reach_held = reach_held or start_in <= grip.region_m[1] / IN_TO_M + GRIP_GAP_IN
     if grip is not None and end_in <= HANDLE_MAX_IN + 0.5:
         total = grip.reading["added_mass_kg"] + finding.reading.get("added_mass_kg", 0.0)
         return replace(grip, region_m=(min(grip.region_m[0], finding.region_m[0]),
@@ -251,6 +255,9 @@ def _as_grip(finding: Finding, null: ChangeFit, grip: Finding | None) -> Finding
 
 GRIP_PAST_IN = 4.0
 """How far past 18 in added mass may start and still be H0's grip substance spread on."""
+GRIP_GAP_IN = 2.0
+"""Gap between the end of H0's grip substance and added mass that starts after it, in, short
+enough for the two to be one substance (a layer's fitted ends move by about an inch)."""
 
 
 def weigh_evidence(predict: ChangePredictor, diff: Differences, space: ParamSpace,
