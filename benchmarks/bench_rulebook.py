@@ -14,7 +14,10 @@ output has a finding).
     nice python benchmarks/bench_rulebook.py --per-kind 6 --without 3 --workers 2 \
         > rulebook.jsonl
 
-``--summary FILE`` re-summarises a run.
+``--summary FILE`` re-summarises a run. After the table, the detection limits per kind
+(``updating.simulate.limits.limits_table``): the smallest change found on 90 % of the bats,
+with and without retest.json, beside a scale and a scale with the balance point (its limit
+from ``--balance-clean`` clean bats) judged on the same bats; false alarms for clean kinds.
 """
 
 from __future__ import annotations
@@ -31,6 +34,8 @@ import numpy as np  # noqa: E402
 
 from batlab.fleet.runner import fleet_map, inspect_args, timed  # noqa: E402
 from updating.simulate.field_fleet import draw_case, write_case  # noqa: E402
+from updating.simulate.lab_methods import clean_balance_limit_in  # noqa: E402
+from updating.simulate.limits import limits_table  # noqa: E402
 from updating.simulate.scoring import verdict_row  # noqa: E402
 
 KINDS = ("none", "pine_tar", "grip_tape", "spray", "tar_past_18", "nails", "shaved",
@@ -38,6 +43,8 @@ KINDS = ("none", "pine_tar", "grip_tape", "spray", "tar_past_18", "nails", "shav
 """The kinds run by default, in the table's order."""
 CORE_KINDS = ("cork", "deep", "empty", "end_plug", "partial", "small", "neutral")
 REGION_TOL_IN = 1.5
+BALANCE_SEED = 2
+"""The clean bats' seed for the balance-point limit (bench_detection.py's default)."""
 
 
 def one(job: tuple[str, int, bool]) -> dict:
@@ -113,6 +120,13 @@ def table(rows: list[dict]) -> str:
     return "\n".join(lines)
 
 
+def report(rows: list[dict], balance_clean: int) -> None:
+    """Print the table and the detection limits (balance limit from ``balance_clean`` bats)."""
+    print(table(rows), file=sys.stderr)
+    limit = clean_balance_limit_in(balance_clean, BALANCE_SEED)
+    print(f"\n## Detection limits\n\n{limits_table(rows, limit)}", file=sys.stderr)
+
+
 def main(argv: list[str] | None = None) -> int:
     """Run the benchmark (or re-summarise a run) and print the table on stderr."""
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
@@ -126,10 +140,12 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--scheduler", default=None, metavar="ADDRESS",
                     help="a running Dask scheduler (tcp://HOST:PORT) instead of a local cluster")
     ap.add_argument("--summary", default=None, help="summarise a JSON-lines file and stop")
+    ap.add_argument("--balance-clean", type=int, default=100, metavar="N",
+                    help="clean bats (readings only) that set the balance-point limit")
     args = ap.parse_args(argv)
     if args.summary:
         lines = Path(args.summary).read_text().splitlines()
-        print(table([json.loads(s) for s in lines if s.strip()]), file=sys.stderr)
+        report([json.loads(s) for s in lines if s.strip()], args.balance_clean)
         return 0
     jobs = [(kind, args.seed + 1000 * k + i, meta)
             for k, kind in enumerate(args.kinds) for meta in (True, False)
@@ -137,7 +153,7 @@ def main(argv: list[str] | None = None) -> int:
     rows = fleet_map(one, jobs, args.workers, "bat", args.scheduler)
     for row in rows:
         print(json.dumps(row, default=float))
-    print(table(rows), file=sys.stderr)
+    report(rows, args.balance_clean)
     return 0
 
 
