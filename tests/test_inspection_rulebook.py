@@ -10,11 +10,13 @@ bounds; a bat whose only change is pine tar or tape on the handle is never calle
 """
 
 from dataclasses import replace
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
 
-from updating.inspect.finding import prefer_added_mass
+from updating.inspect.finding import Finding, prefer_added_mass
+from updating.inspect.nested import _as_grip
 from updating.inspect.retest_meta import RetestConditions
 from updating.inspect.run import inspect_retest
 from updating.model.mass_properties import mass_properties
@@ -120,3 +122,39 @@ def test_a_thin_core_heavier_than_wood_reads_as_added_mass_when_that_fits_as_wel
     wood-like fill and a dense plug in a practical hole stay cores."""
     scores = {"core": 50.0, "added_mass": 50.0 + gap, "diameter_loss": 90.0}
     assert prefer_added_mass(fill, practical, scores) is added
+
+
+@pytest.mark.parametrize("seed", [501, 503, 505])
+def test_pine_tar_past_18_in_is_never_called_altered(seed):
+    """4-8 g of pine tar from 1-4 in to 19-24 in: the bat must be cleaned, but it is not
+    altered, with or without the weights."""
+    rng = np.random.default_rng(seed)
+    case = random_case(rng, "none")
+    change = coating("tar_past_18", rng.uniform(4.0, 8.0), rng.uniform(1.0, 4.0),
+                     rng.uniform(19.0, 24.0))
+    case = replace(case, retest=replace(case.retest, local_changes=change.changes))
+    base, re = case_modes(case, rng)
+    v = inspect_retest(case.profile, case.reference, base, re, false_alarm=0.01)
+    assert v.altered is not True, v.reasons
+    if v.finding is not None:
+        assert v.finding.kind == "handle_substance", v.reasons
+
+
+def _grip_finding(kind: str, start_in: float, end_in: float, grams: float, family: str):
+    return Finding(kind, kind == "handle_substance", (start_in * IN_TO_M, end_in * IN_TO_M),
+                   "rule", {"added_mass_kg": grams * 1e-3}, {"added_mass_kg": 1e-4}, family)
+
+
+@pytest.mark.parametrize("start_in,end_in,spread", [(17.5, 22.2, True), (18.5, 23.0, True),
+                                                    (21.5, 24.0, False), (29.0, 32.0, False)])
+def test_added_mass_next_to_the_grip_is_the_grip_spread_past_18_in(start_in, end_in, spread):
+    """H0 read pine tar at 2.3-16.9 in; added mass starting within 2 in of its end is that
+    tar spread past 18 in (clean the bat), farther along it is an insert or a coat."""
+    null = SimpleNamespace(x=np.array([0, 0, 0, 0, 0, 0, 0, 3.0, 16.9, 2.3]))
+    grip = _grip_finding("handle_substance", 2.3, 16.9, 3.0, "null")
+    found = _grip_finding("inserted_mass", start_in, end_in, 2.9, "added_mass")
+    read = _as_grip(found, null, grip)
+    assert (read.kind == "handle_substance") is spread
+    if spread:
+        assert not read.legal and read.region_m[0] / IN_TO_M == pytest.approx(2.3)
+        assert 1e3 * read.reading["added_mass_kg"] == pytest.approx(5.9)
