@@ -607,6 +607,7 @@ def _facts(r: ReportInputs) -> list[list]:
                                             "no verdict (inconclusive)"}[status])]]
     for reason in v.get("reasons") or []:
         facts.append(["Reason", reason])
+    facts += _finding_facts(v.get("finding"))
     if status == "inconclusive":  # the two tests cannot be compared: no statistic means much
         return facts
     if p is not None:
@@ -649,6 +650,40 @@ def _facts(r: ReportInputs) -> list[list]:
                            "moisture explains; the p-value above is what it means)</span>"),
                       _Raw(f"{stat:.4g} <span class='note'>{html.escape(str(name))}</span>")])
     return facts
+
+
+READING_UNITS = {"_g": ("g", 1), "_in": ("in", 3), "_pct": ("%", 1)}
+"""The contract's reading suffixes: the unit the evidence table names and its decimals."""
+
+
+def _finding_facts(finding: dict | None) -> list[list]:
+    """Return the evidence table's rows for the verdict's finding (contract ``finding``).
+
+    What the change is in the rule's words (its kind, and whether legal), where, and each
+    number of its reading with its standard uncertainty (1 sigma) when the verdict gives one.
+    """
+    if not finding:
+        return []
+    legal = ", legal under Rule 3.02(c)" if finding.get("legal") else ""
+    rows: list[list] = [["Finding (the rule's words)",
+                         f"{finding.get('rule')} ({finding.get('kind', '').replace('_', ' ')}"
+                         f"{legal})"]]
+    if finding.get("region_in"):
+        a, b = finding["region_in"]
+        rows.append(["Finding region (in from the knob end)", _Raw(f"{a:.2f} – {b:.2f}")])
+    unc = finding.get("uncertainty") or {}
+    for key, val in (finding.get("reading") or {}).items():
+        if not isinstance(val, (int, float)):
+            continue
+        sfx = next((s for s in READING_UNITS if key.endswith(s)), "")
+        unit, decimals = READING_UNITS.get(sfx, ("", 3))
+        name = key[: -len(sfx)] if sfx else key
+        text = f"{val:.{decimals}f}"
+        if isinstance(unc.get(key), (int, float)):
+            text += f" ± {unc[key]:.{decimals}f}"
+        rows.append([f"Finding: {name.replace('_', ' ')}" + (f" ({unit})" if unit else ""),
+                     _Raw(text)])
+    return rows
 
 
 def _provenance(r: ReportInputs, generated_at: str) -> list[list]:

@@ -241,3 +241,26 @@ def test_regions_note_names_the_finding(base, name):
     assert f"{a:.1f}–{b:.1f} in" in note
     assert ("one bore" in note) == (name == "core")
     assert (f"fit ({rule})" in note) == (name != "core")
+
+
+@pytest.mark.parametrize("name", list(KINDS))
+def test_evidence_table_gives_the_finding_and_its_uncertainty(base, name):
+    """The evidence table names the finding in the rule's words, its region, and each number
+    of its reading with its drawn standard uncertainty."""
+    from batlab.report import _facts
+
+    r = drawn(base, name, SEEDS[name] + 200)
+    f = r.verdict["finding"]
+    rng = np.random.default_rng(SEEDS[name] + 300)
+    f["uncertainty"] = {k: float(rng.uniform(0.01, 0.2)) * v for k, v in f["reading"].items()}
+    rows = {str(k): str(v) for k, v in _facts(r)}
+    assert f["rule"] in rows["Finding (the rule's words)"]
+    a, b = f["region_in"]
+    assert rows["Finding region (in from the knob end)"] == f"{a:.2f} – {b:.2f}"
+    cells = [v for k, v in rows.items() if k.startswith("Finding: ")]
+    assert len(cells) == len(f["reading"])
+    for (key, val), cell in zip(f["reading"].items(), cells, strict=True):
+        shown, sd = (float(x) for x in cell.split(" ± "))
+        step = 0.0011 if key.endswith("_in") or "_" not in key[-4:] else 0.051
+        assert shown == pytest.approx(val, abs=step), key
+        assert sd == pytest.approx(f["uncertainty"][key], abs=step), key
