@@ -25,7 +25,7 @@ from pathlib import Path
 import numpy as np
 
 from batlab.formatting import finding_words, p_value, status_of
-from batlab.pipeline.records import FORCED_KEY, ReportInputs, jsonable
+from batlab.pipeline.records import FORCED_KEY, ReportInputs, jsonable, lab_units
 from batlab.registry import now_utc
 from batlab.report_check import seal_page
 from ema.io.atomic_write import atomic_write
@@ -619,12 +619,15 @@ def _facts(r: ReportInputs) -> list[list]:
     if v.get("false_alarm_rate") is not None:
         facts.append(["Called altered when that chance is below (false-alarm rate)",
                       percent(float(v["false_alarm_rate"]))])
-    if v.get("region_in"):
+    finding = v.get("finding") or {}
+    read = finding.get("reading") or {}
+    given = set(read) & set(finding.get("uncertainty") or {})  # shown with the finding
+    if v.get("region_in") and not finding.get("region_in"):  # else the finding's rows say it
         facts.append(["Altered region (in from the knob end)",
                       _Raw(f"{v['region_in'][0]:.2f} – {v['region_in'][1]:.2f}")])
-    if v.get("core_diameter_in") is not None:
+    if v.get("core_diameter_in") is not None and "core_diameter_in" not in read:
         facts.append(["Bore diameter (in)", _Raw(f"{v['core_diameter_in']:.2f}")])
-    if v.get("fill_density_ratio") is not None:
+    if v.get("fill_density_ratio") is not None and "fill_density_ratio" not in read:
         facts.append(["Fill density / wood density", _Raw(f"{v['fill_density_ratio']:.2f}")])
     names = {"stiffness_scale": "stiffness", "density_scale": "density"}
     for k, val in (v.get("moisture") or {}).items():
@@ -632,7 +635,7 @@ def _facts(r: ReportInputs) -> list[list]:
             facts.append([f"Whole-bat {names.get(k, k)} change (moisture, temperature), %",
                           _Raw(f"{100 * (val - 1):+.2f}")])
     for k, val in (v.get("uncertainty") or {}).items():
-        if not isinstance(val, (int, float)):
+        if not isinstance(val, (int, float)) or set(lab_units({k: val})) & given:
             continue
         if k.endswith("_m"):
             facts.append([f"Uncertainty (1σ) of {k[:-2].replace('_', ' ')} (in)",

@@ -78,7 +78,7 @@ def _num(v) -> float | None:
     return None if v is None or not math.isfinite(float(v)) else float(v)
 
 
-def _lab_units(values: dict) -> dict:
+def lab_units(values: dict) -> dict:
     """SI readings in the contract's units: *_m -> *_in, *_kg -> *_g, *_rel -> *_pct."""
     out = {}
     for key, v in values.items():
@@ -112,8 +112,8 @@ def finding_dict(finding) -> dict | None:
     a, b = finding.region_m
     return {"kind": finding.kind, "legal": bool(finding.legal),
             "region_in": [_in(a), _in(b)], "rule": finding.rule,
-            "reading": _lab_units(finding.reading),
-            "uncertainty": _lab_units(finding.uncertainty)}
+            "reading": lab_units(finding.reading),
+            "uncertainty": lab_units(finding.uncertainty)}
 
 
 def contract_dict(serial: str, verdict: Verdict) -> dict:
