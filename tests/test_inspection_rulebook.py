@@ -19,9 +19,8 @@ from updating.inspect.finding import Finding, prefer_added_mass
 from updating.inspect.nested import _as_grip
 from updating.inspect.retest_meta import RetestConditions
 from updating.inspect.run import inspect_retest
-from updating.model.mass_properties import mass_properties
-from updating.model.units import IN_TO_M
-from updating.simulate.field_fleet import bare
+from updating.model.units import IN_TO_M, LB_TO_KG
+from updating.simulate.field_fleet import bare, scale_reading
 from updating.simulate.fleet import case_modes, random_case
 from updating.simulate.rulebook import coating, draw_change
 
@@ -89,7 +88,7 @@ def hidden_coat(seed: int):
 
 def weighed(bat) -> float:
     """The bare bat's mass on the scale, kg."""
-    return mass_properties(bare(bat).truth_model()).mass_kg
+    return scale_reading(bare(bat))[0] * LB_TO_KG
 
 
 @pytest.mark.parametrize("seed", [401, 402, 403])

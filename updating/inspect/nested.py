@@ -237,14 +237,14 @@ def _as_grip(finding: Finding, null: ChangeFit, grip: Finding | None) -> Finding
     """
     start_in, end_in = (v / IN_TO_M for v in finding.region_m)
     reach_held = null.x[8] >= HANDLE_MAX_IN - 0.1 and null.x[7] >= GRIP_MIN_G
-    if grip is not None:
-        reach_held = reach_held or start_in <= grip.region_m[1] / IN_TO_M + GRIP_GAP_IN
+    beside_grip = grip is not None and start_in <= grip.region_m[1] / IN_TO_M + GRIP_GAP_IN
     if grip is not None and end_in <= HANDLE_MAX_IN + 0.5:
         total = grip.reading["added_mass_kg"] + finding.reading.get("added_mass_kg", 0.0)
         return replace(grip, region_m=(min(grip.region_m[0], finding.region_m[0]),
                                        max(grip.region_m[1], finding.region_m[1])),
                        reading={"added_mass_kg": total})
-    if finding.family == "added_mass" and reach_held and start_in <= HANDLE_MAX_IN + GRIP_PAST_IN:
+    if (finding.family == "added_mass" and (reach_held or beside_grip)
+            and start_in <= HANDLE_MAX_IN + GRIP_PAST_IN):
         total = float(null.x[7]) * 1e-3 + finding.reading["added_mass_kg"]
         return replace(finding, kind="handle_substance", legal=False,
                        rule=RULES["grip_past"],
