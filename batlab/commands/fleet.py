@@ -2,13 +2,14 @@
 
     batlab fleet inspect DIR --db DB [--scheduler tcp://HOST:PORT] [--json]
     batlab fleet calibrate --profile P --meta M --n N [--seed S] [--scheduler ...] [--json]
-                           [-o rows.jsonl]
+                           [-o rows.jsonl [--resume]]
 
 ``inspect`` judges every ``SERIAL.uff`` of DIR (``SERIAL.json``: its retest.json) against
 the registry as ``batlab inspect --serial`` does and stores each verdict; ``--json`` prints
 the list of the objects ``batlab inspect --json`` prints (a refused re-test:
 ``{"serial", "retest", "error"}``, and exit 1). ``calibrate`` inspects N simulated clean
-re-tests of one bat (every nuisance and legal grip) and bounds its false-alarm rate.
+re-tests of one bat (every nuisance and legal grip) and bounds its false-alarm rate;
+``--resume`` keeps the rows already in ``-o``'s file and inspects only the missing re-tests.
 Without ``--scheduler`` a local cluster sized to the machine does the work; progress goes
 to stderr.
 """
@@ -17,6 +18,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import time
 
 from batlab.cli_support import add_db_argument, db_path, progress_printer
@@ -43,6 +45,9 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("-o", "--out", default=None, metavar="ROWS_JSONL",
                    help="calibrate: also write one JSON line per clean re-test here, as "
                         "each finishes")
+    p.add_argument("--resume", action="store_true",
+                   help="calibrate: keep the rows already in -o's file (the last one is "
+                        "inspected again and must agree) and inspect only the missing ones")
     p.add_argument("--false-alarm", type=float, default=0.01,
                    help="false-alarm rate of the decision (default 0.01)")
     p.add_argument("--json", action="store_true", help="print the result as JSON on stdout")
@@ -91,32 +96,78 @@ def _inspect(args: argparse.Namespace) -> int:
 
 
 def _calibrate(args: argparse.Namespace) -> int:
-    from batlab.fleet.calibrate import BatSpec, read_bat, run_calibration, summary
+    from batlab.fleet.calibrate import BatSpec, read_bat, summary
     from batlab.fleet.cluster import connect
 
     if not (args.profile and args.meta and args.n):
         raise ValueError("fleet calibrate: give --profile, --meta and --n")
+    if args.n < 1:
+        raise ValueError(f"--n {args.n}: at least one clean bat")
+    if args.resume and not args.out:
+        raise ValueError("fleet calibrate: --resume needs -o, the rows file to resume")
     progress = progress_printer("fleet calibrate")
     spec = BatSpec(str(args.profile), str(args.meta), args.seed, args.false_alarm)
     serial = read_bat(spec)[2].get("serial")  # a bad file fails here, before any work
-    rows_file = open(args.out, "w") if args.out else None  # noqa: SIM115 (closed below)
+    stored = _stored_rows(args, progress)
     t0 = time.perf_counter()
+    with connect(args.scheduler) as client:
+        cores = sum(client.nthreads().values())
+        progress(f"{args.n} clean re-tests of {serial} on {_describe(client)}")
+        new = _new_rows(client, spec, args, stored, progress)
+    wall = time.perf_counter() - t0
+    rows = sorted(stored + new, key=lambda r: r["index"])
+    out = summary(rows, spec, serial)
+    if new:
+        cpu = sorted(r["cpu_s"] for r in new)
+        progress(f"{wall:.0f} s on {cores} core(s): {wall * cores / len(new):.2f} core-s a "
+                 f"bat; CPU {sum(cpu) / len(cpu):.2f} s a bat (median {cpu[len(cpu) // 2]:.2f} s)")
+    print(json.dumps(out) if args.json else _words(out))
+    return 0
+
+
+def _stored_rows(args: argparse.Namespace, progress) -> list[dict]:
+    """Return the rows ``--resume`` keeps from ``-o``'s file (none without it)."""
+    from batlab.fleet.calibrate import read_rows
+
+    if not (args.resume and os.path.exists(args.out)):
+        return []
+    rows, cut = read_rows(args.out, args.n)
+    progress(f"{args.out}: {len(rows)} re-test(s) already done"
+             + (", a last line cut short left out" if cut else ""))
+    if cut:  # rewritten without the cut line, so new rows start on a line of their own
+        _write_rows(args.out, rows)
+    return rows
+
+
+def _write_rows(path: str, rows: list[dict]) -> None:
+    """Write ``rows`` to ``path`` as JSON lines, by a temporary name and a rename."""
+    tmp = f"{path}.tmp"
+    with open(tmp, "w") as f:
+        for row in rows:
+            print(json.dumps(row), file=f)
+    os.replace(tmp, path)
+
+
+def _new_rows(client, spec, args: argparse.Namespace, stored: list[dict],
+              progress) -> list[dict]:
+    """Inspect the re-tests not in ``stored`` (the last stored one again, first, to check)."""
+    from batlab.fleet.calibrate import check_resumed, run_calibration
+
+    done = {r["index"] for r in stored}
+    todo = [i for i in range(1, args.n + 1) if i not in done]
+    if stored:
+        progress(f"re-test {stored[-1]['index']} inspected again: it must agree with its row")
+        again = run_calibration(client, spec, [stored[-1]["index"]], progress)[0]
+        check_resumed(args.out, stored[-1], again)
+    if not todo:
+        return []
+    rows_file = open(args.out, "a" if stored else "w") if args.out else None  # noqa: SIM115
     try:
-        with connect(args.scheduler) as client:
-            cores = sum(client.nthreads().values())
-            progress(f"{args.n} clean re-tests of {serial} on {_describe(client)}")
-            rows = run_calibration(client, spec, args.n, progress,
-                                   None if rows_file is None else _row_writer(rows_file))
+        return run_calibration(client, spec, todo, progress,
+                               None if rows_file is None else _row_writer(rows_file))
     finally:
         if rows_file is not None:
             rows_file.close()
-    wall = time.perf_counter() - t0
-    out = summary(rows, spec, serial)
-    cpu = sorted(r["cpu_s"] for r in rows)
-    progress(f"{wall:.0f} s on {cores} core(s): {wall * cores / len(rows):.2f} core-s a bat; "
-             f"CPU {sum(cpu) / len(cpu):.2f} s a bat (median {cpu[len(cpu) // 2]:.2f} s)")
-    print(json.dumps(out) if args.json else _words(out))
-    return 0
 
 
 def _row_writer(file):

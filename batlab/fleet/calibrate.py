@@ -8,6 +8,10 @@ is drawn from child ``i`` (``child_seed``), simulated, written as a test file an
 fitted and judged as ``batlab inspect --serial`` judges it (``pipeline.fit_file``,
 ``pipeline.judge``) with its retest.json; no subprocess, no registry write.
 
+A long calibration can be resumed from its rows file (``read_rows``): the last stored
+re-test is inspected again first and must give its stored status and F (``check_resumed``),
+so rows from another bat, seed or version of batlab are never counted with these.
+
 The tests are written as NPZ (the same doubles a binary UFF holds): pyuff's UFF writer leaves
 its last text handle to be closed by the garbage collector, and in a Dask worker (whose
 monitors hold frames) that handle was flushed late, out of order, twice in our runs.
@@ -265,18 +269,75 @@ def summary(rows: list[dict], spec: BatSpec, serial: str | None = None) -> dict:
             "false_alarm": spec.false_alarm}
 
 
-def run_calibration(client, spec: BatSpec, n: int, progress, on_row=None) -> list[dict]:
-    """Inspect clean re-tests 1..n of the bat on the cluster; their rows in index order.
+def run_calibration(client, spec: BatSpec, indices: list[int], progress,
+                    on_row=None) -> list[dict]:
+    """Inspect the clean re-tests ``indices`` of the bat on the cluster; rows in their order.
 
     ``on_row(row)`` sees each row as it comes back (a file of rows, say).
     """
-    if n < 1:
-        raise ValueError(f"--n {n}: at least one clean bat")
-
     def keep(_: int, row: dict) -> dict:
         if on_row is not None:
             on_row(row)
         return row
 
-    return ordered_map(client, partial(inspect_clean, spec), list(range(1, n + 1)),
+    return ordered_map(client, partial(inspect_clean, spec), list(indices),
                        "clean bat", progress, keep)
+
+
+def read_rows(path: str, n: int) -> tuple[list[dict], int]:
+    """Read a calibration's rows file (``-o``): its rows of re-tests 1..n, one each.
+
+    A last line cut short (the run was killed while writing it) is left out.
+
+    Returns
+    -------
+    rows : list of dict
+        The rows, in index order.
+    cut : int
+        Lines left out (0 or 1).
+
+    Raises
+    ------
+    ValueError
+        A line other than the last is not a row.
+    """
+    lines = Path(path).read_text().splitlines()
+    rows: dict[int, dict] = {}
+    cut = 0
+    for k, line in enumerate(lines, start=1):
+        try:
+            row = json.loads(line)
+            i = int(row["index"])
+        except (ValueError, KeyError, TypeError):
+            if k == len(lines):
+                cut = 1
+                continue
+            raise ValueError(f"{path}: line {k} is not a calibration row") from None
+        if 1 <= i <= n:
+            rows[i] = row
+    return [rows[i] for i in sorted(rows)], cut
+
+
+def same_row(stored: dict, again: dict, rtol: float = 1e-6) -> bool:
+    """Say whether a re-test inspected again gives its stored row (status and F)."""
+    if stored["status"] != again["status"]:
+        return False
+    f0, f1 = stored.get("F"), again.get("F")
+    if f0 is None or f1 is None:
+        return f0 is None and f1 is None
+    return bool(np.isclose(f0, f1, rtol=rtol, atol=0.0))
+
+
+def check_resumed(path: str, stored: dict, again: dict) -> None:
+    """Refuse to go on with rows another bat, seed or code made (``same_row``).
+
+    Raises
+    ------
+    ValueError
+        Naming the file, the re-test and both answers.
+    """
+    if not same_row(stored, again):
+        raise ValueError(
+            f"{path}: re-test {stored['index']} was stored as {stored['status']} "
+            f"(F {stored.get('F')}) but is now {again['status']} (F {again.get('F')}): "
+            "these rows come from another bat, seed or version of batlab")
