@@ -9,7 +9,7 @@ from scipy.stats import binom
 
 import batlab.pipeline as pipeline
 from batlab.cli import main
-from batlab.fleet.calibrate import BatSpec, child_seed, summary, upper95
+from batlab.fleet.calibrate import BatSpec, child_seed, read_rows, same_row, summary, upper95
 from batlab.fleet.clean_retests import draw_bat, draw_retest
 from batlab.fleet.inspect_fleet import retest_jobs
 
@@ -99,19 +99,70 @@ def test_fleet_folder_lists_uff_with_their_json(tmp_path):
         retest_jobs(tmp_path / "empty")
 
 
-def _calibrate(capsys, n: int, seed: int) -> dict:
+def _calibrate(capsys, n: int, seed: int, *more) -> dict:
     code = main(["fleet", "calibrate", "--profile", str(BUILTIN / "profile.csv"), "--meta",
-                 str(BUILTIN / "meta.json"), "--n", str(n), "--seed", str(seed), "--json"])
+                 str(BUILTIN / "meta.json"), "--n", str(n), "--seed", str(seed), "--json",
+                 *more])
     out, err = capsys.readouterr()
     assert code == 0, err
     assert "clean bat: " in err and "a minute" in err  # progress: count, rate, time
     return json.loads(out)
 
 
-def test_calibrate_on_a_local_cluster_twice_the_same(capsys):
-    first = _calibrate(capsys, 2, 7)
+def _rows(path) -> list[dict]:
+    return [json.loads(line) for line in path.read_text().splitlines()]
+
+
+def test_calibrate_on_a_local_cluster_resumed_the_same(capsys, tmp_path):
+    """Two bats, then a third by --resume: bat 2 inspected again agrees with its row (the
+    same seed, the same answer), and a row another run made is refused, naming the file."""
+    rows = tmp_path / "rows.jsonl"
+    first = _calibrate(capsys, 2, 7, "-o", str(rows))
     assert first["n"] == 2 and first["serial"] == "DEMO-34A"
     counted = first["false_alarms"] + first["inconclusive"] + first["not_altered"]
     assert counted + first["refused"] == 2
     assert first["false_alarm_upper95"] == pytest.approx(upper95(first["false_alarms"], 2))
-    assert _calibrate(capsys, 2, 7) == first
+    two = _rows(rows)
+    assert [r["index"] for r in two] == [1, 2]
+    more = _calibrate(capsys, 3, 7, "-o", str(rows), "--resume")
+    three = _rows(rows)
+    assert [r["index"] for r in three] == [1, 2, 3] and three[:2] == two
+    assert more["n"] == 3 and more["false_alarm_upper95"] == pytest.approx(
+        upper95(more["false_alarms"], 3))
+    three[2]["F"] = 2.0 * (three[2]["F"] or 1.0) + 1.0  # as if another seed had made it
+    rows.write_text("".join(json.dumps(r) + "\n" for r in three))
+    code = main(["fleet", "calibrate", "--profile", str(BUILTIN / "profile.csv"), "--meta",
+                 str(BUILTIN / "meta.json"), "--n", "3", "--seed", "7", "-o", str(rows),
+                 "--resume"])
+    err = capsys.readouterr().err
+    assert code == 2 and f"{rows}: re-test 3 was stored as" in err
+
+
+def test_read_rows_leaves_out_a_last_line_cut_short(tmp_path):
+    path = tmp_path / "rows.jsonl"
+    rows = [{"index": i, "status": "not_altered", "F": 1.0 + i} for i in (1, 3, 2, 9)]
+    path.write_text("".join(json.dumps(r) + "\n" for r in rows) + '{"index": 4, "sta')
+    kept, cut = read_rows(str(path), 5)
+    assert [r["index"] for r in kept] == [1, 2, 3] and cut == 1
+    path.write_text('{"index": 1\n' + json.dumps(rows[0]) + "\n")
+    with pytest.raises(ValueError, match="line 1 is not a calibration row"):
+        read_rows(str(path), 5)
+
+
+def test_same_row_reads_status_and_f():
+    row = {"index": 1, "status": "not_altered", "F": 2.5}
+    assert same_row(row, dict(row, F=2.5 * (1 + 1e-9)))
+    assert not same_row(row, dict(row, F=2.6))
+    assert not same_row(row, dict(row, status="inconclusive"))
+    assert same_row(dict(row, F=None), dict(row, F=None))
+
+
+def test_plain_heap_sets_glibcs_thresholds_once():
+    import sys
+
+    from batlab.fleet.cluster import on_plain_heap, plain_heap
+
+    if not sys.platform.startswith("linux"):
+        pytest.skip("glibc's mallopt: Linux only")
+    assert plain_heap() is True and plain_heap() is True
+    assert on_plain_heap(lambda x: 2 * x, 21) == 42
