@@ -9,6 +9,8 @@ import time
 from collections.abc import Callable
 from pathlib import Path
 
+from updating.inspect.parallel import QUIET_THREAD_PREFIX
+
 
 def add_db_argument(p: argparse.ArgumentParser) -> None:
     """Add ``--db``, the registry file, to a command's parser."""
@@ -50,7 +52,9 @@ class Progress:
 
     While one step runs longer than ``HEARTBEAT_S`` without a new message, a background
     thread prints ``still <step> (10 s on this step)`` every ``HEARTBEAT_S``, so no long work
-    is silent. ``stop_all`` (``batlab.cli.main``, at the command's end) ends the threads.
+    is silent. The thread only sleeps and prints, so it is named as one a fit may fork
+    beside (``updating.inspect.parallel.QUIET_THREAD_PREFIX``). ``stop_all``
+    (``batlab.cli.main``, at the command's end) ends the threads.
 
     Parameters
     ----------
@@ -73,7 +77,8 @@ class Progress:
         with self._lock:
             self._step, self._since = message, time.perf_counter()
             if self._thread is None:
-                self._thread = threading.Thread(target=self._beat, daemon=True)
+                self._thread = threading.Thread(target=self._beat, daemon=True,
+                                                name=f"{QUIET_THREAD_PREFIX}heartbeat")
                 self._thread.start()
                 _RUNNING.append(self)
         self._print(message)

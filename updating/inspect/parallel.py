@@ -6,7 +6,10 @@ sent back through a pipe. The same computations run either way, so the results a
 as sequential ones. It runs sequentially when forking is not safe or not useful: one item,
 one core, a daemonic process (a Dask or multiprocessing worker may not have children),
 other threads running (a fork copies their locks), no ``fork`` start method, or
-``BATLAB_FIT_WORKERS=1`` in the environment.
+``BATLAB_FIT_WORKERS=1`` in the environment. A thread named with ``QUIET_THREAD_PREFIX``
+does not count: it promises to hold no lock the child's numerics take (the command line's
+progress heartbeat, which sleeps and prints; the child never prints). Before this rule the
+heartbeat alone kept every ``batlab inspect`` sequential.
 """
 
 from __future__ import annotations
@@ -16,6 +19,9 @@ import os
 import threading
 from collections.abc import Callable, Iterable
 from typing import TypeVar
+
+QUIET_THREAD_PREFIX = "batlab-quiet-"
+"""Name prefix of a thread that holds no lock a forked child's numerics need."""
 
 T = TypeVar("T")
 R = TypeVar("R")
@@ -28,8 +34,10 @@ def _can_fork() -> bool:
     if "fork" not in multiprocessing.get_all_start_methods():
         return False
     cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count()
+    others = [t for t in threading.enumerate() if t is not threading.main_thread()
+              and not t.name.startswith(QUIET_THREAD_PREFIX)]
     return (cores or 1) >= 2 and not multiprocessing.current_process().daemon and \
-        threading.active_count() == 1
+        threading.current_thread() is threading.main_thread() and not others
 
 
 def _child(fn: Callable, items: list, conn) -> None:
