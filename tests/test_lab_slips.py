@@ -185,9 +185,9 @@ def test_another_bats_baseline_is_refused_and_no_registry_made(tmp_path, capsys)
 
 def test_the_mass_line_of_a_bat_follows_its_weight():
     x_m, d_m = np.array([0.0, 0.5, 0.85]), np.array([0.03, 0.03, 0.065])
-    a = [plausible.rigid_flexibility(x_m, d_m, w, 0.8) for w in (0.8, 1.0)]
+    a = [plausible.driving_point_mass_line(x_m, d_m, w, 0.8) for w in (0.8, 1.0)]
     assert a[0] / a[1] == pytest.approx(1.25)  # a(x_d) = 1/M + (x_d - x_c)^2 / I, both ~ 1/M
-    lighter = plausible.rigid_flexibility(x_m, d_m, 0.8, 0.8, sensor_kg=0.01)
+    lighter = plausible.driving_point_mass_line(x_m, d_m, 0.8, 0.8, sensor_kg=0.01)
     assert lighter < a[0]
     assert plausible.check_mass_line(a[0], x_m, d_m, 0.8, 0.8) is None
     assert "about 2.2 lb, not meta.json's weight_lb 1.764" in plausible.check_mass_line(

@@ -280,6 +280,8 @@ def rigid_flexibility(
     first moment and pitch inertia about the knob end. dG = -[1, x_j] R^-1 dR R^-1 [1, x_s]^T
     with dR / d sensor_g = 1e-3 [[1, x_s], [x_s, x_s^2]] and dR / d ln rho = the wood's part.
     E, E/G and the bungees do not enter: the mass line separates the accelerometer from E.
+    This is ``updating.model.mass_properties.rigid_mass_line`` written with R, whose
+    derivatives the calibration needs.
     """
     s = effective_state(setup, active, state)
     u = setup.unit_mass

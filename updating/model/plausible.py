@@ -14,6 +14,7 @@ import re
 
 import numpy as np
 
+from updating.model.mass_properties import rigid_mass_line, solid_mass_properties, with_point_mass
 from updating.model.units import IN_TO_M, LB_TO_KG
 
 LENGTH_IN = (24.0, 42.0)
@@ -176,38 +177,17 @@ MASS_LINE_REL = 0.05
 and wood density not uniform (the simulated fleet's baselines: within -1.6 % to +2.8 %)."""
 
 
-def rigid_flexibility(x_m: np.ndarray, diameter_m: np.ndarray, weight_kg: float,
-                      x_drive_m: float, sensor_kg: float = 0.0) -> float:
-    """Return the rigid-body flexibility of a free bat at its driving point, 1/kg.
+def driving_point_mass_line(x_m: np.ndarray, diameter_m: np.ndarray, weight_kg: float,
+                            x_drive_m: float, sensor_kg: float = 0.0) -> float:
+    """Return a free bat's rigid-body flexibility at its driving point, 1/kg.
 
-    The mass line's value there, a(x_d) = 1/M + (x_d - x_c)^2 / I, for the profile's solid
-    of revolution at uniform density weighing ``weight_kg``, with an accelerometer of
-    ``sensor_kg`` at the driving point (Ewins, Modal Testing, 2000, sec. 4.3: the lower
-    residual of a free body's driving-point accelerance).
-
-    Parameters
-    ----------
-    x_m, diameter_m : ndarray
-        The profile's stations from the knob end and the diameters there, m.
-    weight_kg : float
-        The bat's mass, kg.
-    x_drive_m : float
-        The driving point (accelerometer) from the knob end, m.
-    sensor_kg : float
-        The accelerometer's mass, kg.
-
-    Returns
-    -------
-    float
-        a(x_d), 1/kg.
+    ``mass_properties.rigid_mass_line`` at x = x_d, a(x_d) = 1/M + (x_d - x_c)^2 / I, for
+    the profile's solid of revolution at uniform density weighing ``weight_kg``
+    (``solid_mass_properties``) with an accelerometer of ``sensor_kg`` at the driving point.
     """
-    x = np.linspace(x_m[0], x_m[-1], 2001)
-    area = np.pi / 4 * np.interp(x, x_m, diameter_m) ** 2
-    dm = weight_kg * area / area.sum()
-    mass = weight_kg + sensor_kg
-    x_c = (dm @ x + sensor_kg * x_drive_m) / mass
-    inertia = dm @ (x - x_c) ** 2 + sensor_kg * (x_drive_m - x_c) ** 2
-    return 1.0 / mass + (x_drive_m - x_c) ** 2 / inertia
+    mp = with_point_mass(solid_mass_properties(x_m, diameter_m, weight_kg), sensor_kg,
+                         x_drive_m)
+    return float(rigid_mass_line(mp, x_drive_m, x_drive_m))
 
 
 def check_mass_line(a_drive_per_kg: float, x_m: np.ndarray, diameter_m: np.ndarray,
@@ -234,12 +214,12 @@ def check_mass_line(a_drive_per_kg: float, x_m: np.ndarray, diameter_m: np.ndarr
     str or None
         One line (the bat's weight the mass line implies), None when plausible.
     """
-    hi = rigid_flexibility(x_m, diameter_m, weight_kg, x_drive_m) * (1 + MASS_LINE_REL)
-    lo = rigid_flexibility(x_m, diameter_m, weight_kg, x_drive_m, SENSOR_MAX_KG) * (
+    hi = driving_point_mass_line(x_m, diameter_m, weight_kg, x_drive_m) * (1 + MASS_LINE_REL)
+    lo = driving_point_mass_line(x_m, diameter_m, weight_kg, x_drive_m, SENSOR_MAX_KG) * (
         1 - MASS_LINE_REL)
     if lo <= a_drive_per_kg <= hi:
         return None
-    implied_lb = weight_kg * rigid_flexibility(x_m, diameter_m, weight_kg, x_drive_m) \
+    implied_lb = weight_kg * driving_point_mass_line(x_m, diameter_m, weight_kg, x_drive_m) \
         / a_drive_per_kg / LB_TO_KG
     return (f"its mass line ({a_drive_per_kg:.4g} 1/kg at the driving point, {lo:.4g}-"
             f"{hi:.4g} expected) says the bat weighs about {implied_lb:.3g} lb, not "
