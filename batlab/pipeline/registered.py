@@ -6,9 +6,10 @@ API; the method's steps are those of ``batlab.pipeline.inspection``.
 
 from __future__ import annotations
 
-import sqlite3
 from dataclasses import dataclass
 from pathlib import Path
+
+import sqlalchemy as sa
 
 from batlab import registry as reg
 from batlab.pipeline.files import (
@@ -125,21 +126,21 @@ def prepare_registration(
     return Registration(record, baseline, diagnosis)
 
 
-def require_unregistered(conn: sqlite3.Connection, serial: str) -> None:
+def require_unregistered(conn: sa.Connection, serial: str) -> None:
     """Raise ValueError when ``serial`` is already registered (a new bat needs --replace)."""
     if reg.has_bat(conn, serial):
         raise ValueError(f"bat {serial!r} is already registered (use --replace)")
 
 
 def register_files(
-    conn: sqlite3.Connection, profile_path, meta_path, baseline_path,
+    conn: sa.Connection, profile_path, meta_path, baseline_path,
     serial: str | None = None, replace: bool = False, progress: Progress = quiet,
 ) -> Registration:
     """Register a bat: fit, calibrate, store with a copy of the baseline file.
 
     Parameters
     ----------
-    conn : sqlite3.Connection
+    conn : sa.Connection
         The registry.
     profile_path, meta_path, baseline_path : str or os.PathLike
         profile.csv, meta.json and the baseline test file.
@@ -161,13 +162,13 @@ def register_files(
     return store_registration(conn, done, baseline_path, replace, progress)
 
 
-def store_registration(conn: sqlite3.Connection, done: Registration, baseline_path,
+def store_registration(conn: sa.Connection, done: Registration, baseline_path,
                        replace: bool = False, progress: Progress = quiet) -> Registration:
     """Store a prepared registration with a copy of its baseline file.
 
     Parameters
     ----------
-    conn : sqlite3.Connection
+    conn : sa.Connection
         The registry.
     done : Registration
         ``prepare_registration``'s result.
@@ -190,7 +191,7 @@ def store_registration(conn: sqlite3.Connection, done: Registration, baseline_pa
 
 
 def registered_case(
-    conn: sqlite3.Connection, serial: str, retest_path, refit_baseline: bool = False,
+    conn: sa.Connection, serial: str, retest_path, refit_baseline: bool = False,
     progress: Progress = quiet, baseline_fit=None,
 ) -> InspectionCase:
     """Read a registered bat and a re-test file into the method's inputs.
@@ -201,7 +202,7 @@ def registered_case(
 
     Parameters
     ----------
-    conn : sqlite3.Connection
+    conn : sa.Connection
         The registry.
     serial : str
         The bat's serial number.
@@ -240,7 +241,7 @@ def registered_case(
 
 
 def inspect_registered(
-    conn: sqlite3.Connection, serial: str, retest_path, false_alarm: float = 0.01,
+    conn: sa.Connection, serial: str, retest_path, false_alarm: float = 0.01,
     refit_baseline: bool = False, progress: Progress = quiet, baseline_fit=None,
     retest_meta_path=None,
 ) -> InspectionResult:
@@ -248,7 +249,7 @@ def inspect_registered(
 
     Parameters
     ----------
-    conn : sqlite3.Connection
+    conn : sa.Connection
         The registry.
     serial : str
         The bat's serial number.

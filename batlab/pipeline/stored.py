@@ -2,8 +2,9 @@
 
 from __future__ import annotations
 
-import sqlite3
 from pathlib import Path
+
+import sqlalchemy as sa
 
 from batlab import __version__
 from batlab import registry as reg
@@ -25,7 +26,7 @@ EXPORT_COLUMNS = [
 
 
 def store_inspection(
-    conn: sqlite3.Connection, result: InspectionResult, retest_path, false_alarm: float = 0.01,
+    conn: sa.Connection, result: InspectionResult, retest_path, false_alarm: float = 0.01,
     retest_meta: bool = False,
 ) -> reg.Inspection:
     """Record an inspection of a registered bat.
@@ -35,7 +36,7 @@ def store_inspection(
 
     Parameters
     ----------
-    conn : sqlite3.Connection
+    conn : sa.Connection
         The registry.
     result : InspectionResult
         The inspection.
@@ -62,7 +63,7 @@ def store_inspection(
 
 
 def already_inspected(
-    conn: sqlite3.Connection, serial: str, retest_path, false_alarm: float = 0.01,
+    conn: sa.Connection, serial: str, retest_path, false_alarm: float = 0.01,
 ) -> reg.Inspection | None:
     """Find the bat's latest stored inspection of this very re-test file, if any.
 
@@ -71,7 +72,7 @@ def already_inspected(
 
     Parameters
     ----------
-    conn : sqlite3.Connection
+    conn : sa.Connection
         The registry.
     serial : str
         The bat's serial number.
@@ -94,25 +95,25 @@ def already_inspected(
     return same[-1] if same else None
 
 
-def stored_bat(conn: sqlite3.Connection, stored: reg.Inspection) -> reg.BatRecord:
+def stored_bat(conn: sa.Connection, stored: reg.Inspection) -> reg.BatRecord:
     """Return the registration a stored inspection was judged against."""
     return reg.bat_as_registered(conn, stored.reference_seq)
 
 
-def note_report(conn: sqlite3.Connection, stored: reg.Inspection, path: str) -> None:
+def note_report(conn: sa.Connection, stored: reg.Inspection, path: str) -> None:
     """Record where the inspection's report was written."""
     reg.set_report_path(conn, stored.id, path)
 
 
 def provenance(
-    conn: sqlite3.Connection | None = None, stored: reg.Inspection | None = None,
+    conn: sa.Connection | None = None, stored: reg.Inspection | None = None,
     baseline_sha256: str | None = None, retest_sha256: str | None = None,
 ) -> dict:
     """Gather the facts a report prints to be verified.
 
     Parameters
     ----------
-    conn : sqlite3.Connection or None
+    conn : sa.Connection or None
         The registry (for a stored inspection).
     stored : Inspection or None
         The stored inspection: its number, time and custody records (the verdict's and
@@ -165,7 +166,7 @@ def report_inputs(result: InspectionResult, meta: dict, prov: dict) -> ReportInp
                         result.retest, verdict_record(result.serial, result.verdict), meta, prov)
 
 
-def _stored_inspection(conn: sqlite3.Connection, serial: str,
+def _stored_inspection(conn: sa.Connection, serial: str,
                        inspection_id: int | None) -> reg.Inspection:
     """Find the bat's inspection ``inspection_id`` (None: its latest) that kept its files."""
     rows = reg.history(conn, serial)
@@ -187,7 +188,7 @@ def _stored_inspection(conn: sqlite3.Connection, serial: str,
 
 
 def stored_report_inputs(
-    conn: sqlite3.Connection, serial: str, inspection_id: int | None = None,
+    conn: sa.Connection, serial: str, inspection_id: int | None = None,
     progress: Progress = quiet,
 ) -> ReportInputs:
     """Rebuild a past inspection's report inputs from the registry alone.
@@ -198,7 +199,7 @@ def stored_report_inputs(
 
     Parameters
     ----------
-    conn : sqlite3.Connection
+    conn : sa.Connection
         The registry.
     serial : str
         The bat's serial number.
@@ -232,12 +233,12 @@ def stored_report_inputs(
         stored.verdict, bat.meta, provenance(conn, stored=stored))
 
 
-def history_table(conn: sqlite3.Connection, serial: str | None = None):
+def history_table(conn: sa.Connection, serial: str | None = None):
     """Tabulate every inspection (of one bat), one row each, lab units: `batlab export`.
 
     Parameters
     ----------
-    conn : sqlite3.Connection
+    conn : sa.Connection
         The registry.
     serial : str or None
         One bat's serial, or None for all bats.
