@@ -12,8 +12,9 @@ from __future__ import annotations
 
 import html
 import re
-import sqlite3
 from pathlib import Path
+
+import sqlalchemy as sa
 
 from batlab import custody, signing
 
@@ -45,7 +46,7 @@ def _seal_problems(page: str, where: str, trusted: set[str]) -> list[str]:
     return []
 
 
-def _content_problems(conn: sqlite3.Connection, page: str, where: str,
+def _content_problems(conn: sa.Connection, page: str, where: str,
                       verdict_seq: int) -> list[str]:
     """Check the page's verdict words, reasons and head against the inspection and chain."""
     from batlab.registry import custody_rows, inspection_by_record
@@ -70,13 +71,13 @@ def _content_problems(conn: sqlite3.Connection, page: str, where: str,
     return problems
 
 
-def check_page(conn: sqlite3.Connection, page_path: str | Path,
+def check_page(conn: sa.Connection, page_path: str | Path,
                trusted: set[str]) -> list[str]:
     """Return the problems of a report page against the registry (empty: it verifies).
 
     Parameters
     ----------
-    conn : sqlite3.Connection
+    conn : sqlalchemy.Connection
         The registry.
     page_path : str or Path
         The report's ``index.html``.
