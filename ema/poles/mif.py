@@ -11,6 +11,11 @@
   half-power points between lines (poor when the bandwidth spans 2-3 lines) a parabola is
   fitted to 1/S over the lines above 0.3 x the peak: f_r is its vertex and the half-power
   half-width zeta f_r = sqrt(floor / a).
+- Prominence (``prominent_peaks``) as ``scipy.signal.find_peaks`` and ``peak_prominences``
+  define it: a peak is a sample or a flat run (its middle sample) higher than both
+  neighbours; its prominence is its height less the higher of the lowest points between it
+  and the nearest higher sample on each side (or the end). The same peaks, without
+  importing scipy.signal (which imports scipy.stats: 0.3-0.8 s of every command's start).
 """
 
 from __future__ import annotations
@@ -18,6 +23,54 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+
+
+def local_maxima(y: np.ndarray) -> np.ndarray:
+    """Return the indices of the local maxima of ``y``, a flat top by its middle sample.
+
+    A run of equal samples is a maximum when the samples either side of it are both lower;
+    the first and last samples never are (``scipy.signal.find_peaks`` without conditions).
+    """
+    y = np.asarray(y, dtype=float)
+    if y.size < 3:
+        return np.zeros(0, dtype=int)
+    start = np.flatnonzero(np.concatenate([[True], y[1:] != y[:-1]]))  # each run's first
+    end = np.concatenate([start[1:] - 1, [y.size - 1]])
+    v = y[start]
+    top = np.flatnonzero((v[1:-1] > v[:-2]) & (v[1:-1] > v[2:])) + 1
+    return (start[top] + end[top]) // 2
+
+
+def prominent_peaks(y: np.ndarray, min_prominence: float) -> np.ndarray:
+    """Return the local maxima of ``y`` with a prominence of at least ``min_prominence``.
+
+    The prominence of peak p: y[p] - max(min y[l+1..p], min y[p..r-1]), l and r the nearest
+    samples either side higher than y[p] (the ends when there is none), as
+    ``scipy.signal.peak_prominences`` (module docstring). One vectorised search per peak.
+
+    Parameters
+    ----------
+    y : ndarray
+        (F,) samples.
+    min_prominence : float
+        The least prominence kept, in y's units.
+
+    Returns
+    -------
+    ndarray
+        Indices of the peaks kept, ascending.
+    """
+    y = np.asarray(y, dtype=float)
+    peaks = local_maxima(y)
+    keep = np.zeros(peaks.size, dtype=bool)
+    for n, p in enumerate(peaks):  # one search per peak, none per sample
+        higher_left = np.flatnonzero(y[:p] > y[p])
+        higher_right = np.flatnonzero(y[p + 1:] > y[p])
+        lo = higher_left[-1] + 1 if higher_left.size else 0
+        hi = p + 1 + higher_right[0] if higher_right.size else y.size
+        base = max(y[lo:p + 1].min(), y[p:hi].min())
+        keep[n] = y[p] - base >= min_prominence
+    return peaks[keep]
 
 
 @dataclass(frozen=True)
@@ -113,13 +166,11 @@ def pick_peaks(
     PeakPick
         Frequencies, damping ratios and heights of the peaks.
     """
-    from scipy.signal import find_peaks  # here: scipy.signal costs 0.2-0.4 s to import
-
     freq_hz = np.asarray(freq_hz, dtype=float)
     mif = np.asarray(mif, dtype=float)
     sel = np.flatnonzero((freq_hz >= band_hz[0]) & (freq_hz <= band_hz[1]))
     f, s = freq_hz[sel], np.maximum(mif[sel], np.finfo(float).tiny)
-    idx, _ = find_peaks(np.log(s), prominence=np.log(min_prominence))
+    idx = prominent_peaks(np.log(s), np.log(min_prominence))
     idx = idx[(idx > 0) & (idx < f.size - 1)]
     fr, zeta, ok = np.empty(idx.size), np.empty(idx.size), np.zeros(idx.size, dtype=bool)
     for n, k in enumerate(idx):  # one small fit per peak (not per line)

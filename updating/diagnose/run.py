@@ -30,7 +30,6 @@ from __future__ import annotations
 from dataclasses import dataclass, replace
 
 import numpy as np
-import scipy.stats
 
 from ema.shapes.mac import mac
 from updating.correlate.measured import MeasuredModes
@@ -59,6 +58,7 @@ from updating.model.lab_input import BatMeta
 from updating.model.profile import Profile
 from updating.model.reference import BatReference
 from updating.model.units import IN_TO_M, LBF_IN3_TO_KG_M3, PSI_TO_PA
+from updating.tails import chi2_ppf
 
 MIN_GAIN_PCT = 0.05
 FINE_ELEMENT_IN = 0.5
@@ -581,7 +581,7 @@ def diagnose(
     if meta.accelerometer_mass_kg is not None:  # the data sheet's mass: a prior
         obs = replace(obs, sensor_prior_g=1e3 * meta.accelerometer_mass_kg)
     nominal = fit_model(setup, frozenset(), obs, start_state(setup, suspension_hz))
-    crit = scipy.stats.chi2.ppf(CONFIDENCE, np.arange(8))
+    crit = chi2_ppf(CONFIDENCE, np.arange(8))
 
     def nameable(s: Step) -> bool:
         return s.gain_pct >= min_gain_pct and s.chi2_drop_freq >= crit[s.new_params]

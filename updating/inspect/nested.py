@@ -34,8 +34,8 @@ from updating.inspect.hypotheses import (
 from updating.inspect.kinds import N_PARAMS, KindFits, classify, segment_space
 from updating.inspect.local_change import N_SEGMENT, fit_segment
 from updating.inspect.model import ChangePredictor
-from updating.inspect.tails import chi2_ppf, f_sf
 from updating.model.units import IN_TO_M
+from updating.tails import chi2_ppf, f_sf
 
 INITIAL_SHAPE_NOISE = 0.01
 

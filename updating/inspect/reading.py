@@ -35,8 +35,8 @@ from updating.inspect.kinds import KindFits
 from updating.inspect.model import ChangePredictor
 from updating.inspect.msso_map import msso_map
 from updating.inspect.nested import Hypotheses, NestedTest
-from updating.inspect.tails import chi2_ppf
 from updating.model.units import IN_TO_M
+from updating.tails import chi2_ppf
 
 MAP_MASS_NORMALISED = True
 PARTIAL_LEVEL = 0.01
