@@ -10,6 +10,7 @@ a wrong file, a lost re-ordering or a swapped test changes what they return.
 
 from __future__ import annotations
 
+import json
 import shutil
 from pathlib import Path
 from types import SimpleNamespace
@@ -106,3 +107,39 @@ def run_cli(args, capsys) -> tuple[int, str, str]:
     code = main([str(a) for a in args])
     out = capsys.readouterr()
     return code, out.out, out.err
+
+
+def bat_folders(tmp_path: Path, prefix: str, n: int) -> list[Path]:
+    """``n`` lab folders, bats ``{prefix}-0`` ... ``{prefix}-{n-1}``: the sample's profile.csv
+    and its meta.json with the serial changed (one registry, several bats)."""
+    sample = SAMPLE.resolve()
+    folders = []
+    for k in range(n):
+        folder = tmp_path / f"bat{k}"
+        folder.mkdir()
+        shutil.copyfile(sample / "profile.csv", folder / "profile.csv")
+        meta = json.loads((sample / "meta.json").read_text())
+        meta["serial"] = f"{prefix}-{k}"
+        (folder / "meta.json").write_text(json.dumps(meta))
+        folders.append(folder)
+    return folders
+
+
+def lab_worker(db: str, folder: str, n_inspections: int) -> None:
+    """One lab in its own process: register the bat of ``folder`` on ``db`` and inspect the
+    corked re-test ``n_inspections`` times (``--again``), the numerics stood in."""
+    import batlab.pipeline.inspection as pipeline
+    from batlab.cli import main
+    from updating.correlate import fitted
+
+    fitted.fit_test, pipeline.calibrate = fake_fit, fake_calibrate
+    pipeline.inspect = fake_inspect
+    d, sample = Path(folder), SAMPLE.resolve()
+    serial = json.loads((d / "meta.json").read_text())["serial"]
+    code = main(["register", "--profile", str(d / "profile.csv"), "--meta",
+                 str(d / "meta.json"), "--baseline", str(sample / "baseline.uff"),
+                 "--db", db, "--json"])
+    assert code == 0
+    for _ in range(n_inspections):
+        assert main(["inspect", "--serial", serial, str(sample / "retest_corked.uff"),
+                     "--db", db, "--json", "--again"]) == 0  # the same file: stored anew

@@ -7,13 +7,12 @@ from __future__ import annotations
 
 import json
 import multiprocessing as mp
-import shutil
 from pathlib import Path
 
 import pytest
 
 from batlab import registry as reg
-from tests.inspect_standins import SAMPLE, run_cli, stand_in_lab
+from tests.inspect_standins import bat_folders, lab_worker, run_cli, stand_in_lab
 
 # the time, the place, and a custody record's hash (it covers the record's time stamp)
 VARIES = ("registered_at", "inspected_at", "last_inspected_at", "db", "record_sha256")
@@ -71,37 +70,12 @@ def test_a_forged_verdict_on_the_server_is_found(lab, pg_url, capsys):
         err.strip().splitlines()) == 1
 
 
-def _register_worker(url: str, folder: str, serial: str) -> None:
-    import batlab.pipeline.inspection as pipeline
-    from batlab.cli import main
-    from tests.inspect_standins import fake_calibrate, fake_fit, fake_inspect
-    from updating.correlate import fitted
-
-    fitted.fit_test, pipeline.calibrate = fake_fit, fake_calibrate
-    pipeline.inspect = fake_inspect
-    d = Path(folder)
-    code = main(["register", "--profile", str(d / "profile.csv"), "--meta",
-                 str(d / "meta.json"), "--baseline", str(SAMPLE / "baseline.uff"),
-                 "--db", url, "--json"])
-    assert code == 0
-    for _ in range(2):
-        assert main(["inspect", "--serial", serial, str(SAMPLE / "retest_corked.uff"),
-                     "--db", url, "--json", "--again"]) == 0
-
-
 def test_four_registrations_at_once_all_land(tmp_path, pg_url):
     """Four processes register a bat each and inspect it twice, all at once, on a registry
     none of them found created: every bat and verdict is there, one chain, no fork."""
     ctx = mp.get_context("spawn")
-    procs = []
-    for k in range(4):
-        folder = tmp_path / f"bat{k}"
-        folder.mkdir()
-        shutil.copyfile(SAMPLE / "profile.csv", folder / "profile.csv")
-        meta = json.loads((SAMPLE / "meta.json").read_text())
-        meta["serial"] = f"PG-{k}"
-        (folder / "meta.json").write_text(json.dumps(meta))
-        procs.append(ctx.Process(target=_register_worker, args=(pg_url, str(folder), f"PG-{k}")))
+    procs = [ctx.Process(target=lab_worker, args=(pg_url, str(folder), 2))
+             for folder in bat_folders(tmp_path, "PG", 4)]
     for p in procs:
         p.start()
     for p in procs:
