@@ -166,3 +166,28 @@ def test_plain_heap_sets_glibcs_thresholds_once():
         pytest.skip("glibc's mallopt: Linux only")
     assert plain_heap() is True and plain_heap() is True
     assert on_plain_heap(lambda x: 2 * x, 21) == 42
+
+
+def test_the_verdict_does_not_need_the_element_map(tmp_path):
+    """A calibration skips the MSSO map: the verdict, its statistic, reasons and finding
+    are those of the inspection that draws it (only ``details.msso`` differs)."""
+    from dataclasses import replace
+
+    from batlab.fleet.calibrate import registration
+    from updating.inspect.retest_meta import conditions_from_dict
+    from updating.simulate.virtual_bat import simulate_test
+
+    spec = BatSpec(str(BUILTIN / "profile.csv"), str(BUILTIN / "meta.json"), 7)
+    reg = registration(spec)
+    retest = draw_retest(np.random.default_rng(child_seed(7, 3)), reg.bat)
+    path = tmp_path / "retest.npz"
+    pipeline.write_frf(path, simulate_test(retest.bat, reg.bat.freq_hz, seed=retest.noise_seed))
+    case = replace(reg.case, retest=pipeline.fit_file(path.name, pipeline.read_frf(path),
+                                                      reg.case.weight_kg))
+    cond = conditions_from_dict(retest.retest_meta, "retest.json")
+    drawn = pipeline.judge(case, 0.01, cond).verdict
+    bare = pipeline.judge(case, 0.01, cond, with_map=False).verdict
+    assert drawn.details.fit.msso.result is not None
+    assert bare.details.fit.msso.result is None
+    assert bare.statistic == drawn.statistic and bare.reasons == drawn.reasons
+    assert pipeline.contract_dict("S", bare) == pipeline.contract_dict("S", drawn)

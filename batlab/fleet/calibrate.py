@@ -6,7 +6,8 @@ baseline simulated, written as the lab's files and registered by the pipeline's 
 calibration) once per worker process (``registration`` caches it). Re-test ``i`` (1-based)
 is drawn from child ``i`` (``child_seed``), simulated, written as a test file and read back,
 fitted and judged as ``batlab inspect --serial`` judges it (``pipeline.fit_file``,
-``pipeline.judge``) with its retest.json; no subprocess, no registry write.
+``pipeline.judge``) with its retest.json; no subprocess, no registry write, and no MSSO
+element map (only a report draws it; the verdict is the same without it).
 
 A long calibration can be resumed from its rows file (``read_rows``): the last stored
 re-test is inspected again first and must give its stored status and F (``check_resumed``),
@@ -163,7 +164,7 @@ def inspect_clean(spec: BatSpec, i: int) -> dict:
             fitted = pipeline.fit_file(path.name, test, reg.case.weight_kg)
             case = replace(reg.case, retest=fitted)
             verdict = pipeline.judge(case, spec.false_alarm, conditions_from_dict(
-                retest.retest_meta, "retest.json")).verdict
+                retest.retest_meta, "retest.json"), with_map=False).verdict
         except ValueError as exc:  # refused, as `batlab inspect` refuses it
             row.update(status="refused", reasons=[str(exc)], F=None, p=None,
                        seconds=time.perf_counter() - t0, cpu_s=time.process_time() - cpu0)

@@ -157,7 +157,7 @@ def calibrate_baseline(profile: Profile, meta: BatMeta, baseline: FittedTest) ->
 
 
 def judge(case: InspectionCase, false_alarm: float,
-          conditions: RetestConditions | None) -> InspectionResult:
+          conditions: RetestConditions | None, with_map: bool = True) -> InspectionResult:
     """Judge a case: the method's one call (``updating.inspect.run.inspect``).
 
     Parameters
@@ -168,6 +168,8 @@ def judge(case: InspectionCase, false_alarm: float,
         The decision's false-alarm rate.
     conditions : RetestConditions or None
         The re-test's retest.json.
+    with_map : bool
+        Compute the MSSO element map the report draws (False: the same verdict, sooner).
 
     Returns
     -------
@@ -175,7 +177,7 @@ def judge(case: InspectionCase, false_alarm: float,
         The case with its verdict.
     """
     verdict = inspect(case.profile, case.reference, case.baseline.modes, case.retest.modes,
-                      false_alarm, conditions, case.registered)
+                      false_alarm, conditions, case.registered, with_map=with_map)
     return InspectionResult(case.serial, case.profile, case.reference, case.baseline,
                             case.retest, verdict, case.reference_seq, case.weight_kg,
                             case.retest_content)
