@@ -155,6 +155,9 @@ def test_same_row_reads_status_and_f():
     assert not same_row(row, dict(row, F=2.6))
     assert not same_row(row, dict(row, status="inconclusive"))
     assert same_row(dict(row, F=None), dict(row, F=None))
+    nan = dict(row, status="inconclusive", F=float("nan"))  # judged before the F test
+    assert same_row(json.loads(json.dumps(nan)), nan)
+    assert not same_row(nan, dict(nan, F=2.5)) and not same_row(dict(row, F=None), row)
 
 
 def test_plain_heap_sets_glibcs_thresholds_once():

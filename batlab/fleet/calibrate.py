@@ -320,13 +320,16 @@ def read_rows(path: str, n: int) -> tuple[list[dict], int]:
 
 
 def same_row(stored: dict, again: dict, rtol: float = 1e-6) -> bool:
-    """Say whether a re-test inspected again gives its stored row (status and F)."""
+    """Say whether a re-test inspected again gives its stored row (status and F).
+
+    F within ``rtol``; no F (a refusal) or NaN (inconclusive before the test) on both sides.
+    """
     if stored["status"] != again["status"]:
         return False
     f0, f1 = stored.get("F"), again.get("F")
     if f0 is None or f1 is None:
         return f0 is None and f1 is None
-    return bool(np.isclose(f0, f1, rtol=rtol, atol=0.0))
+    return bool(np.isclose(f0, f1, rtol=rtol, atol=0.0, equal_nan=True))
 
 
 def check_resumed(path: str, stored: dict, again: dict) -> None:
