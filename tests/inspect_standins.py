@@ -50,7 +50,7 @@ def fake_calibrate(profile, meta, baseline_modes, suspension_hz=None):
 
 
 def fake_inspect(profile, reference, baseline, retest, false_alarm, conditions=None,
-                 registered=None):
+                 registered=None, with_map=True):
     """Altered when the modes shift unevenly (beyond a uniform drift); 1 in elements; the
     'core' sits in the last 10 in, its size from the largest uneven shift."""
     n = min(baseline.freq_hz.size, retest.freq_hz.size)

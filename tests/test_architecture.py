@@ -29,10 +29,11 @@ UPDATING_LAYERS = {  # sub-package (or top module) -> the updating sub-packages 
     "model": set(),
     "correlate": {"model"},
     "lsq": set(),
+    "tails": set(),
     "solid": {"model", "correlate"},
     "msso": {"model", "correlate", "lsq"},
-    "diagnose": {"model", "correlate", "lsq", "solid"},
-    "inspect": {"model", "correlate", "lsq", "msso"},
+    "diagnose": {"model", "correlate", "lsq", "tails", "solid"},
+    "inspect": {"model", "correlate", "lsq", "tails", "msso"},
     "simulate": {"model", "correlate", "lsq", "msso", "inspect", "solid"},
 }
 

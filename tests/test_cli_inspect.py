@@ -92,7 +92,7 @@ def _recording(monkeypatch):
     seen = []
 
     def rec(profile, reference, baseline, retest, false_alarm, conditions=None,
-            registered=None):
+            registered=None, with_map=True):
         seen.append((conditions, registered))
         return fake_inspect(profile, reference, baseline, retest, false_alarm)
 

@@ -110,7 +110,9 @@ def _calibrate(capsys, n: int, seed: int, *more) -> dict:
 
 
 def _rows(path) -> list[dict]:
-    return [json.loads(line) for line in path.read_text().splitlines()]
+    """The rows of a calibration's file, in index order (it holds them in arrival order)."""
+    return sorted((json.loads(line) for line in path.read_text().splitlines()),
+                  key=lambda r: r["index"])
 
 
 def test_calibrate_on_a_local_cluster_resumed_the_same(capsys, tmp_path):

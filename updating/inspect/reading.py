@@ -247,12 +247,13 @@ def _element_source(family: str | None) -> str:
 
 
 def element_map(profile, reference, baseline, retest, pairs: RetestPairs, drift, offset,
-                 sigma, sigma_lnf) -> ElementMap:
+                sigma, sigma_lnf, fit_region_m=None) -> ElementMap:
     """Map the paired modes element by element (MSSO).
 
     The MSSO map of the paired modes (its ``error`` when the modes cannot be updated
     element by element), weighted with the median of the per-mode noise levels (the map
-    takes one shape and one frequency level).
+    takes one shape and one frequency level), and whether it agrees with the fit's region
+    ``fit_region_m`` (``regions_agree``; None: no alteration found).
     """
     try:
         mp = msso_map(profile, reference, baseline.select(pairs.baseline_index),
@@ -264,7 +265,7 @@ def element_map(profile, reference, baseline, retest, pairs: RetestPairs, drift,
                       mass_normalised=MAP_MASS_NORMALISED)
     except ValueError as exc:
         return ElementMap(error=str(exc))
-    return ElementMap(mp)
+    return ElementMap(mp, agrees_with_fit=regions_agree(mp.region_m, fit_region_m))
 
 
 def regions_agree(map_region, fit_region) -> bool:

@@ -54,7 +54,6 @@ from updating.inspect.reading import (
     fit_evidence,
     mode_pairs,
     read_fit,
-    regions_agree,
 )
 from updating.inspect.retest_meta import RetestConditions
 from updating.inspect.segments import element_factors
@@ -203,13 +202,11 @@ def inspect_retest(
     # 6. the MSSO map, with the accepted model's drift (when there is a core, the null fit's
     # uniform scales absorb part of it and the map would show that as a change of the bat)
     ps = reading.fit.params
+    region = finding.region_m if altered else None
     msso = ElementMap()
     if with_map:
         msso = element_map(profile, reference, baseline, retest, pairs, ps, offset,
-                           hyp.sigma_rel, diff.sigma_lnf)
-    region = finding.region_m if altered else None
-    if msso.result is not None:
-        msso = replace(msso, agrees_with_fit=regions_agree(msso.region_m, region))
+                           hyp.sigma_rel, diff.sigma_lnf, region)
     record = fit_evidence(diff, space, hyp, test, evidence, reading, kinds, altered,
                           factors.beta_shear, offset, msso)
     return Verdict(
