@@ -196,3 +196,20 @@ def test_the_verdict_does_not_need_the_element_map(tmp_path):
     assert bare.details.fit.msso.result is None
     assert bare.statistic == drawn.statistic and bare.reasons == drawn.reasons
     assert pipeline.contract_dict("S", bare) == pipeline.contract_dict("S", drawn)
+
+
+def test_resume_takes_off_only_a_cut_last_line(tmp_path):
+    """``--resume`` on a file killed mid-line: the cut line goes (atomically), every complete
+    row stays, those beyond ``--n`` too; the rows kept are re-tests 1..n."""
+    import argparse
+
+    from batlab.commands.fleet import _stored_rows
+
+    path = tmp_path / "rows.jsonl"
+    rows = [{"index": i, "status": "not_altered", "F": 1.0 + i} for i in (1, 2, 7)]
+    path.write_text("".join(json.dumps(r) + "\n" for r in rows) + '{"index": 3, "st')
+    said = []
+    kept = _stored_rows(argparse.Namespace(resume=True, out=str(path), n=5), said.append)
+    assert [r["index"] for r in kept] == [1, 2] and "cut short" in said[0]
+    assert [json.loads(line)["index"] for line in path.read_text().splitlines()] == [1, 2, 7]
+    assert path.read_text().endswith("\n") and not list(tmp_path.glob("*.tmp*"))

@@ -20,6 +20,7 @@ import argparse
 import json
 import os
 import time
+from pathlib import Path
 
 from batlab.cli_support import add_db_argument, db_path, progress_printer
 
@@ -126,26 +127,24 @@ def _calibrate(args: argparse.Namespace) -> int:
 
 
 def _stored_rows(args: argparse.Namespace, progress) -> list[dict]:
-    """Return the rows ``--resume`` keeps from ``-o``'s file (none without it)."""
+    """Return the rows ``--resume`` keeps from ``-o``'s file (none without it).
+
+    A last line cut short is taken off the file (atomically), so new rows start on a line of
+    their own; every complete line stays, rows beyond ``--n`` included.
+    """
     from batlab.fleet.calibrate import read_rows
+    from ema.io.atomic_write import atomic_write
 
     if not (args.resume and os.path.exists(args.out)):
         return []
     rows, cut = read_rows(args.out, args.n)
     progress(f"{args.out}: {len(rows)} re-test(s) already done"
              + (", a last line cut short left out" if cut else ""))
-    if cut:  # rewritten without the cut line, so new rows start on a line of their own
-        _write_rows(args.out, rows)
+    if cut:
+        text = Path(args.out).read_text()
+        whole = text[:text.rfind("\n") + 1]
+        atomic_write(args.out, lambda tmp: tmp.write_text(whole))
     return rows
-
-
-def _write_rows(path: str, rows: list[dict]) -> None:
-    """Write ``rows`` to ``path`` as JSON lines, by a temporary name and a rename."""
-    tmp = f"{path}.tmp"
-    with open(tmp, "w") as f:
-        for row in rows:
-            print(json.dumps(row), file=f)
-    os.replace(tmp, path)
 
 
 def _new_rows(client, spec, args: argparse.Namespace, stored: list[dict],
@@ -161,7 +160,7 @@ def _new_rows(client, spec, args: argparse.Namespace, stored: list[dict],
         check_resumed(args.out, stored[-1], again)
     if not todo:
         return []
-    rows_file = open(args.out, "a" if stored else "w") if args.out else None  # noqa: SIM115
+    rows_file = open(args.out, "a" if args.resume else "w") if args.out else None  # noqa: SIM115
     try:
         return run_calibration(client, spec, todo, progress,
                                None if rows_file is None else _row_writer(rows_file))

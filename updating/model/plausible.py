@@ -214,13 +214,13 @@ def check_mass_line(a_drive_per_kg: float, x_m: np.ndarray, diameter_m: np.ndarr
     str or None
         One line (the bat's weight the mass line implies), None when plausible.
     """
-    hi = driving_point_mass_line(x_m, diameter_m, weight_kg, x_drive_m) * (1 + MASS_LINE_REL)
+    bare = driving_point_mass_line(x_m, diameter_m, weight_kg, x_drive_m)
+    hi = bare * (1 + MASS_LINE_REL)
     lo = driving_point_mass_line(x_m, diameter_m, weight_kg, x_drive_m, SENSOR_MAX_KG) * (
         1 - MASS_LINE_REL)
     if lo <= a_drive_per_kg <= hi:
         return None
-    implied_lb = weight_kg * driving_point_mass_line(x_m, diameter_m, weight_kg, x_drive_m) \
-        / a_drive_per_kg / LB_TO_KG
+    implied_lb = weight_kg * bare / a_drive_per_kg / LB_TO_KG
     return (f"its mass line ({a_drive_per_kg:.4g} 1/kg at the driving point, {lo:.4g}-"
             f"{hi:.4g} expected) says the bat weighs about {implied_lb:.3g} lb, not "
             f"meta.json's weight_lb {weight_kg / LB_TO_KG:.4g}")
