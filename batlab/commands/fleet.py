@@ -20,7 +20,6 @@ import argparse
 import json
 import os
 import time
-from pathlib import Path
 
 from batlab.cli_support import add_db_argument, db_path, progress_printer
 
@@ -132,8 +131,7 @@ def _stored_rows(args: argparse.Namespace, progress) -> list[dict]:
     A last line cut short is taken off the file (atomically), so new rows start on a line of
     their own; every complete line stays, rows beyond ``--n`` included.
     """
-    from batlab.fleet.calibrate import read_rows
-    from ema.io.atomic_write import atomic_write
+    from batlab.fleet.calibrate import drop_cut_line, read_rows
 
     if not (args.resume and os.path.exists(args.out)):
         return []
@@ -141,9 +139,7 @@ def _stored_rows(args: argparse.Namespace, progress) -> list[dict]:
     progress(f"{args.out}: {len(rows)} re-test(s) already done"
              + (", a last line cut short left out" if cut else ""))
     if cut:
-        text = Path(args.out).read_text()
-        whole = text[:text.rfind("\n") + 1]
-        atomic_write(args.out, lambda tmp: tmp.write_text(whole))
+        drop_cut_line(args.out)
     return rows
 
 

@@ -32,6 +32,7 @@ import numpy as np
 import batlab.pipeline as pipeline
 from batlab.fleet.clean_retests import CleanBat, draw_bat, draw_retest
 from batlab.fleet.cluster import ordered_map
+from batlab.pipeline.files import atomic_write
 from batlab.pipeline.registered import Registration, registered_weight_kg
 from batlab.registry import decode_modes
 from updating.inspect.retest_meta import conditions_from_dict
@@ -317,6 +318,13 @@ def read_rows(path: str, n: int) -> tuple[list[dict], int]:
         if 1 <= i <= n:
             rows[i] = row
     return [rows[i] for i in sorted(rows)], cut
+
+
+def drop_cut_line(path: str) -> None:
+    """Take a last line cut short off a rows file, atomically; every complete line stays."""
+    text = Path(path).read_text()
+    whole = text[:text.rfind("\n") + 1]
+    atomic_write(path, lambda tmp: tmp.write_text(whole))
 
 
 def same_row(stored: dict, again: dict, rtol: float = 1e-6) -> bool:
