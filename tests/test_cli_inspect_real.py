@@ -8,12 +8,14 @@ from __future__ import annotations
 import json
 import subprocess
 import sys
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
 import pytest
 
 from batlab.pipeline import jsonable
+from batlab.pipeline.stored import stored_report_inputs, with_element_map
 from batlab.registry import history, open_registry
 from ema.io.frf_io import write_test
 from updating.inspect.details import InspectionDetails, ModePair
@@ -96,7 +98,41 @@ def test_corked_retest_found_in_place(registry):
     assert stateless == out
     record = assert_stored_record_reads_back(db)
     details = InspectionDetails.from_json_dict(record["details"])
-    assert details.msso.result is not None and details.msso.region_m is not None
+    assert details.msso.result is None and details.msso.error is None  # no report asked
+
+
+def test_element_map_drawn_when_a_report_asks(registry):
+    """An inspection without a report stores no MSSO element map; a report of it judges the
+    stored tests again and draws the map an inspection with a report stores, the same to
+    the digit (but its time). A stored verdict the second judgement does not reproduce gets no map, and
+    says why. A retest.json's conditions are stored for that second judgement."""
+    tmp, db = registry
+    retest = SAMPLE / "retest_corked.uff"
+    batlab(["inspect", "--serial", "HX-2001", retest, "--db", db, "--again", "--json"])
+    with open_registry(db, create=False) as conn:
+        inputs = stored_report_inputs(conn, "HX-2001")
+        bare = history(conn, "HX-2001")[-1]
+    assert bare.verdict["details"]["msso"] == {}
+    drawn = inputs.verdict["details"]["msso"]
+    assert drawn["region_m"] is not None and len(drawn["alpha"]) > 10
+    batlab(["inspect", "--serial", "HX-2001", retest, "--db", db, "--again", "--json",
+            "-o", tmp / "rep"])
+    with open_registry(db, create=False) as conn:
+        stored = history(conn, "HX-2001")[-1].verdict
+    untimed = [{k: v for k, v in m.items() if k != "time_s"}
+               for m in (stored["details"]["msso"], drawn)]
+    assert untimed[0] == untimed[1]
+    # a verdict this batlab does not reproduce (here: its status changed) gets no map
+    other = {**bare.verdict, "status": "not_altered"}
+    again = with_element_map(replace(inputs, verdict=other), bare.inputs, None)
+    assert "no map is drawn" in again.verdict["details"]["msso"]["error"]
+    (tmp / "retest.json").write_text(json.dumps({"weight_lb": 1.90, "temperature_c": 21.0}))
+    batlab(["inspect", "--serial", "HX-2001", tmp / "drifted.uff", "--db", db,
+            "--retest-meta", tmp / "retest.json", "--json"])
+    with open_registry(db, create=False) as conn:
+        kept = history(conn, "HX-2001")[-1].inputs
+    assert kept["retest_meta"] is True and kept["retest_conditions"]["temperature_c"] == 21.0
+    assert kept["retest_conditions"]["weight_kg"] == pytest.approx(1.90 * 0.45359237)
 
 
 def test_drifted_retest_is_not_altered(registry):

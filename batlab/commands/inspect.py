@@ -94,10 +94,11 @@ def run(args: argparse.Namespace) -> int:
                 pipeline.already_inspected(conn, args.serial, retest, args.false_alarm)
             if done is not None:
                 return _print_stored(args, conn, done, retest, progress, readable)
+            drawn = bool(args.out or args.plots)  # the element map only for a report
             result = pipeline.inspect_registered(conn, args.serial, retest, args.false_alarm,
-                                                 refit_baseline=bool(args.out or args.plots),
-                                                 progress=progress,
-                                                 retest_meta_path=args.retest_meta)
+                                                 refit_baseline=drawn, progress=progress,
+                                                 retest_meta_path=args.retest_meta,
+                                                 with_map=drawn)
             stored = pipeline.store_inspection(conn, result, retest, args.false_alarm,
                                                retest_meta=bool(args.retest_meta))
             progress(f"stored as inspection #{stored.id} of {result.serial} (custody record "
@@ -120,7 +121,8 @@ def run(args: argparse.Namespace) -> int:
         if not all(stateless):
             raise ValueError("give --serial S, or all of --profile, --meta and --baseline")
         result = pipeline.inspect_files(args.profile, args.meta, args.baseline, retest,
-                                        args.false_alarm, progress, args.retest_meta)
+                                        args.false_alarm, progress, args.retest_meta,
+                                        with_map=bool(args.out or args.plots))
         _print(args, pipeline.contract_dict(result.serial, result.verdict), readable)
         if args.out or args.plots:
             prov = pipeline.provenance(baseline_sha256=pipeline.file_sha256(args.baseline),

@@ -75,7 +75,8 @@ def inspect_job(db: str, false_alarm: float, job: RetestJob):
     try:
         with open_registry(db, create=False) as conn:
             result = pipeline.inspect_registered(conn, job.serial, job.retest_path, false_alarm,
-                                                 retest_meta_path=job.retest_meta_path)
+                                                 retest_meta_path=job.retest_meta_path,
+                                                 with_map=False)
     except (ValueError, OSError) as exc:
         return f"{job.retest_path}: {exc}"
     return replace(result, baseline=None, retest=None, profile=None, reference=None)

@@ -84,6 +84,9 @@ class InspectionResult:
     retest_content : bytes or None
         The re-test file's bytes as judged (stored as they are, even if the file on disk
         changes afterwards).
+    conditions : RetestConditions or None
+        The retest.json's conditions it was judged with (stored, so that a report can judge
+        the stored tests again for the element map).
     """
 
     serial: str
@@ -95,6 +98,7 @@ class InspectionResult:
     reference_seq: int | None = None
     weight_kg: float | None = None
     retest_content: bytes | None = None
+    conditions: RetestConditions | None = None
 
 
 def fit_file(name: str, test: FrfTest, weight_kg: float | None,
@@ -169,7 +173,8 @@ def judge(case: InspectionCase, false_alarm: float,
     conditions : RetestConditions or None
         The re-test's retest.json.
     with_map : bool
-        Compute the MSSO element map the report draws (False: the same verdict, sooner).
+        Compute the MSSO element map the report draws (False: the same verdict, sooner;
+        a report of the stored verdict computes it then, ``stored.with_element_map``).
 
     Returns
     -------
@@ -180,7 +185,7 @@ def judge(case: InspectionCase, false_alarm: float,
                       false_alarm, conditions, case.registered, with_map=with_map)
     return InspectionResult(case.serial, case.profile, case.reference, case.baseline,
                             case.retest, verdict, case.reference_seq, case.weight_kg,
-                            case.retest_content)
+                            case.retest_content, conditions)
 
 
 def stateless_case(profile_path, meta_path, baseline_path, retest_path,
@@ -213,7 +218,7 @@ def stateless_case(profile_path, meta_path, baseline_path, retest_path,
 
 def inspect_files(
     profile_path, meta_path, baseline_path, retest_path, false_alarm: float = 0.01,
-    progress: Progress = quiet, retest_meta_path=None,
+    progress: Progress = quiet, retest_meta_path=None, with_map: bool = True,
 ) -> InspectionResult:
     """Inspect a re-test statelessly: the steps of `register`, then the re-test against it.
 
@@ -227,6 +232,8 @@ def inspect_files(
         Receives one-line messages.
     retest_meta_path : str or os.PathLike or None
         The optional retest.json.
+    with_map : bool
+        Compute the MSSO element map (what a report draws; ``judge``).
 
     Returns
     -------
@@ -236,4 +243,4 @@ def inspect_files(
     conditions = read_conditions(retest_meta_path)
     case = stateless_case(profile_path, meta_path, baseline_path, retest_path, progress)
     progress("inspecting the re-test against the reference")
-    return judge(case, false_alarm, conditions)
+    return judge(case, false_alarm, conditions, with_map)

@@ -243,7 +243,7 @@ def registered_case(
 def inspect_registered(
     conn: sa.Connection, serial: str, retest_path, false_alarm: float = 0.01,
     refit_baseline: bool = False, progress: Progress = quiet, baseline_fit=None,
-    retest_meta_path=None,
+    retest_meta_path=None, with_map: bool = True,
 ) -> InspectionResult:
     """Inspect a re-test of a registered bat against its stored reference and baseline modes.
 
@@ -265,6 +265,9 @@ def inspect_registered(
         A fit of that same baseline file already at hand (saves the refit).
     retest_meta_path : str or os.PathLike or None
         The optional retest.json.
+    with_map : bool
+        Compute the MSSO element map (what a report draws; without it a later report
+        computes it, ``stored.with_element_map``).
 
     Returns
     -------
@@ -274,4 +277,4 @@ def inspect_registered(
     conditions = read_conditions(retest_meta_path)
     case = registered_case(conn, serial, retest_path, refit_baseline, progress, baseline_fit)
     progress("inspecting the re-test against the registered reference")
-    return judge(case, false_alarm, conditions)
+    return judge(case, false_alarm, conditions, with_map)

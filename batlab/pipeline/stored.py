@@ -1,7 +1,16 @@
-"""Stored inspections: an inspection stored, and read back (provenance, report inputs, export)."""
+"""Stored inspections: an inspection stored, and read back (provenance, report inputs, export).
+
+The MSSO element map is evidence a report draws, not part of the verdict: an inspection
+without a report (``batlab inspect --serial`` without ``-o``/``--plots``, ``batlab fleet
+inspect``) skips it, and a report of such a stored verdict judges the stored tests again with
+the map (``with_element_map``). It draws that map only when the second judgement gives the
+stored status and statistic, else it says why there is no map.
+"""
 
 from __future__ import annotations
 
+import math
+from dataclasses import asdict, replace
 from pathlib import Path
 
 import sqlalchemy as sa
@@ -9,10 +18,11 @@ import sqlalchemy as sa
 from batlab import __version__
 from batlab import registry as reg
 from batlab.pipeline.files import Progress, file_sha256, frf_from_bytes, quiet
-from batlab.pipeline.inspection import InspectionResult, fit_file
+from batlab.pipeline.inspection import InspectionCase, InspectionResult, fit_file, judge
 from batlab.pipeline.records import FittedTest, ReportInputs, verdict_record
 from batlab.pipeline.registered import registered_weight_kg
 from updating.correlate.points import match_points, point_positions_m
+from updating.inspect.retest_meta import RetestConditions, conditions_from_dict
 from updating.model.profile import make_profile
 from updating.model.reference import BatReference
 
@@ -45,7 +55,8 @@ def store_inspection(
     false_alarm : float
         The decision's false-alarm rate.
     retest_meta : bool
-        Whether a retest.json gave the re-test's conditions (kept in the inputs).
+        Whether a retest.json gave the re-test's conditions (kept in the inputs, with the
+        conditions themselves, SI, so that a report can judge the tests again).
 
     Returns
     -------
@@ -55,11 +66,13 @@ def store_inspection(
     path = Path(retest_path)
     content = result.retest_content if result.retest_content is not None else \
         path.read_bytes()
+    inputs = {"false_alarm": float(false_alarm), "batlab_version": __version__,
+              "retest_meta": bool(retest_meta)}
+    if retest_meta and result.conditions is not None:
+        inputs["retest_conditions"] = asdict(result.conditions)
     return reg.add_inspection(
         conn, result.serial, verdict_record(result.serial, result.verdict), path.name,
-        content, reference_seq=result.reference_seq,
-        inputs={"false_alarm": float(false_alarm), "batlab_version": __version__,
-                "retest_meta": bool(retest_meta)})
+        content, reference_seq=result.reference_seq, inputs=inputs)
 
 
 def already_inspected(
@@ -227,10 +240,74 @@ def stored_report_inputs(
     base_fit = fit_file(bat.baseline_name, base_test, weight_kg, None, progress).fit
     retest = fit_file(stored.retest_name, re_test, weight_kg, order, progress)
     profile = make_profile(bat.profile_x_m, bat.profile_diameter_m, f"registry bat {serial}")
-    return ReportInputs(
+    inputs = ReportInputs(
         serial, profile, BatReference.from_dict(bat.reference),
         FittedTest(bat.baseline_name, base_test, base_fit, base_modes), retest,
         stored.verdict, bat.meta, provenance(conn, stored=stored))
+    return with_element_map(inputs, stored.inputs or {}, weight_kg, progress)
+
+
+def with_element_map(inputs: ReportInputs, stored_inputs: dict, weight_kg: float | None,
+                     progress: Progress = quiet) -> ReportInputs:
+    """Return a stored inspection's report inputs with its MSSO element map (module docstring).
+
+    Parameters
+    ----------
+    inputs : ReportInputs
+        The stored verdict, the registration it was judged against and both tests refitted.
+    stored_inputs : dict
+        The inspection's stored inputs (false-alarm rate, retest.json's conditions).
+    weight_kg : float or None
+        The registered weight, kg.
+    progress : Progress
+        Receives one-line messages.
+
+    Returns
+    -------
+    ReportInputs
+        ``inputs`` as they were when the stored verdict holds a map (or the reason it has
+        none, or no test to map); else with the map of a second judgement, or the reason
+        there is none, in a copy of the verdict's details (the stored record is unchanged).
+    """
+    v = inputs.verdict
+    details = v.get("details") or {}
+    if "statistic" not in details or details.get("msso"):
+        return inputs
+    if stored_inputs.get("retest_meta") and "retest_conditions" not in stored_inputs:
+        emap = {"error": "this inspection's retest.json was not stored with it, so its tests "
+                         "cannot be judged again for the map"}
+    else:
+        cond = stored_inputs.get("retest_conditions")
+        conditions = None if cond is None else RetestConditions(**cond)
+        progress("judging the stored tests again for the element map (an inspection without "
+                 "a report does not compute it)")
+        case = InspectionCase(inputs.serial, inputs.profile, inputs.reference, inputs.baseline,
+                              inputs.retest, conditions_from_dict(
+                                  inputs.meta, f"registered bat {inputs.serial}"), weight_kg)
+        again = verdict_record(inputs.serial, judge(
+            case, float(stored_inputs.get("false_alarm", 0.01)), conditions).verdict)
+        if _same_judgement(again, v):
+            emap = again["details"]["msso"]
+        else:
+            emap = {"error": f"judged again by batlab {__version__}, the stored tests give "
+                             f"{again['status']} (F {_f(again)}), not the stored "
+                             f"{v['status']} (F {_f(v)}): no map is drawn for a verdict it "
+                             "does not belong to"}
+    return replace(inputs, verdict={**v, "details": {**details, "msso": emap}})
+
+
+def _same_judgement(again: dict, stored: dict) -> bool:
+    """Say whether two verdict records have one status and statistic (to 1e-6 relative)."""
+    a, b = again.get("statistic"), stored.get("statistic")
+    if again["status"] != stored["status"] or (a is None) != (b is None):
+        return False
+    return a is None or math.isclose(float(a), float(b), rel_tol=1e-6, abs_tol=1e-9)
+
+
+def _f(record: dict) -> str:
+    """Return the record's statistic in a few digits ("none" without one)."""
+    f = record.get("statistic")
+    return "none" if f is None else f"{float(f):.4g}"
 
 
 def history_table(conn: sa.Connection, serial: str | None = None):
