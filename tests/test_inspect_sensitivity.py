@@ -10,6 +10,8 @@ bat at a random state, with and without a weighed mass.
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 import pytest
 import scipy.linalg
@@ -107,3 +109,36 @@ def test_fit_jacobian_matches_central_differences(family, weighed):
     # the plane mix moves no matrix: its column is the model's own, exactly
     assert np.allclose(J[:, 6], J_fd[:, 6], rtol=1e-6, atol=1e-9)
     assert x.size == N_NULL or np.linalg.norm(J[:, N_NULL:]) > 0
+
+
+@pytest.mark.parametrize("sensor_mass_g", [0.0, 3.0])
+@pytest.mark.parametrize("family", ["null", "core", "local_change", "added_mass",
+                                    "diameter_loss"])
+def test_matrix_steps_equal_assembled_differences(family, sensor_mass_g):
+    """``matrix_steps`` forms each step's difference from the terms it changes: it must be
+    the difference of the two assembled states, to round-off, for every parameter (a
+    negative accelerometer mass held off its limit included: the reference at 0 g and the
+    fit's change of mass below it)."""
+    predict, diff, space, rng = _fit_problem(21 + int(sensor_mass_g), False)
+    ref = replace(predict.reference, sensor_mass_kg=sensor_mass_g * 1e-3)
+    predict = ChangePredictor(predict.profile, ref, predict.points_m, predict.sensor_x_m,
+                              predict.n_solve)
+    fspace = space if family in ("null", "core") else segment_space(space, family)
+    x = _random_null(space, rng)
+    if family != "null":
+        x = np.concatenate([x, _family_tail(family, rng)])
+    x[5] = -abs(x[5]) - 1.0  # the accelerometer lighter than the reference's
+    params = fspace.params(x)
+    base = predict.matrices(params)
+    h = 1e-4
+    steps = [(fspace.params(x + h * e), h) for e in np.eye(x.size)]
+    dK, dM, dv = predict.matrix_steps(params, base, steps)
+    for i, (s, hi) in enumerate(steps):
+        st = predict.matrices(s)
+        # the assembled difference carries round-off of eps |K| / h; the formed one less
+        for got, a, b in ((dK[i], st.K, base.K), (dM[i], st.M, base.M),
+                          (dv[i], st.sensor_vector(), base.sensor_vector())):
+            want = (a - b) / hi
+            tol = 1e-11 * max(np.abs(want).max(), np.abs(b).max() / hi)
+            assert np.allclose(got, want, rtol=0, atol=tol), (i, np.abs(got - want).max())
+    assert np.count_nonzero(np.abs(dK).sum(axis=(1, 2))) >= 2

@@ -46,6 +46,7 @@ from updating.inspect.local_change import (
     segment_scan,
     start_from,
 )
+from updating.inspect.parallel import fork_map
 from updating.inspect.segments import segment_mass_kg
 from updating.model.units import IN_TO_M
 
@@ -109,15 +110,21 @@ def fit_families(predict, diff: Differences, space: ParamSpace, sigma_rel: Sigma
     dict
         Family name -> fit, with the generic change under ``local_change``.
     """
-    fits = {"local_change": generic}
-    fits["core"], _ = fit_core(predict, diff, space, sigma_rel, null)
     gspace = segment_space(space, "local_change")
-    for family in ("added_mass", "diameter_loss"):
+
+    def fit_family(family: str) -> ChangeFit:
+        if family == "core":
+            return fit_core(predict, diff, space, sigma_rel, null)[0]
         fspace = segment_space(space, family)
         starts = [start_from(generic, gspace, fspace, predict)]
         starts += distinct_best(segment_scan(predict, diff, fspace, sigma_rel, null), 1)
-        fits[family] = fit_segment(predict, diff, fspace, sigma_rel, null, starts=starts)
-    return fits
+        return fit_segment(predict, diff, fspace, sigma_rel, null, starts=starts)
+
+    # the families are independent: one on each core (a family's own starts then share
+    # the first core with it), their scans included
+    families = ("core", "added_mass", "diameter_loss")
+    return {"local_change": generic, **dict(zip(families, fork_map(fit_family, families),
+                                                strict=True))}
 
 
 def segment_reading(fit: ChangeFit, fspace: SegmentSpace, cov: np.ndarray,

@@ -88,10 +88,18 @@ class WoodSystem:
                 M = M + MASS_PER_POINT * m * Me
         return K, M
 
-    def mass_kg(self, M: np.ndarray) -> float:
-        """Total (translational) mass of a mass matrix: t^T M t, t the rigid translation."""
+    def mass_kg(self, end_moisture_pt: tuple[float, float]) -> float:
+        """Return the wood's mass with the end-grain moisture excess, kg.
+
+        t^T M_wood t with t the rigid translation, from its terms (``wood_matrices``):
+        t^T M t + 0.01 sum m_i t^T M_end,i t, with no matrix formed.
+        """
         t = self.translation
-        return float(t @ M @ t)
+        mass = float(t @ self.M @ t)
+        for m, Me in zip(end_moisture_pt, self.M_ends, strict=True):
+            if m:
+                mass += MASS_PER_POINT * m * float(t @ Me @ t)
+        return mass
 
 
 def wood_system(
@@ -231,9 +239,8 @@ class ChangePredictor:
     def wood_mass_kg(self, p: ChangeParams) -> float:
         """Return the wood's mass with the changes ``p``, kg."""
         ws = self.system(p.core)
-        _, M = ws.wood_matrices(p.end_moisture_pt)
         added = self.local(ws, p.segments)[2] if p.segments else 0.0
-        return p.density_scale * ws.mass_kg(M) + added
+        return p.density_scale * ws.mass_kg(p.end_moisture_pt) + added
 
     def matrices(self, p: ChangeParams) -> StateMatrices:
         """Return K and M of the bat changed by ``p``, with its accelerometer, and where it is."""
@@ -243,19 +250,117 @@ class ChangePredictor:
         local = self.local(ws, p.segments)
         if local is not None:  # after moisture's scale: it scales the wood, not a foreign mass
             K, M = K + local[0], M + local[1]
-        x = float(np.clip(self.sensor_x_m + p.sensor_shift_m, 0.0, self.profile.length_m))
-        dofs, n = self._point(ws, x)
-        # the change may take the calibrated mass below 0 (calibration puts other physics
-        # there, the change is relative to it), but not so far that M + m n n^T stops being
-        # positive definite (m > -1 / n^T M^-1 n), where the eigen-solution would fail
-        mass = self.reference.sensor_mass_kg + p.sensor_mass_change_kg
-        if mass < 0:
-            v = np.zeros(M.shape[0])
-            v[dofs] = n
-            mass = max(mass, -0.9 / float(v @ np.linalg.solve(M, v)))
+        dofs, n, mass = self._sensor(ws, p, M)
         if mass:
             M[np.ix_(dofs, dofs)] += mass * np.outer(n, n)
         return StateMatrices(p.stiffness_scale * K + ws.K_bungees, M, dofs, n, ws.point_rows)
+
+    def _sensor(self, ws: WoodSystem, p: ChangeParams,
+                M: np.ndarray | None) -> tuple[np.ndarray, np.ndarray, float]:
+        """Return the accelerometer's (dofs, point vector n, mass in kg) in the state ``p``.
+
+        The change may take the calibrated mass below 0 (calibration puts other physics
+        there, the change is relative to it), but not so far that M + m n n^T stops being
+        positive definite (m > -1 / n^T M^-1 n), where the eigen-solution would fail: a
+        negative mass is kept above 0.9 times that limit, with M the state's matrix without
+        the accelerometer (only read for a negative mass; None: not at hand, built).
+        """
+        x = float(np.clip(self.sensor_x_m + p.sensor_shift_m, 0.0, self.profile.length_m))
+        dofs, n = self._point(ws, x)
+        mass = self.reference.sensor_mass_kg + p.sensor_mass_change_kg
+        if mass < 0:
+            if M is None:
+                M = self._bare_mass(ws, p)
+            mass = max(mass, -0.9 / banded_inverse_form(M, dofs, n))
+        return dofs, n, mass
+
+    def _bare_mass(self, ws: WoodSystem, p: ChangeParams) -> np.ndarray:
+        """Return M of the state ``p`` without its accelerometer."""
+        M = p.density_scale * self._wood(ws, p.end_moisture_pt)[1]
+        local = self.local(ws, p.segments)
+        return M if local is None else M + local[1]
+
+    def matrix_steps(self, p: ChangeParams, base: StateMatrices,
+                     steps: list[tuple[ChangeParams, float]]):
+        """Return each step's difference quotients (dK, dM, dv), (k, N, N) twice and (k, N).
+
+        ``(matrices(s) - matrices(p)) / h`` and the same of the accelerometer's point vector,
+        for each step (s, h), computed from the terms the step changes: with
+        K = s_E W + K_bungees, W = K_wood(e) + L_K and M = s_rho M_wood(e) + L_M + m n n^T
+        (module docstring; L the segments' changes, e the end-grain moisture),
+
+            K(s) - K(p) = (s_E' - s_E) W + s_E' (dK_wood + dL_K)
+            M(s) - M(p) = (s_rho' - s_rho) M_wood + s_rho' dM_wood + dL_M + d(m n n^T)
+
+        which is the same difference without assembling each stepped state (a Jacobian
+        moves one parameter at a time). A step to another core is assembled and differenced.
+        A step equal to ``p`` (a parameter the matrices do not hold) gives zeros.
+        """
+        n_dof, k = base.K.shape[0], len(steps)
+        dK, dM, dv = np.zeros((k, n_dof, n_dof)), np.zeros((k, n_dof, n_dof)), \
+            np.zeros((k, n_dof))
+        ws = self.system(p.core)
+        Kw, Mw = self._wood(ws, p.end_moisture_pt)
+        local = self.local(ws, p.segments)
+        W = Kw if local is None else Kw + local[0]
+        v0 = base.sensor_vector()
+        mass0 = self._sensor(ws, p, None)[2]
+        for i, (s, h) in enumerate(steps):
+            if s == p:
+                continue
+            if s.core != p.core:
+                st = self.matrices(s)
+                dK[i], dM[i] = (st.K - base.K) / h, (st.M - base.M) / h
+                dv[i] = (st.sensor_vector() - v0) / h
+                continue
+            Ki, Mi = dK[i], dM[i]
+            if s.stiffness_scale != p.stiffness_scale:
+                Ki += (s.stiffness_scale - p.stiffness_scale) * W
+            if s.density_scale != p.density_scale:
+                Mi += (s.density_scale - p.density_scale) * Mw
+            if s.end_moisture_pt != p.end_moisture_pt:
+                for de, Ke, Me in zip(np.subtract(s.end_moisture_pt, p.end_moisture_pt),
+                                      ws.K_ends, ws.M_ends, strict=True):
+                    if de:
+                        Ki += s.stiffness_scale * E_PER_POINT * de * Ke
+                        Mi += s.density_scale * MASS_PER_POINT * de * Me
+            if s.segments != p.segments:
+                for sign, segs in ((1.0, s.segments), (-1.0, p.segments)):
+                    part = self.local(ws, segs)
+                    if part is not None:
+                        Ki += sign * s.stiffness_scale * part[0]
+                        Mi += sign * part[1]
+            self._sensor_step(ws, p, s, base, mass0, Mi, dv[i])
+            Ki /= h
+            Mi /= h
+            dv[i] /= h
+        return dK, dM, dv
+
+    def _sensor_step(self, ws: WoodSystem, p: ChangeParams, s: ChangeParams,
+                     base: StateMatrices, mass0: float, Mi: np.ndarray, dvi: np.ndarray) -> None:
+        """Add the accelerometer's change from ``p`` to ``s`` to Mi, and its point vector's to dvi.
+
+        Mi holds M(s) - M(p) without the accelerometer on entry; ``mass0`` is its mass in
+        ``p`` (``_sensor``). A negative mass is held off its limit by the state's own matrix,
+        so it is evaluated again whatever the step.
+        """
+        moved = s.sensor_shift_m != p.sensor_shift_m
+        negative = self.reference.sensor_mass_kg + s.sensor_mass_change_kg < 0
+        if not (moved or negative or s.sensor_mass_change_kg != p.sensor_mass_change_kg):
+            return
+        bare = None
+        if negative:
+            bare = base.M + Mi
+            if mass0:
+                bare[np.ix_(base.dofs, base.dofs)] -= mass0 * np.outer(base.n, base.n)
+        dofs, n, mass = self._sensor(ws, s, bare)
+        if mass:
+            Mi[np.ix_(dofs, dofs)] += mass * np.outer(n, n)
+        if mass0:
+            Mi[np.ix_(base.dofs, base.dofs)] -= mass0 * np.outer(base.n, base.n)
+        if moved:
+            dvi[dofs] += n
+            dvi[base.dofs] -= base.n
 
     def _wood(self, ws: WoodSystem, end_moisture_pt: tuple[float, float]):
         """Return ``ws.wood_matrices`` (the last few kept: a Jacobian's steps share them)."""
@@ -348,3 +453,22 @@ def baseline_sensor_offset(
     res = minimize_scalar(cost, bounds=(-max_offset_m, max_offset_m), method="bounded",
                           options={"xatol": 1e-5})
     return float(res.x)
+
+
+def banded_inverse_form(M: np.ndarray, dofs: np.ndarray, n: np.ndarray,
+                        bandwidth: int = 3) -> float:
+    """Return v^T M^-1 v for v = n at ``dofs`` (zero elsewhere), M banded and positive definite.
+
+    A beam's matrices couple a node's two DOFs with the next node's only, so M is banded
+    (``bandwidth`` diagonals above the main one: 3). Cholesky in banded storage
+    (``scipy.linalg.solveh_banded``) costs O(N b^2), against O(N^3) for a dense solve.
+    """
+    from scipy.linalg import solveh_banded
+
+    ab = np.zeros((bandwidth + 1, M.shape[0]))
+    for k in range(bandwidth + 1):
+        ab[bandwidth - k, k:] = np.diagonal(M, k)
+    v = np.zeros(M.shape[0])
+    v[dofs] = n
+    return float(v @ solveh_banded(ab, v, check_finite=False))
+

@@ -4,7 +4,8 @@ A finite-difference Jacobian of the change fit solves the eigen-problem once mor
 parameter. Here each parameter's step changes only the matrices, dK = (K(x + h e_i) - K(x)) / h
 and dM likewise (exact for the parameters K and M are linear in: moisture, temperature,
 end grain, the accelerometer's and a substance's mass; the secant of the finite difference
-for the positions and a core's geometry); the modes' derivatives follow from every mode of
+for the positions and a core's geometry), formed from the terms the step changes
+(``ChangePredictor.matrix_steps``); the modes' derivatives follow from every mode of
 the unchanged state (``updating.model.sensitivity``):
 
     d ln f_r = d lambda_r / (2 lambda_r)
@@ -21,7 +22,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from updating.inspect.model import ChangeParams, ChangePredictor, StateMatrices
+from updating.inspect.model import ChangeParams, ChangePredictor
 from updating.model.sensitivity import full_modes, mode_derivatives
 
 
@@ -47,23 +48,6 @@ class PredictedChange:
     d_shapes: np.ndarray
 
 
-def _matrix_steps(predict: ChangePredictor, params: ChangeParams, base: StateMatrices,
-                  steps: list[tuple[ChangeParams, float]]):
-    """Return (dK, dM, dv), (k, N, N) twice and (k, N): the matrices' difference quotients."""
-    n = base.K.shape[0]
-    v0 = base.sensor_vector()
-    dK, dM, dv = np.zeros((len(steps), n, n)), np.zeros((len(steps), n, n)), \
-        np.zeros((len(steps), n))
-    for i, (p, h) in enumerate(steps):
-        if p == params:  # a parameter the matrices do not hold (the plane mix)
-            continue
-        s = predict.matrices(p)
-        dK[i] = (s.K - base.K) / h
-        dM[i] = (s.M - base.M) / h
-        dv[i] = (s.sensor_vector() - v0) / h
-    return dK, dM, dv
-
-
 def predicted_change(predict: ChangePredictor, params: ChangeParams,
                      steps: list[tuple[ChangeParams, float]]) -> PredictedChange:
     """Predict the modes at ``params`` and differentiate them along ``steps``.
@@ -85,7 +69,7 @@ def predicted_change(predict: ChangePredictor, params: ChangeParams,
     base = predict.matrices(params)
     modes = full_modes(base.K, base.M)
     m = predict.n_solve
-    dK, dM, dv = _matrix_steps(predict, params, base, steps)
+    dK, dM, dv = predict.matrix_steps(params, base, steps)
     v0 = base.sensor_vector()
     touched = np.flatnonzero((v0 != 0) | np.any(dv != 0, axis=0))
     rows = np.concatenate([base.point_rows, touched])
