@@ -487,12 +487,24 @@ def _fit_words(v: dict) -> tuple[str, str, str]:
 def regions_note(r: ReportInputs) -> str:
     """Write the two localisations side by side, reconciled or their difference explained."""
     v = r.verdict
-    fit = v.get("region_in") if status_of(v) == "altered" else None
     emap = stored_details(v).msso
     if emap.error is not None:
         return f"The element map could not be computed ({emap.error})."
     if emap.result is None:
         return ""
+    return (MAP_JUDGED_AGAIN if v.get("map_judged_again") else "") + _regions_words(r, emap)
+
+
+MAP_JUDGED_AGAIN = ("The element map was computed when this report was drawn, by judging the "
+                    "stored tests again (they gave the stored status and F); it is not part "
+                    "of the signed verdict record. ")
+"""What a report says of a map its inspection did not store (``pipeline.with_element_map``)."""
+
+
+def _regions_words(r: ReportInputs, emap) -> str:
+    """Write the two localisations' words for a map (``regions_note``)."""
+    v = r.verdict
+    fit = v.get("region_in") if status_of(v) == "altered" else None
     mreg = emap.region_m
     mreg = None if not mreg else (mreg[0] / IN_TO_M, mreg[1] / IN_TO_M)
     pts = np.sort(r.baseline.modes.x_m) / IN_TO_M

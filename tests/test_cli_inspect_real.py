@@ -17,6 +17,7 @@ import pytest
 from batlab.pipeline import jsonable
 from batlab.pipeline.stored import stored_report_inputs, with_element_map
 from batlab.registry import history, open_registry
+from batlab.report import MAP_JUDGED_AGAIN, regions_note
 from ema.io.frf_io import write_test
 from updating.inspect.details import InspectionDetails, ModePair
 from updating.model.lab_input import read_meta
@@ -104,8 +105,9 @@ def test_corked_retest_found_in_place(registry):
 def test_element_map_drawn_when_a_report_asks(registry):
     """An inspection without a report stores no MSSO element map; a report of it judges the
     stored tests again and draws the map an inspection with a report stores, the same to
-    the digit (but its time). A stored verdict the second judgement does not reproduce gets no map, and
-    says why. A retest.json's conditions are stored for that second judgement."""
+    the digit (but its time), and says so. A stored verdict the second judgement does not
+    reproduce gets no map, and says why. A retest.json's conditions are stored for that
+    second judgement."""
     tmp, db = registry
     retest = SAMPLE / "retest_corked.uff"
     batlab(["inspect", "--serial", "HX-2001", retest, "--db", db, "--again", "--json"])
@@ -115,6 +117,7 @@ def test_element_map_drawn_when_a_report_asks(registry):
     assert bare.verdict["details"]["msso"] == {}
     drawn = inputs.verdict["details"]["msso"]
     assert drawn["region_m"] is not None and len(drawn["alpha"]) > 10
+    assert regions_note(inputs).startswith(MAP_JUDGED_AGAIN)
     batlab(["inspect", "--serial", "HX-2001", retest, "--db", db, "--again", "--json",
             "-o", tmp / "rep"])
     with open_registry(db, create=False) as conn:

@@ -266,8 +266,9 @@ def with_element_map(inputs: ReportInputs, stored_inputs: dict, weight_kg: float
     -------
     ReportInputs
         ``inputs`` as they were when the stored verdict holds a map (or the reason it has
-        none, or no test to map); else with the map of a second judgement, or the reason
-        there is none, in a copy of the verdict's details (the stored record is unchanged).
+        none, or no test to map); else with the map of a second judgement (and
+        ``map_judged_again``, which the report states), or the reason there is none, in a
+        copy of the verdict (the stored record is unchanged).
     """
     v = inputs.verdict
     details = v.get("details") or {}
@@ -287,7 +288,8 @@ def with_element_map(inputs: ReportInputs, stored_inputs: dict, weight_kg: float
         again = verdict_record(inputs.serial, judge(
             case, float(stored_inputs.get("false_alarm", 0.01)), conditions).verdict)
         if _same_judgement(again, v):
-            emap = again["details"]["msso"]
+            return replace(inputs, verdict={**v, "details": {
+                **details, "msso": again["details"]["msso"]}, "map_judged_again": True})
         else:
             emap = {"error": f"judged again by batlab {__version__}, the stored tests give "
                              f"{again['status']} (F {_f(again)}), not the stored "
