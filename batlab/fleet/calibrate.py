@@ -33,6 +33,7 @@ import batlab.pipeline as pipeline
 from batlab.fleet.clean_retests import CleanBat, draw_bat, draw_retest
 from batlab.fleet.cluster import ordered_map
 from batlab.pipeline.files import atomic_write
+from batlab.pipeline.records import same_judgement
 from batlab.pipeline.registered import Registration, registered_weight_kg
 from batlab.registry import decode_modes
 from updating.inspect.retest_meta import conditions_from_dict
@@ -328,16 +329,9 @@ def drop_cut_line(path: str) -> None:
 
 
 def same_row(stored: dict, again: dict, rtol: float = 1e-6) -> bool:
-    """Say whether a re-test inspected again gives its stored row (status and F).
-
-    F within ``rtol``; no F (a refusal) or NaN (inconclusive before the test) on both sides.
-    """
-    if stored["status"] != again["status"]:
-        return False
-    f0, f1 = stored.get("F"), again.get("F")
-    if f0 is None or f1 is None:
-        return f0 is None and f1 is None
-    return bool(np.isclose(f0, f1, rtol=rtol, atol=0.0, equal_nan=True))
+    """Say whether a re-test inspected again gives its stored row (``same_judgement``)."""
+    return same_judgement(stored["status"], stored.get("F"), again["status"], again.get("F"),
+                          rtol)
 
 
 def check_resumed(path: str, stored: dict, again: dict) -> None:

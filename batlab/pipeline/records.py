@@ -78,6 +78,21 @@ def _num(v) -> float | None:
     return None if v is None or not math.isfinite(float(v)) else float(v)
 
 
+def same_judgement(status: str, statistic: float | None, again_status: str,
+                   again_statistic: float | None, rtol: float = 1e-6) -> bool:
+    """Say whether a re-test judged again gives the same verdict: its status and its F.
+
+    F within ``rtol`` (relative); no F (a refusal) or NaN (inconclusive before the test) on
+    both sides counts as the same. A resumed calibration (``fleet.calibrate.same_row``) and
+    a report's element map judged again (``stored.with_element_map``) both ask it.
+    """
+    if status != again_status:
+        return False
+    if statistic is None or again_statistic is None:
+        return statistic is None and again_statistic is None
+    return bool(np.isclose(statistic, again_statistic, rtol=rtol, atol=0.0, equal_nan=True))
+
+
 def lab_units(values: dict) -> dict:
     """SI readings in the contract's units: *_m -> *_in, *_kg -> *_g, *_rel -> *_pct."""
     out = {}

@@ -9,7 +9,6 @@ stored status and statistic, else it says why there is no map.
 
 from __future__ import annotations
 
-import math
 from dataclasses import asdict, replace
 from pathlib import Path
 
@@ -19,7 +18,7 @@ from batlab import __version__
 from batlab import registry as reg
 from batlab.pipeline.files import Progress, file_sha256, frf_from_bytes, quiet
 from batlab.pipeline.inspection import InspectionCase, InspectionResult, fit_file, judge
-from batlab.pipeline.records import FittedTest, ReportInputs, verdict_record
+from batlab.pipeline.records import FittedTest, ReportInputs, same_judgement, verdict_record
 from batlab.pipeline.registered import registered_weight_kg
 from updating.correlate.points import match_points, point_positions_m
 from updating.inspect.retest_meta import RetestConditions, conditions_from_dict
@@ -287,7 +286,8 @@ def with_element_map(inputs: ReportInputs, stored_inputs: dict, weight_kg: float
                                   inputs.meta, f"registered bat {inputs.serial}"), weight_kg)
         again = verdict_record(inputs.serial, judge(
             case, float(stored_inputs.get("false_alarm", 0.01)), conditions).verdict)
-        if _same_judgement(again, v):
+        if same_judgement(v["status"], v.get("statistic"), again["status"],
+                          again.get("statistic")):
             return replace(inputs, verdict={**v, "details": {
                 **details, "msso": again["details"]["msso"]}, "map_judged_again": True})
         else:
@@ -296,14 +296,6 @@ def with_element_map(inputs: ReportInputs, stored_inputs: dict, weight_kg: float
                              f"{v['status']} (F {_f(v)}): no map is drawn for a verdict it "
                              "does not belong to"}
     return replace(inputs, verdict={**v, "details": {**details, "msso": emap}})
-
-
-def _same_judgement(again: dict, stored: dict) -> bool:
-    """Say whether two verdict records have one status and statistic (to 1e-6 relative)."""
-    a, b = again.get("statistic"), stored.get("statistic")
-    if again["status"] != stored["status"] or (a is None) != (b is None):
-        return False
-    return a is None or math.isclose(float(a), float(b), rel_tol=1e-6, abs_tol=1e-9)
 
 
 def _f(record: dict) -> str:

@@ -141,6 +141,9 @@ class StateMatrices:
         (4,) its consistent point vector there (``assembly.point_vector``).
     point_rows : numpy.ndarray
         Rows of the test points' transverse displacements.
+    sensor_mass_kg : float
+        The accelerometer's mass in M (held off its limit when negative,
+        ``ChangePredictor._sensor``), kg.
     """
 
     K: np.ndarray
@@ -148,6 +151,7 @@ class StateMatrices:
     dofs: np.ndarray
     n: np.ndarray
     point_rows: np.ndarray
+    sensor_mass_kg: float = 0.0
 
     def sensor_vector(self) -> np.ndarray:
         """Return the accelerometer's point vector over every degree of freedom, (n_dof,)."""
@@ -253,7 +257,8 @@ class ChangePredictor:
         dofs, n, mass = self._sensor(ws, p, M)
         if mass:
             M[np.ix_(dofs, dofs)] += mass * np.outer(n, n)
-        return StateMatrices(p.stiffness_scale * K + ws.K_bungees, M, dofs, n, ws.point_rows)
+        return StateMatrices(p.stiffness_scale * K + ws.K_bungees, M, dofs, n, ws.point_rows,
+                             mass)
 
     def _sensor(self, ws: WoodSystem, p: ChangeParams,
                 M: np.ndarray | None) -> tuple[np.ndarray, np.ndarray, float]:
@@ -263,22 +268,14 @@ class ChangePredictor:
         there, the change is relative to it), but not so far that M + m n n^T stops being
         positive definite (m > -1 / n^T M^-1 n), where the eigen-solution would fail: a
         negative mass is kept above 0.9 times that limit, with M the state's matrix without
-        the accelerometer (only read for a negative mass; None: not at hand, built).
+        the accelerometer (only read for a negative mass).
         """
         x = float(np.clip(self.sensor_x_m + p.sensor_shift_m, 0.0, self.profile.length_m))
         dofs, n = self._point(ws, x)
         mass = self.reference.sensor_mass_kg + p.sensor_mass_change_kg
         if mass < 0:
-            if M is None:
-                M = self._bare_mass(ws, p)
             mass = max(mass, -0.9 / banded_inverse_form(M, dofs, n))
         return dofs, n, mass
-
-    def _bare_mass(self, ws: WoodSystem, p: ChangeParams) -> np.ndarray:
-        """Return M of the state ``p`` without its accelerometer."""
-        M = p.density_scale * self._wood(ws, p.end_moisture_pt)[1]
-        local = self.local(ws, p.segments)
-        return M if local is None else M + local[1]
 
     def matrix_steps(self, p: ChangeParams, base: StateMatrices,
                      steps: list[tuple[ChangeParams, float]]):
@@ -304,7 +301,6 @@ class ChangePredictor:
         local = self.local(ws, p.segments)
         W = Kw if local is None else Kw + local[0]
         v0 = base.sensor_vector()
-        mass0 = self._sensor(ws, p, None)[2]
         for i, (s, h) in enumerate(steps):
             if s == p:
                 continue
@@ -330,20 +326,21 @@ class ChangePredictor:
                     if part is not None:
                         Ki += sign * s.stiffness_scale * part[0]
                         Mi += sign * part[1]
-            self._sensor_step(ws, p, s, base, mass0, Mi, dv[i])
+            self._sensor_step(ws, p, s, base, Mi, dv[i])
             Ki /= h
             Mi /= h
             dv[i] /= h
         return dK, dM, dv
 
     def _sensor_step(self, ws: WoodSystem, p: ChangeParams, s: ChangeParams,
-                     base: StateMatrices, mass0: float, Mi: np.ndarray, dvi: np.ndarray) -> None:
+                     base: StateMatrices, Mi: np.ndarray, dvi: np.ndarray) -> None:
         """Add the accelerometer's change from ``p`` to ``s`` to Mi, and its point vector's to dvi.
 
-        Mi holds M(s) - M(p) without the accelerometer on entry; ``mass0`` is its mass in
-        ``p`` (``_sensor``). A negative mass is held off its limit by the state's own matrix,
-        so it is evaluated again whatever the step.
+        Mi holds M(s) - M(p) without the accelerometer on entry; ``base`` is the state ``p``
+        (its accelerometer's mass included). A negative mass is held off its limit by the
+        state's own matrix, so it is evaluated again whatever the step.
         """
+        mass0 = base.sensor_mass_kg
         moved = s.sensor_shift_m != p.sensor_shift_m
         negative = self.reference.sensor_mass_kg + s.sensor_mass_change_kg < 0
         if not (moved or negative or s.sensor_mass_change_kg != p.sensor_mass_change_kg):
