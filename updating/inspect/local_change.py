@@ -29,7 +29,6 @@ import numpy as np
 
 from updating.inspect.hypotheses import (
     N_NULL,
-    SEARCH_TOL,
     ChangeFit,
     Differences,
     NullBounds,
@@ -249,7 +248,7 @@ def fit_segment(predict, diff: Differences, space: SegmentSpace, sigma_rel: Sigm
     if starts is None:
         starts = distinct_best(segment_scan(predict, diff, space, sigma_rel, null), n_starts)
     fits = fork_map(lambda s: fit_bounded(fun, np.clip(s, lo, hi), lo, hi, space, diff,
-                                          MAX_NFEV, SEARCH_TOL), starts)
+                                          MAX_NFEV), starts)
     return min(fits, key=lambda f: f.rss)
 
 
