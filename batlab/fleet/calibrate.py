@@ -32,10 +32,14 @@ import numpy as np
 import batlab.pipeline as pipeline
 from batlab.fleet.clean_retests import CleanBat, draw_bat, draw_retest
 from batlab.fleet.cluster import ordered_map
-from batlab.pipeline.files import atomic_write
 from batlab.pipeline.records import same_judgement
-from batlab.pipeline.registered import Registration, registered_weight_kg
+from batlab.pipeline.registered import (
+    Registration,
+    registered_weight_kg,
+    registration_conditions,
+)
 from batlab.registry import decode_modes
+from ema.io.atomic_write import atomic_write
 from updating.inspect.retest_meta import conditions_from_dict
 from updating.simulate.virtual_bat import simulate_test
 
@@ -131,8 +135,7 @@ def registration(spec: BatSpec) -> Registered:
                                    decode_modes(record.modes))
     case = pipeline.InspectionCase(
         record.serial, profile, done.diagnosis.reference, baseline, None,
-        conditions_from_dict(record.meta, f"registered bat {record.serial}"),
-        registered_weight_kg(record))
+        registration_conditions(record.meta, record.serial), registered_weight_kg(record))
     return Registered(bat, done, case)
 
 

@@ -30,7 +30,7 @@ from batlab.pipeline.inspection import (
 from batlab.pipeline.records import FORCED_KEY, FittedTest
 from updating.correlate.measured import driving_mass_line
 from updating.correlate.points import match_points, point_positions_m
-from updating.inspect.retest_meta import conditions_from_dict
+from updating.inspect.retest_meta import RetestConditions, conditions_from_dict
 from updating.model import plausible
 from updating.model.lab_input import BatMeta
 from updating.model.profile import Profile, make_profile
@@ -61,6 +61,14 @@ def registered_weight_kg(bat: reg.BatRecord) -> float | None:
     """Return a registered bat's weight from its meta.json, kg (None when not weighed)."""
     weight = bat.meta.get("weight_lb")
     return None if weight is None else float(weight) * LB_TO_KG
+
+
+def registration_conditions(meta: dict, serial: str) -> RetestConditions:
+    """Return the conditions a registered bat's meta.json recorded at its baseline.
+
+    ``conditions_from_dict`` of the stored meta.json, errors naming the registered bat.
+    """
+    return conditions_from_dict(meta, f"registered bat {serial}")
 
 
 def baseline_mass_line(profile: Profile, meta: BatMeta, baseline: FittedTest) -> str | None:
@@ -236,8 +244,8 @@ def registered_case(
     baseline = FittedTest(bat.baseline_name, base_test, fit, base_modes)
     retest = fit_file(Path(retest_path).name, re_test, weight_kg, order, progress)
     return InspectionCase(serial, profile, BatReference.from_dict(bat.reference), baseline,
-                          retest, conditions_from_dict(bat.meta, f"registered bat {serial}"),
-                          weight_kg, bat.reference_seq, retest_content)
+                          retest, registration_conditions(bat.meta, serial), weight_kg,
+                          bat.reference_seq, retest_content)
 
 
 def inspect_registered(

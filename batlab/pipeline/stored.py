@@ -19,9 +19,9 @@ from batlab import registry as reg
 from batlab.pipeline.files import Progress, file_sha256, frf_from_bytes, quiet
 from batlab.pipeline.inspection import InspectionCase, InspectionResult, fit_file, judge
 from batlab.pipeline.records import FittedTest, ReportInputs, same_judgement, verdict_record
-from batlab.pipeline.registered import registered_weight_kg
+from batlab.pipeline.registered import registered_weight_kg, registration_conditions
 from updating.correlate.points import match_points, point_positions_m
-from updating.inspect.retest_meta import RetestConditions, conditions_from_dict
+from updating.inspect.retest_meta import RetestConditions
 from updating.model.profile import make_profile
 from updating.model.reference import BatReference
 
@@ -282,8 +282,8 @@ def with_element_map(inputs: ReportInputs, stored_inputs: dict, weight_kg: float
         progress("judging the stored tests again for the element map (an inspection without "
                  "a report does not compute it)")
         case = InspectionCase(inputs.serial, inputs.profile, inputs.reference, inputs.baseline,
-                              inputs.retest, conditions_from_dict(
-                                  inputs.meta, f"registered bat {inputs.serial}"), weight_kg)
+                              inputs.retest, registration_conditions(inputs.meta, inputs.serial),
+                              weight_kg)
         again = verdict_record(inputs.serial, judge(
             case, float(stored_inputs.get("false_alarm", 0.01)), conditions).verdict)
         if same_judgement(v["status"], v.get("statistic"), again["status"],

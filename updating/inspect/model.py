@@ -25,6 +25,7 @@ from collections.abc import Callable
 from dataclasses import dataclass, replace
 
 import numpy as np
+from scipy.linalg import solveh_banded
 
 from updating.inspect.segments import Segment, segment_change
 from updating.model.assembly import (
@@ -460,12 +461,9 @@ def banded_inverse_form(M: np.ndarray, dofs: np.ndarray, n: np.ndarray,
     (``bandwidth`` diagonals above the main one: 3). Cholesky in banded storage
     (``scipy.linalg.solveh_banded``) costs O(N b^2), against O(N^3) for a dense solve.
     """
-    from scipy.linalg import solveh_banded
-
     ab = np.zeros((bandwidth + 1, M.shape[0]))
     for k in range(bandwidth + 1):
         ab[bandwidth - k, k:] = np.diagonal(M, k)
     v = np.zeros(M.shape[0])
     v[dofs] = n
     return float(v @ solveh_banded(ab, v, check_finite=False))
-
