@@ -32,6 +32,7 @@ import numpy as np
 import batlab.pipeline as pipeline
 from batlab.fleet.clean_retests import CleanBat, draw_bat, draw_retest
 from batlab.fleet.cluster import ordered_map
+from batlab.pipeline.files import atomic_write
 from batlab.pipeline.records import same_judgement
 from batlab.pipeline.registered import (
     Registration,
@@ -39,7 +40,6 @@ from batlab.pipeline.registered import (
     registration_conditions,
 )
 from batlab.registry import decode_modes
-from ema.io.atomic_write import atomic_write
 from updating.inspect.retest_meta import conditions_from_dict
 from updating.simulate.virtual_bat import simulate_test
 
