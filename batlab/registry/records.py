@@ -104,20 +104,28 @@ def encode_modes(m) -> dict:
             "damping_ratio": np.asarray(m.damping_ratio).tolist(),
             "shapes": np.asarray(m.shapes).tolist(), "x_m": np.asarray(m.x_m).tolist(),
             "sensor_x_m": float(m.sensor_x_m),
-            "freq_std_hz": None if m.freq_std_hz is None else np.asarray(m.freq_std_hz).tolist()}
+            "freq_std_hz": None if m.freq_std_hz is None else np.asarray(m.freq_std_hz).tolist(),
+            "band_top_hz": None if m.band_top_hz is None else float(m.band_top_hz),
+            "members": None if m.members is None else np.asarray(m.members).tolist()}
 
 
 def decode_modes(d: dict):
-    """Return the stored modes as ``MeasuredModes`` (shapes points x modes)."""
+    """Return the stored modes as ``MeasuredModes`` (shapes points x modes).
+
+    Records stored before the band's top and the merged pairs were kept read them as
+    unknown (None).
+    """
     import numpy as np
 
     from updating.correlate.measured import MeasuredModes
 
-    std = d.get("freq_std_hz")
+    std, members = d.get("freq_std_hz"), d.get("members")
     return MeasuredModes(np.asarray(d["freq_hz"], float),
                          np.asarray(d["shapes"], float).reshape(len(d["x_m"]), -1),
                          np.asarray(d["x_m"], float), np.asarray(d["damping_ratio"], float),
-                         float(d["sensor_x_m"]), None if std is None else np.asarray(std, float))
+                         float(d["sensor_x_m"]), None if std is None else np.asarray(std, float),
+                         band_top_hz=d.get("band_top_hz"),
+                         members=None if members is None else np.asarray(members, int))
 
 
 def has_file(conn: sa.Connection, sha256: str) -> bool:

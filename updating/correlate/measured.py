@@ -34,6 +34,11 @@ class MeasuredModes:
         mass_line: (n_points,) the driving point's row of the rigid-body flexibility at the
             points, 1/kg (the mass line, ``ema.shapes.mass_line``: 1/M + (x - x_c)(x_d -
             x_c)/I of the bat with its accelerometer), or None when the test did not give it.
+        band_top_hz: the top of the band the modes were fitted in, Hz, or None (unknown): a
+            mode near it may have its other bending plane's member above it.
+        members: (m,) how many fitted modes each mode stands for: 2 where a resolved pair of
+            bending planes was merged into it (``planes.merge_plane_pairs``), 1 for a mode
+            seen once; None when not recorded.
     """
 
     freq_hz: np.ndarray
@@ -43,6 +48,8 @@ class MeasuredModes:
     sensor_x_m: float
     freq_std_hz: np.ndarray | None = None
     mass_line: np.ndarray | None = None
+    band_top_hz: float | None = None
+    members: np.ndarray | None = None
 
     @property
     def omega2(self) -> np.ndarray:
@@ -53,8 +60,10 @@ class MeasuredModes:
         """Return a subset of the modes."""
         idx = np.asarray(idx)
         std = None if self.freq_std_hz is None else self.freq_std_hz[idx]
+        members = None if self.members is None else self.members[idx]
         return MeasuredModes(self.freq_hz[idx], self.shapes[:, idx], self.x_m,
-                             self.damping_ratio[idx], self.sensor_x_m, std, self.mass_line)
+                             self.damping_ratio[idx], self.sensor_x_m, std, self.mass_line,
+                             self.band_top_hz, members)
 
 
 def from_fit(fit, sensor_x_m: float, min_hz: float = 20.0) -> MeasuredModes:
@@ -65,10 +74,12 @@ def from_fit(fit, sensor_x_m: float, min_hz: float = 20.0) -> MeasuredModes:
     """
     keep = np.flatnonzero(np.asarray(fit.freq_hz) >= min_hz)
     std = getattr(fit, "freq_std_hz", None)
+    band = getattr(fit, "band_hz", None)
     return MeasuredModes(
         np.asarray(fit.freq_hz)[keep], np.asarray(fit.real_shapes)[:, keep],
         np.asarray(fit.x_m), np.asarray(fit.damping_ratio)[keep], float(sensor_x_m),
-        None if std is None else np.asarray(std)[keep], driving_mass_line(fit))
+        None if std is None else np.asarray(std)[keep], driving_mass_line(fit),
+        None if band is None else float(band[1]), np.ones(keep.size, dtype=int))
 
 
 def driving_mass_line(fit) -> np.ndarray | None:

@@ -36,11 +36,13 @@ def merge_plane_pairs(modes: MeasuredModes) -> MeasuredModes:
     """Merge each resolved two-plane pair into one mode.
 
     The modes with each resolved two-plane pair (adjacent, within ``PAIR_MAX_REL_DF``,
-    MAC >= ``PAIR_MIN_MAC``) replaced by one mode (module docstring).
+    MAC >= ``PAIR_MIN_MAC``) replaced by one mode (module docstring); ``members`` says
+    which modes were merged (2) and which were seen once (1); the band's top is kept.
     """
     f, psi = np.asarray(modes.freq_hz, float), np.asarray(modes.shapes, float)
     std = None if modes.freq_std_hz is None else np.asarray(modes.freq_std_hz, float)
-    out_f, out_psi, out_z, out_std = [], [], [], []
+    was = np.ones(f.size, int) if modes.members is None else np.asarray(modes.members, int)
+    out_f, out_psi, out_z, out_std, out_members = [], [], [], [], []
     k = 0
     while k < f.size:
         if k + 1 < f.size and f[k + 1] / f[k] - 1 < PAIR_MAX_REL_DF and \
@@ -54,6 +56,7 @@ def merge_plane_pairs(modes: MeasuredModes) -> MeasuredModes:
             out_z.append(w1 * modes.damping_ratio[k] + w2 * modes.damping_ratio[k + 1])
             if std is not None:
                 out_std.append(max(std[k], std[k + 1]))
+            out_members.append(was[k] + was[k + 1])
             k += 2
         else:
             out_f.append(f[k])
@@ -61,7 +64,10 @@ def merge_plane_pairs(modes: MeasuredModes) -> MeasuredModes:
             out_z.append(modes.damping_ratio[k])
             if std is not None:
                 out_std.append(std[k])
+            out_members.append(was[k])
             k += 1
     return MeasuredModes(np.array(out_f), np.column_stack(out_psi), modes.x_m,
                          np.array(out_z), modes.sensor_x_m,
-                         None if std is None else np.array(out_std))
+                         None if std is None else np.array(out_std),
+                         band_top_hz=modes.band_top_hz,
+                         members=np.array(out_members, dtype=int))

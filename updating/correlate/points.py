@@ -114,4 +114,5 @@ def reorder(modes: MeasuredModes, order: np.ndarray) -> MeasuredModes:
         The same modes with their shapes' rows and positions re-ordered.
     """
     return MeasuredModes(modes.freq_hz, modes.shapes[order], modes.x_m[order],
-                         modes.damping_ratio, modes.sensor_x_m, modes.freq_std_hz)
+                         modes.damping_ratio, modes.sensor_x_m, modes.freq_std_hz,
+                         band_top_hz=modes.band_top_hz, members=modes.members)

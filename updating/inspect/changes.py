@@ -27,6 +27,7 @@ from updating.inspect.hypotheses import (
     plane_sigma,
     shape_noise_profile,
 )
+from updating.inspect.identity import ModeIdentity, mode_identity
 from updating.inspect.model import ChangeParams, ChangePredictor
 from updating.model.profile import Profile
 
@@ -77,6 +78,11 @@ class RetestPairs:
         """Return the number of pairs."""
         return int(self.baseline_index.size)
 
+    def subset(self, keep: np.ndarray) -> RetestPairs:
+        """Return the pairs selected by ``keep`` (a boolean mask or indices)."""
+        return RetestPairs(self.baseline_index[keep], self.retest_index[keep],
+                           self.model_index[keep], self.mac[keep], self.mac_model[keep])
+
 
 def pair_tests(predict: ChangePredictor, baseline: MeasuredModes, retest: MeasuredModes,
                min_mac: float) -> RetestPairs:
@@ -95,6 +101,26 @@ def pair_tests(predict: ChangePredictor, baseline: MeasuredModes, retest: Measur
     return RetestPairs(ib, ir, np.array([to_model[b] for b in ib], dtype=int),
                      np.asarray(mac_br, float)[keep],
                      np.array([mac_model[b] for b in ib], dtype=float))
+
+
+def identify_pairs(predict: ChangePredictor, baseline: MeasuredModes, retest: MeasuredModes,
+                   pairs: RetestPairs) -> tuple[RetestPairs, ModeIdentity]:
+    """Keep the pairs whose bending plane can be told (``identity.mode_identity``).
+
+    Returns the pairs the verdict is judged on and every pair's identity (its ``notes`` say
+    which were left out and why).
+    """
+    f_mod, phi_mod = predict(ChangeParams())
+    order = np.searchsorted(np.flatnonzero(f_mod >= ELASTIC_MIN_HZ), pairs.model_index)
+    ib, ir = pairs.baseline_index, pairs.retest_index
+    psi_b = baseline.shapes[:, ib]
+    identity = mode_identity(
+        baseline.freq_hz[ib], order, psi_b, align_signs(psi_b, retest.shapes[:, ir]),
+        phi_mod[:, pairs.model_index],
+        members_b=None if baseline.members is None else baseline.members[ib],
+        members_r=None if retest.members is None else retest.members[ir],
+        band_top_b_hz=baseline.band_top_hz, band_top_r_hz=retest.band_top_hz)
+    return pairs.subset(identity.usable), identity
 
 
 def differences(predict: ChangePredictor, baseline: MeasuredModes, retest: MeasuredModes,
