@@ -42,7 +42,7 @@ mass-only core there), which avoids the local minima of the position.
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -260,6 +260,9 @@ class Differences:
     plane_shape_sens
         (n_points, m) d phi_r / d ln(E/G), aligned as phi0 (the mix's effect on each pair's
         shape per unit c), or None.
+    rows
+        (n_points,) which of the predictor's test points the shape rows are, or None (all,
+        in order): a point left out (``without_point``).
     """
 
     model_index: np.ndarray
@@ -273,6 +276,31 @@ class Differences:
     mass0_kg: float = 1.0
     plane_sens: np.ndarray | None = None
     plane_shape_sens: np.ndarray | None = None
+    rows: np.ndarray | None = None
+
+    def without_mode(self, k: int) -> Differences:
+        """Return the changes with paired mode ``k`` left out."""
+        keep = np.arange(self.n_freq) != k
+        return replace(self, model_index=self.model_index[keep], dlnf=self.dlnf[keep],
+                       sigma_lnf=self.sigma_lnf[keep], dpsi=self.dpsi[:, keep],
+                       psi_scale=self.psi_scale[:, keep], f0=self.f0[keep],
+                       phi0=self.phi0[:, keep],
+                       plane_sens=None if self.plane_sens is None else self.plane_sens[keep],
+                       plane_shape_sens=None if self.plane_shape_sens is None
+                       else self.plane_shape_sens[:, keep])
+
+    def without_point(self, j: int) -> Differences:
+        """Return the changes with the shape row of test point ``j`` (a row here) left out."""
+        keep = np.arange(self.dpsi.shape[0]) != j
+        rows = np.arange(self.dpsi.shape[0]) if self.rows is None else self.rows
+        return replace(self, dpsi=self.dpsi[keep], psi_scale=self.psi_scale[keep],
+                       phi0=self.phi0[keep], rows=rows[keep],
+                       plane_shape_sens=None if self.plane_shape_sens is None
+                       else self.plane_shape_sens[keep])
+
+    def point_rows(self, shapes: np.ndarray) -> np.ndarray:
+        """Return the rows of the predictor's ``shapes`` (points first) these changes use."""
+        return shapes if self.rows is None else shapes[self.rows]
 
     @property
     def n_freq(self) -> int:
@@ -477,7 +505,7 @@ class Residual:
         params = self.space.params(x)
         f, phi = self.predict(params)
         idx = self.diff.model_index
-        f, phi = f[idx], phi[:, idx]
+        f, phi = f[idx], self.diff.point_rows(phi)[:, idx]
         phi = phi * np.sign(np.einsum("ij,ij->j", phi, self.diff.phi0))
         mass = None if self.diff.dlnw is None else self.predict.wood_mass_kg(params)
         return self.weigh(x, f, phi, mass)
@@ -513,9 +541,10 @@ class Residual:
         steps = [(self.space.params(xi), float(hi)) for xi, hi in zip(xs, h, strict=True)]
         pc = predicted_change(self.predict, params, steps)
         idx = self.diff.model_index
-        phi = pc.shapes[:, idx]
+        phi = self.diff.point_rows(pc.shapes)[:, idx]
         sign = np.sign(np.einsum("ij,ij->j", phi, self.diff.phi0))
-        d_lnf, d_phi = pc.d_lnf[idx], pc.d_shapes[:, idx] * sign[None, :, None]
+        d_lnf = pc.d_lnf[idx]
+        d_phi = self.diff.point_rows(pc.d_shapes)[:, idx] * sign[None, :, None]
         f, phi = pc.freq_hz[idx], phi * sign
         mass = d_lnm = None
         if self.diff.dlnw is not None:

@@ -12,7 +12,13 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from updating.inspect.decision import CONFUSABLE, GRIP_MIN_G, Evidence, is_significant
+from updating.inspect.decision import (
+    CLEAR_LEVEL,
+    CONFUSABLE,
+    GRIP_MIN_G,
+    Evidence,
+    is_large,
+)
 from updating.inspect.details import (
     PositionScan,
 )
@@ -25,6 +31,7 @@ from updating.inspect.hypotheses import (
     Differences,
     NullBounds,
     ParamSpace,
+    SigmaRel,
     covariance,
     fit_bounded,
     fit_null,
@@ -58,6 +65,13 @@ class Hypotheses:
     kinds : KindFits
         Every family fitted on the same null and noise (``kinds.classify``); ``full`` is
         the one with the lowest residual.
+    family : str
+        The family ``full`` belongs to.
+    null_h0, full_h0 : ChangeFit
+        H0 and ``full``'s family refitted with the shape noise H0 leaves (``sigma_h0``):
+        the test whose chance the verdict states (``nested_test``).
+    sigma_h0 : numpy.ndarray
+        (m,) relative shape noise per paired mode estimated from H0's residual.
     """
 
     null: ChangeFit
@@ -65,41 +79,58 @@ class Hypotheses:
     sigma_rel: np.ndarray
     scan: PositionScan
     kinds: KindFits
-    family: str = "local_change"
-    """The family ``full`` belongs to."""
+    family: str
+    null_h0: ChangeFit
+    full_h0: ChangeFit
+    sigma_h0: np.ndarray
 
 
 def fit_hypotheses(predict: ChangePredictor, diff: Differences, space: ParamSpace,
                    n_starts: int) -> Hypotheses:
-    """Fit H0 and H1 (a local change of any kind) with each mode's shape noise.
+    """Fit H0 and H1 (a local change of any kind) with two estimates of the shape noise.
 
-    Shape noise of each mode from the null fit, then from the generic local change's fit
-    (both refitted with it); then every kind's family on that null and noise.
+    First the noise H0 leaves: each mode's shape noise from H0's residual (``shape_noise``,
+    ``NOISE_PASSES`` times, H0 refitted with each estimate). Then the noise the best local
+    change leaves: the generic local change fitted, the noise re-estimated from it, H0 and
+    it refitted, every kind's family fitted (``kinds.classify``), the noise re-estimated
+    from the best family (which fits an alteration of a known kind better than the generic
+    change) and H0 and that family refitted: ``null``, ``full``, ``sigma_rel``, what the
+    finding is read from. Last, the best family refitted with H0's noise (``full_h0``):
+    the test whose chance is stated (``nested_test``, docs/inspection.md, "Two noises").
     """
+    sigma: SigmaRel = INITIAL_SHAPE_NOISE
+    null = fit_null(predict, diff, space, sigma)
+    for _ in range(NOISE_PASSES):
+        sigma = shape_noise(null, diff, sigma, N_NULL)
+        null = fit_null(predict, diff, space, sigma, x0=null.x)
+    null_h0, sigma_h0 = null, sigma
     gspace = segment_space(space, "local_change")
-    null = fit_null(predict, diff, space, INITIAL_SHAPE_NOISE)
-    sigma = shape_noise(null, diff, INITIAL_SHAPE_NOISE, N_NULL)
+    generic = fit_segment(predict, diff, gspace, sigma, null, n_starts)
+    sigma = shape_noise(generic, diff, sigma, N_NULL + N_SEGMENT)
     null = fit_null(predict, diff, space, sigma, x0=null.x)
-    full = fit_segment(predict, diff, gspace, sigma, null, n_starts)
-    sigma = shape_noise(full, diff, sigma, N_NULL + N_SEGMENT)
-    null = fit_null(predict, diff, space, sigma, x0=null.x)
-    full = fit_segment(predict, diff, gspace, sigma, null,
-                       starts=[np.concatenate([null.x, full.x[N_NULL:]])])
-    kinds = classify(predict, diff, space, sigma, null, full)
+    generic = fit_segment(predict, diff, gspace, sigma, null,
+                          starts=[np.concatenate([null.x, generic.x[N_NULL:]])])
+    kinds = classify(predict, diff, space, sigma, null, generic)
     best = min(kinds.fits, key=lambda k: kinds.fits[k].rss)
-    # the noise from the best family's residual (the generic change may fit an alteration of
-    # a known kind less well, and its residual would read as noise), both hypotheses refitted
     sigma = shape_noise(kinds.fits[best], diff, sigma, N_NULL + N_PARAMS[best])
     null = fit_null(predict, diff, space, sigma, x0=null.x)
     fspace = space if best == "core" else segment_space(space, best)
-    fun = residual_function(predict, diff, fspace, sigma)
-    x0 = kinds.fits[best].x
-    full = fit_bounded(fun, x0, fspace.lower(), fspace.upper(), fspace, diff, MAX_NFEV_CORE)
+    lo, hi = fspace.lower(), fspace.upper()
+    full = fit_bounded(residual_function(predict, diff, fspace, sigma), kinds.fits[best].x,
+                       lo, hi, fspace, diff, MAX_NFEV_CORE)
     fits = dict(kinds.fits, **{best: full})
     dof = max(diff.n_data - N_NULL - N_PARAMS[kinds.family], 1)
     kinds = replace(kinds, fits=fits, fit=fits[kinds.family],
                     cov=covariance(fits[kinds.family], dof))
-    return Hypotheses(null, full, sigma, PositionScan(), kinds, best)
+    full_h0 = fit_bounded(residual_function(predict, diff, fspace, sigma_h0), full.x, lo, hi,
+                          fspace, diff, MAX_NFEV_CORE)
+    return Hypotheses(null, full, sigma, PositionScan(), kinds, best, null_h0, full_h0,
+                      sigma_h0)
+
+
+NOISE_PASSES = 3
+"""Re-estimates of the shape noise from H0's residual (each refits H0 with it): the
+estimate is a fixed point, reached to a few 0.1 % in three."""
 
 
 def nested_f(rss_null: float, rss_core: float, q: int, dof: int) -> tuple[float, float]:
@@ -116,18 +147,23 @@ def nested_f(rss_null: float, rss_core: float, q: int, dof: int) -> tuple[float,
 
 @dataclass(frozen=True)
 class NestedTest:
-    """The nested F test of H1 (drift and a core) against H0 (drift alone).
+    """The nested F test of H1 (drift and a local change) against H0 (drift alone).
 
     Attributes
     ----------
     F, p_value : float
-        The statistic and P(F_{q, dof} > F) (``nested_f``).
+        The statistic and P(F_{q, dof} > F) (``nested_f``) with the shape noise H0 leaves:
+        the chance the verdict states.
     q, dof : int
-        Its degrees of freedom: the core's parameters, the data less H1's parameters.
+        Its degrees of freedom: the local change's parameters, the data less H1's.
     n : int
         Number of data (frequencies, shapes, weight).
     rss_null, rss_core : float
-        Weighted residual sums of squares of H0 and of H1 (the lower of the two fits).
+        Weighted residual sums of squares of H0 and of H1 (the lower of the two fits),
+        with H0's noise.
+    F_fit, p_fit : float
+        The same test with the noise the best local change leaves: how large the change is
+        against the test's own noise (``decision.F_FLOOR``).
     """
 
     F: float
@@ -137,6 +173,8 @@ class NestedTest:
     n: int
     rss_null: float
     rss_core: float
+    F_fit: float = float("nan")
+    p_fit: float = float("nan")
 
 
 def nested_test(diff: Differences, hyp: Hypotheses) -> NestedTest:
@@ -152,13 +190,15 @@ def nested_test(diff: Differences, hyp: Hypotheses) -> NestedTest:
     Returns
     -------
     NestedTest
-        F, p and what they were computed from.
+        F, p and what they were computed from: with the noise H0 leaves (the chance stated)
+        and with the noise the best local change leaves (the change's size).
     """
     n, q = diff.n_data, N_SEGMENT
     dof = max(n - (N_NULL + N_SEGMENT), 1)
-    rss0, rss1 = hyp.null.rss, min(hyp.full.rss, hyp.null.rss)
+    rss0, rss1 = hyp.null_h0.rss, min(hyp.full_h0.rss, hyp.null_h0.rss)
     F, p_value = nested_f(rss0, rss1, q, dof)
-    return NestedTest(F, p_value, q, dof, n, rss0, rss1)
+    F_fit, p_fit = nested_f(hyp.null.rss, min(hyp.full.rss, hyp.null.rss), q, dof)
+    return NestedTest(F, p_value, q, dof, n, rss0, rss1, F_fit, p_fit)
 
 
 def _uniform_explanation(predict, diff, space, hyp: Hypotheses, q: int, dof: int,
@@ -201,8 +241,8 @@ def _core_beyond_drift(predict, diff, space, hyp: Hypotheses, q: int, dof: int,
     """Ask whether the core beats drift beyond the bounds.
 
     F of the core against the null with every nuisance range ``factor`` times as wide
-    (``NullBounds.relaxed``, priors kept) when the core is still significant there (p below
-    ``false_alarm``, F at least ``F_FLOOR``), else None: a core fit that holds a nuisance
+    (``NullBounds.relaxed``, priors kept) when the core is still large there
+    (``decision.is_large``), else None: a core fit that holds a nuisance
     at its bound is told apart from that drift when no drift three times as large explains
     the change.
     """
@@ -210,7 +250,7 @@ def _core_beyond_drift(predict, diff, space, hyp: Hypotheses, q: int, dof: int,
                     hyp.sigma_rel, x0=hyp.null.x)
     rss1 = min(hyp.full.rss, hyp.null.rss)
     F, p = nested_f(wide.rss, rss1, q, dof)
-    return F if is_significant(F, p, false_alarm) else None
+    return F if is_large(F, p, false_alarm) else None
 
 
 def _grip_in_null(null: ChangeFit, n: int) -> Finding | None:
@@ -295,16 +335,18 @@ def weigh_evidence(predict: ChangePredictor, diff: Differences, space: ParamSpac
     kinds : KindFits or None
         Every kind's fit and the finding, when the change is significant.
     """
-    significant = is_significant(test.F, test.p_value, false_alarm)
+    significant = test.p_value < min(CLEAR_LEVEL, false_alarm)
+    large = is_large(test.F_fit, test.p_fit, false_alarm)
     grip = _grip_in_null(hyp.null, test.n)
     kinds = finding = None
     held_core: tuple[str, ...] = ()
-    if significant:
+    if significant or large:
         kinds = hyp.kinds
         finding = _as_grip(kinds.finding, hyp.null, grip)
         held_core = tuple(h for h in NullBounds.held(kinds.fit) if h in CONFUSABLE)
     evidence = Evidence(
-        F=test.F, p_value=test.p_value, significant=significant, finding=finding,
+        F=test.F, p_value=test.p_value, significant=significant,
+        beyond=significant and large, large=large, F_fit=test.F_fit, finding=finding,
         finding_text="" if finding is None else describe(finding),
         held_null=tuple(NullBounds.held(hyp.null)), held_core=held_core, dlnw=dlnw,
         grip=grip)

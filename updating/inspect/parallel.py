@@ -1,7 +1,8 @@
 """The independent starts of a multi-start fit, on a second core when there is one.
 
-``fork_map(fn, items)`` is ``[fn(i) for i in items]``: the first item in this process, the
-others in one forked child that inherits every cache (no pickling of the model), its results
+``fork_map(fn, items)`` is ``[fn(i) for i in items]``: the first half of the items (the
+first one of two or three) in this process, the others in one forked child that inherits
+every cache (no pickling of the model), its results
 sent back through a pipe. The same computations run either way, so the results are the same
 as sequential ones. It runs sequentially when forking is not safe or not useful: one item,
 one core, a daemonic process (a Dask or multiprocessing worker may not have children),
@@ -51,7 +52,7 @@ def _child(fn: Callable, items: list, conn) -> None:
 
 
 def fork_map(fn: Callable[[T], R], items: Iterable[T]) -> list[R]:
-    """Return ``[fn(i) for i in items]``, the items after the first in a forked child.
+    """Return ``[fn(i) for i in items]``, the second half of the items in a forked child.
 
     Parameters
     ----------
@@ -70,11 +71,12 @@ def fork_map(fn: Callable[[T], R], items: Iterable[T]) -> list[R]:
         return [fn(i) for i in items]
     ctx = multiprocessing.get_context("fork")
     recv, send = ctx.Pipe(duplex=False)
-    child = ctx.Process(target=_child, args=(fn, items[1:], send), daemon=True)
+    half = len(items) // 2
+    child = ctx.Process(target=_child, args=(fn, items[half:], send), daemon=True)
     child.start()
     send.close()
     try:
-        first = fn(items[0])
+        first = [fn(i) for i in items[:half]]
         status, rest = recv.recv()
     finally:
         recv.close()
@@ -84,4 +86,4 @@ def fork_map(fn: Callable[[T], R], items: Iterable[T]) -> list[R]:
             child.join()
     if status == "error":
         raise rest
-    return [first, *rest]
+    return [*first, *rest]
