@@ -57,20 +57,23 @@ def score_verdict(row: dict, serial: str, verdict, kind: str, truth: dict) -> di
     """Score a verdict against the truth of its fleet bat.
 
     ``row`` with the verdict's status, reasons, F test, candidate core and finding, and for a
-    cored bat called altered the reading's errors against ``truth`` (start in, diameter
-    relative, fill ratio absolute and relative, and whether the fill is within target).
+    cored bat called altered and read as a core the reading's errors against ``truth`` (start
+    in, diameter relative, fill ratio absolute and relative, and whether the fill is within
+    target).
     """
     out = pipeline.contract_dict(serial, verdict)
     fit = verdict.details.fit
     row.update(status=out["status"], reasons=out["reasons"], F=verdict.statistic,
                p=None if fit is None else fit.p_value,
+               F_fit=None if fit is None else fit.F_fit,
                weight_change_rel=None if fit is None else fit.weight_change_rel,
                null_fit=None if fit is None else fit.null_fit,
                plug_m=None if fit is None else fit.plug_m,
                candidate=None if fit is None else fit.candidate_core.to_json_dict(),
                finding=out["finding"])
     t = truth
-    if kind != "none" and out["status"] == "altered" and t.get("core_diameter_in"):
+    if (kind != "none" and out["status"] == "altered" and t.get("core_diameter_in")
+            and out["core_diameter_in"] is not None):
         row["start_err_in"] = out["region_in"][0] - t["region_in"][0]
         row["d_err_rel"] = out["core_diameter_in"] / t["core_diameter_in"] - 1
         r_true = t["fill_density_ratio"]

@@ -108,27 +108,35 @@ def lab_units(values: dict) -> dict:
     return out
 
 
-def finding_dict(finding) -> dict | None:
+def finding_dict(finding, spread: dict | None = None) -> dict | None:
     """Write a verdict's finding as the contract fixes it (None when nothing was found).
 
     Parameters
     ----------
     finding : updating.inspect.finding.Finding or None
         What changed, SI.
+    spread : dict or None
+        The leave-one-out spread of its reading (``updating.inspect.robustness``), SI name
+        -> (lowest, highest), when it was checked.
 
     Returns
     -------
     dict or None
         ``kind``, ``legal``, ``region_in``, ``rule``, ``reading`` and ``uncertainty`` (1
-        sigma) in the lab's units (in, g, %).
+        sigma) in the lab's units (in, g, %), and ``leave_one_out`` (each reading's lowest
+        and highest with any one mode or point left out) when given.
     """
     if finding is None:
         return None
     a, b = finding.region_m
-    return {"kind": finding.kind, "legal": bool(finding.legal),
-            "region_in": [_in(a), _in(b)], "rule": finding.rule,
-            "reading": lab_units(finding.reading),
-            "uncertainty": lab_units(finding.uncertainty)}
+    out = {"kind": finding.kind, "legal": bool(finding.legal),
+           "region_in": [_in(a), _in(b)], "rule": finding.rule,
+           "reading": lab_units(finding.reading),
+           "uncertainty": lab_units(finding.uncertainty)}
+    if spread:
+        lo, hi = (lab_units({k: v[i] for k, v in spread.items()}) for i in (0, 1))
+        out["leave_one_out"] = {k: [lo[k], hi[k]] for k in lo}
+    return out
 
 
 def contract_dict(serial: str, verdict: Verdict) -> dict:
@@ -166,11 +174,19 @@ def contract_dict(serial: str, verdict: Verdict) -> dict:
         "region_in": None if region is None else [_in(region[0]), _in(region[1])],
         "core_diameter_in": None if core is None else round(float(core) / IN_TO_M, 4),
         "fill_density_ratio": _num(fill),
-        "finding": finding_dict(verdict.finding),
+        "finding": finding_dict(verdict.finding, _spread(verdict)),
         "elements": elements,
         "confidence": _num(verdict.confidence),
         "false_alarm_rate": _num(verdict.false_alarm_rate),
     }
+
+
+def _spread(verdict: Verdict) -> dict | None:
+    """Return the leave-one-out spread of an altered verdict's finding, SI, or None."""
+    fit = verdict.details.fit
+    if verdict.altered is not True or fit is None or not fit.leave_one_out:
+        return None
+    return fit.leave_one_out.get("spread") or None
 
 
 def jsonable(value):

@@ -248,6 +248,14 @@ class FitEvidence:
         H1's generic local change (start, length in inches; relative mass and stiffness).
     kind_scores
         Akaike score of each kind's fit, when the change was significant.
+    leave_one_out
+        The finding refitted with each mode and each point left out (``robustness``:
+        ``cases`` and the readings' ``spread``, SI), when it was checked; else empty.
+    modes_left_out
+        Why paired modes were left out of the verdict (``identity``), one line each.
+    F_fit
+        The nested test's F with the noise the best local change leaves (the change's size;
+        ``statistic`` and ``p_value`` are the test with the noise H0 leaves).
     """
 
     statistic: str
@@ -275,6 +283,9 @@ class FitEvidence:
     empty_m: float = 0.0
     local_change: dict[str, float] = field(default_factory=dict)
     kind_scores: dict[str, float] = field(default_factory=dict)
+    leave_one_out: dict[str, Any] = field(default_factory=dict)
+    modes_left_out: tuple[str, ...] = ()
+    F_fit: float = math.nan
 
 
 @dataclass(frozen=True)
@@ -337,6 +348,8 @@ class InspectionDetails:
             "plug_m": f.plug_m, "fill_modulus_ratio": f.fill_modulus_ratio,
             "empty_m": f.empty_m, "local_change": dict(f.local_change),
             "kind_scores": dict(f.kind_scores), "time_s": self.time_s,
+            "leave_one_out": dict(f.leave_one_out),
+            "modes_left_out": list(f.modes_left_out), "F_fit": f.F_fit,
         }
 
     @classmethod
@@ -377,7 +390,9 @@ class InspectionDetails:
             plug_m=_num(d.get("plug_m")), fill_modulus_ratio=_num(d.get("fill_modulus_ratio")),
             empty_m=_num(d.get("empty_m")),
             local_change=dict(d.get("local_change") or {}),
-            kind_scores=dict(d.get("kind_scores") or {}))
+            kind_scores=dict(d.get("kind_scores") or {}),
+            leave_one_out=dict(d.get("leave_one_out") or {}),
+            modes_left_out=tuple(d.get("modes_left_out") or ()), F_fit=_num(d.get("F_fit")))
         return cls(n_modes, time_s, fit)
 
 

@@ -41,7 +41,14 @@ from dataclasses import replace
 import numpy as np
 
 from updating.correlate.measured import MeasuredModes
-from updating.inspect.changes import comparability_reasons, differences, pair_tests
+from updating.inspect.changes import (
+    ELASTIC_MIN_HZ,
+    RetestPairs,
+    comparability_reasons,
+    differences,
+    identify_pairs,
+    pair_tests,
+)
 from updating.inspect.decision import Evidence, decide
 from updating.inspect.details import ElementMap, InspectionDetails
 from updating.inspect.finding import Finding
@@ -56,6 +63,7 @@ from updating.inspect.reading import (
     read_fit,
 )
 from updating.inspect.retest_meta import RetestConditions
+from updating.inspect.robustness import Robustness, leave_one_out
 from updating.inspect.segments import element_factors
 from updating.inspect.verdict import Verdict
 from updating.model.profile import Profile
@@ -180,10 +188,11 @@ def inspect_retest(
     _check(profile, baseline, retest)
     predict, offset = _predictor(profile, reference, baseline, retest)
     dlnw = _weight_change(cond, registered_weight_kg)
-    pairs = pair_tests(predict, baseline, retest, min_mac)
+    pairs, identity = identify_pairs(predict, baseline, retest,
+                                     pair_tests(predict, baseline, retest, min_mac))
     reasons = comparability_reasons(profile, baseline, retest, pairs, dlnw)
     if reasons:
-        return _nan_verdict(predict, false_alarm, reasons,
+        return _nan_verdict(predict, false_alarm, reasons + list(identity.notes),
                             InspectionDetails(pairs.n, time.perf_counter() - t0))
     diff = differences(predict, baseline, retest, pairs, dlnw)
     space = ParamSpace(profile, _null_bounds(cond, baseline_temperature_c,
@@ -192,6 +201,13 @@ def inspect_retest(
     hyp = fit_hypotheses(predict, diff, space, n_starts)
     test = nested_test(diff, hyp)
     evidence, kinds = weigh_evidence(predict, diff, space, hyp, test, false_alarm, dlnw)
+    robust = Robustness()
+    if evidence.would_alter:
+        robust = leave_one_out(predict, diff, space, hyp.sigma_rel, hyp.null, kinds.fit,
+                               kinds.family, evidence.finding, false_alarm,
+                               _mode_labels(predict, baseline, pairs), baseline.x_m)
+        evidence = replace(evidence, rests_on=tuple(
+            f"{c.label} (F {c.F:.1f} without it)" for c in robust.failing))
     altered, reasons = decide(evidence)
     reading = read_fit(predict, diff, space, hyp, test, altered, kinds)
     if reading.reason is not None:
@@ -207,8 +223,10 @@ def inspect_retest(
     if with_map:
         msso = element_map(profile, reference, baseline, retest, pairs, ps, offset,
                            hyp.sigma_rel, diff.sigma_lnf, region)
-    record = fit_evidence(diff, space, hyp, test, evidence, reading, kinds, altered,
-                          factors.beta_shear, offset, msso)
+    record = replace(fit_evidence(diff, space, hyp, test, evidence, reading, kinds, altered,
+                                  factors.beta_shear, offset, msso),
+                     leave_one_out=robust.to_json_dict() if robust.cases else {},
+                     modes_left_out=identity.notes, F_fit=float(test.F_fit))
     return Verdict(
         altered=altered, confidence=1.0 - test.p_value, false_alarm_rate=false_alarm,
         statistic=float(test.F),
@@ -222,7 +240,16 @@ def inspect_retest(
                   "density_scale": float(ps.density_scale)},
         modes=mode_pairs(predict, diff, pairs, baseline, retest, hyp.null, reading.core_fit),
         details=InspectionDetails(pairs.n, time.perf_counter() - t0, record),
-        reasons=tuple(reasons), finding=finding if finding.kind else None)
+        reasons=tuple(reasons) + identity.notes, finding=finding if finding.kind else None)
+
+
+def _mode_labels(predict: ChangePredictor, baseline: MeasuredModes,
+                 pairs: RetestPairs) -> list[str]:
+    """Each paired mode in the lab's words: "mode 3 (1120 Hz)" (baseline frequency)."""
+    f_mod, _ = predict(ChangeParams())
+    order = np.searchsorted(np.flatnonzero(f_mod >= ELASTIC_MIN_HZ), pairs.model_index)
+    return [f"mode {k + 1} ({baseline.freq_hz[i]:.0f} Hz)"
+            for k, i in zip(order, pairs.baseline_index, strict=True)]
 
 
 def _finding_change(reading: Reading, finding: Finding, altered: bool | None):
