@@ -271,3 +271,46 @@ def test_harmless_changes_still_work(tmp_path, monkeypatch, change):
     assert mine.meta["points_in"] == theirs.meta["points_in"]
     noted = [ln for ln in err.splitlines() if "not used (ignored)" in ln]
     assert len(noted) == (1 if change == "unknown" else 0)  # retest.json's 'technician'
+
+
+def test_numpy_warnings_never_reach_the_user_unless_asked(monkeypatch):
+    """A warning raised during a command is not shown (the command's result or its one-line
+    error is the answer); ``python -W`` (sys.warnoptions) shows it to a developer."""
+    import sys
+
+    import batlab.commands.model as model
+
+    def noisy(args):
+        np.log(np.zeros(2))  # numpy: divide by zero (RuntimeWarning)
+        warnings.warn("scipy would say this", RuntimeWarning, stacklevel=1)
+        return 0
+
+    monkeypatch.setattr(model, "run", noisy)
+    code, _, err, caught = run(["model"])
+    assert code == 0 and not caught and "Warning" not in err
+    monkeypatch.setattr(sys, "warnoptions", ["default"])
+    code, _, _, caught = run(["model"])
+    assert code == 0 and len(caught) == 2
+
+
+def test_a_fit_failing_on_its_numbers_is_one_line_naming_the_file(monkeypatch, tmp_path):
+    """What no input check foresaw: the fit's own numerical failure is one line naming the
+    file, for `fit` and for a bat's baseline."""
+    from ema import modal_fit
+    from updating.correlate import fitted
+
+    def singular(*args, **kwargs):
+        raise np.linalg.LinAlgError("Singular matrix")
+
+    monkeypatch.setattr(modal_fit, "fit_test", singular)
+    monkeypatch.setattr(fitted, "fit_test", singular)
+    code, _, err, caught = run(["fit", SAMPLE / "baseline.uff", "--json"])
+    lines = [ln for ln in err.splitlines() if not PROGRESS.match(ln)]
+    assert code == 2 and not caught
+    assert lines[-1].endswith("baseline.uff: the fit failed on its numbers (Singular matrix): "
+                              "check the FRFs' units and scale")
+    db = tmp_path / "lab.sqlite"
+    code, _, err, _ = run(_register_argv(Folder(tmp_path, "bat"), db))
+    lines = [ln for ln in err.splitlines() if ln.strip() and not PROGRESS.match(ln)]
+    assert code == 2 and len(lines) == 1 and "baseline.uff: the fit failed" in lines[0]
+    assert not db.exists()
