@@ -4,8 +4,11 @@
 lists the commands without importing any of them, and ``batlab CMD ...`` imports CMD's module
 alone. A command module defines ``EXAMPLE`` (one command line, shown under its ``--help``),
 ``add_arguments(parser)`` and ``run(args) -> int``, and imports heavy dependencies inside
-``run``. Bad input raises ``ValueError`` or ``OSError`` with a message that names the file
-and the problem; it is printed as one line on stderr and the exit code is 2.
+``run``; a command checks its options and files first (``batlab.pipeline.door.admit``). Bad
+input raises ``ValueError`` or ``OSError`` with a message that names the file and the
+problem; it is printed as one line on stderr and the exit code is 2. Warnings (numpy's,
+scipy's) never reach the user: a failure they foretell is that one line, and a run that
+succeeds checked its results itself (``python -W default -m batlab ...`` shows them).
 """
 
 from __future__ import annotations
@@ -15,6 +18,7 @@ import importlib
 import os
 import sqlite3
 import sys
+import warnings
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 
@@ -181,9 +185,16 @@ def main(argv: Sequence[str] | None = None) -> int:
     chosen = chosen_command(argv)
     args = build_parser(wired=() if chosen is None else (chosen,)).parse_args(argv)
     try:
-        return int(args._run(args) or 0)
+        with warnings.catch_warnings():
+            if not sys.warnoptions:  # python -W / PYTHONWARNINGS: a developer asks for them
+                warnings.simplefilter("ignore")
+            return int(args._run(args) or 0)
     except (ValueError, OSError) as exc:
         print(f"batlab {args.command}: error: {error_lines(exc)}", file=sys.stderr)
+        return 2
+    except (OverflowError, FloatingPointError) as exc:  # a number no input check saw
+        print(f"batlab {args.command}: error: a computation failed on the inputs' numbers "
+              f"({error_lines(exc)}): check their units and scale", file=sys.stderr)
         return 2
     except sqlite3.DatabaseError as exc:  # damage found after the registry opened
         db = getattr(args, "db", None) or "the registry"

@@ -34,9 +34,23 @@ def db_path(args: argparse.Namespace) -> Path | str:
         A PostgreSQL URL as given, else ``--db`` with ``~`` expanded, else
         ``batlab.registry.default_db_path()`` ($BATLAB_DB, else under $XDG_DATA_HOME or
         ~/.local/share).
+
+    Raises
+    ------
+    ValueError
+        ``--db`` (or $BATLAB_DB) is a URL of another kind of server (``mysql://...``).
     """
+    import os
+
     from batlab.registry import default_db_path, is_url
 
+    for label, given in (("--db", args.db), ("$BATLAB_DB", os.environ.get("BATLAB_DB"))):
+        if given:
+            if "://" in given and not is_url(given):
+                scheme = given.split("://", 1)[0]
+                raise ValueError(f"{label} {scheme}://...: not a registry batlab opens (give a "
+                                 "SQLite file's path or a postgresql:// URL)")
+            break
     if args.db and is_url(args.db):
         return args.db
     return Path(args.db).expanduser() if args.db else default_db_path()

@@ -55,15 +55,17 @@ def test_simulate_json_is_rounded_and_names_its_wood(tmp_path, capsys):
 
 
 def test_meta_errors_name_the_key(tmp_path, capsys):
-    meta = {"serial": "X", "nominal_E_psi": "1.7e6 psi", "nominal_weight_density_lbf_in3": 0.02}
+    meta = {"serial": "X", "species": "maple", "nominal_E_psi": "1.7e6 psi",
+            "nominal_weight_density_lbf_in3": 0.02, "weight_lb": 1.9, "points_in": [1, 33]}
     (tmp_path / "m.json").write_text(json.dumps(meta))
     code, _, err = run_cli(["model", "--meta", tmp_path / "m.json"], capsys)
     assert code == 2
-    assert f"{tmp_path / 'm.json'}: key 'nominal_E_psi' must be a number, not '1.7e6 psi'" in err
+    assert (f"{tmp_path / 'm.json'}: key 'nominal_E_psi' must be a number (psi), not the "
+            "text '1.7e6 psi'") in err
     meta.update(nominal_E_psi=1.7e6, points_in=[1, "two"])
     (tmp_path / "m.json").write_text(json.dumps(meta))
     code, _, err = run_cli(["model", "--meta", tmp_path / "m.json"], capsys)
-    assert code == 2 and "key 'points_in' must be a list of numbers" in err
+    assert code == 2 and "key 'points_in'[1] must be a number" in err
 
 
 def test_diagnose_plot_directory_checked_before_work(tmp_path, capsys):

@@ -133,10 +133,10 @@ def test_retest_meta_reaches_the_inspection_in_both_forms(lab, capsys, monkeypat
 @pytest.mark.parametrize("content,expect", [
     ('{"weight_lb": 2.2', "not valid JSON"),
     ('[1, 2]', "expected a JSON object"),
-    ('{"weight_lb": "heavy"}', "weight_lb must be a number"),
-    ('{"accelerometer_mass_g": -1}', "accelerometer_mass_g = -1 is outside"),
-    ('{"temperature_c": 400}', "temperature_c = 400 is outside"),
-    ('{"tested_on": "yesterday"}', "tested_on must be a date"),
+    ('{"weight_lb": "heavy"}', "key 'weight_lb' must be a number"),
+    ('{"accelerometer_mass_g": -1}', "key 'accelerometer_mass_g' = -1 is outside"),
+    ('{"temperature_c": 400}', "key 'temperature_c' = 400 is outside"),
+    ('{"tested_on": "yesterday"}', "key 'tested_on' must be a date"),
 ])
 def test_bad_retest_meta_is_refused_in_one_line(lab, capsys, content, expect):
     (lab / "retest.json").write_text(content)
@@ -315,7 +315,8 @@ def test_cli_process_missing_file_exit_code(tmp_path):
          "--retest", str(SAMPLE / "retest_corked.uff"), "--json"],
         capture_output=True, text=True, timeout=60)
     assert res.returncode == 2 and res.stdout == ""
-    assert res.stderr.strip() == f"batlab inspect: error: {tmp_path / 'nope.uff'}: no such file"
+    assert res.stderr.strip() == (f"batlab inspect: error: {tmp_path / 'nope.uff'}: no such file "
+                                  "(--baseline: the baseline test)")
 
 
 def test_report_option_both_forms(lab, capsys):
@@ -336,7 +337,8 @@ def test_report_option_both_forms(lab, capsys):
 
 def test_reading_commands_need_an_existing_registry(tmp_path, capsys):
     db = tmp_path / "none.sqlite"
-    for args in (["bats"], ["history", "S"], ["inspect", "--serial", "S", "r.uff"]):
+    for args in (["bats"], ["history", "S"],
+                 ["inspect", "--serial", "S", SAMPLE / "retest_corked.uff"]):
         code, out, err = run_cli([*args, "--db", db], capsys)
         assert code == 2 and out == "" and "no registry there" in err
     assert not db.exists()

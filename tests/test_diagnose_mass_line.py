@@ -130,7 +130,8 @@ def test_data_sheet_prior_and_whether_the_data_agree(sheet_g, agree):
 ])
 def test_bad_data_sheet_mass_names_the_key(tmp_path, value, message):
     path = tmp_path / "meta.json"
-    base = {"serial": "S", "nominal_E_psi": 1.7e6, "nominal_weight_density_lbf_in3": 0.0217}
+    base = {"serial": "S", "species": "white ash", "nominal_E_psi": 1.7e6,
+            "nominal_weight_density_lbf_in3": 0.0217, "weight_lb": 1.8, "points_in": [1.0, 33.0]}
     path.write_text(json.dumps({**base, "accelerometer_mass_g": value}))
     with pytest.raises(ValueError, match=f"key {message}"):
         read_meta(path)

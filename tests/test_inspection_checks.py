@@ -121,7 +121,7 @@ def test_retest_meta_read_in_si(tmp_path):
     p.write_text("{}")
     assert read_retest_meta(p).weight_kg is None
     p.write_text('{"weight_lb": true}')
-    with pytest.raises(ValueError, match="retest.json: weight_lb must be a number"):
+    with pytest.raises(ValueError, match="retest.json: key 'weight_lb' must be a number"):
         read_retest_meta(p)
     with pytest.raises(ValueError, match="no such file"):
         read_retest_meta(tmp_path / "nope.json")

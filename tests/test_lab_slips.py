@@ -175,7 +175,13 @@ def test_a_heavier_bats_baseline_is_refused_with_its_weight(tmp_path, capsys):
 
 
 def test_another_bats_baseline_is_refused_and_no_registry_made(tmp_path, capsys):
-    code, err, db = _register(tmp_path, "data_samples/paper_bat/baseline.uff", capsys)
+    other = Path("data_samples/paper_bat")
+    code, err, db = _register(tmp_path, other / "baseline.uff", capsys)
+    assert code == 2 and "key 'points_in' has 33.00 in where" in err  # at the door, unfitted
+    assert not db.exists()
+    points = json.loads((other / "meta.json").read_text())["points_in"]
+    folder = _bat_folder(tmp_path, points_in=points)  # its points listed: judged after the fit
+    code, err, db = _register(tmp_path, other / "baseline.uff", capsys, folder)
     assert code == 2 and "misses its frequencies by" in err and "at its upper limit" in err
     assert not db.exists()
     folder = _bat_folder(tmp_path, weight_lb=873.6)

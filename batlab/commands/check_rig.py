@@ -51,6 +51,8 @@ def run(args: argparse.Namespace) -> int:
     def fraction(pct: float | None) -> float | None:
         return None if pct is None else pct / 100
 
+    pipeline.admit(args, progress)
+
     result = pipeline.check_rig_files(args.bar, args.frf, args.method, fraction(args.freq_tol),
                                       fraction(args.max_damping), fraction(args.scale_tol),
                                       progress)

@@ -15,7 +15,13 @@ import json
 import tempfile
 from pathlib import Path
 
-from batlab.cli_support import add_db_argument, add_out_argument, progress_printer
+from batlab.cli_support import (
+    add_db_argument,
+    add_out_argument,
+    db_path,
+    note_printer,
+    progress_printer,
+)
 
 EXAMPLE = "batlab demo -o demo/"
 
@@ -46,6 +52,10 @@ def run(args: argparse.Namespace) -> int:
         Exit code: 0 (bad input raises ValueError or OSError; ``batlab.cli`` prints
         it in one line and exits 2).
     """
+    from batlab.pipeline import admit
+
+    admit(args, note_printer("demo"), outputs={"out": "dir"},
+          registry=db_path(args) if args.db else None, create=True)
     if args.out:
         return _run_in(Path(args.out), args, keep=True)
     with tempfile.TemporaryDirectory(prefix="batlab-demo-") as tmp:
@@ -61,7 +71,7 @@ def _run_in(work: Path, args: argparse.Namespace, keep: bool) -> int:
 
     progress = progress_printer("demo")
     check_destination(work, "--out")
-    db = Path(args.db) if args.db else work / "registry.sqlite"
+    db = db_path(args) if args.db else work / "registry.sqlite"
     files = pipeline.simulate_demo_pair(work, args.seed, progress)
     profile, meta, baseline, retest = files.profile, files.meta, files.baseline, files.retest
     with open_registry(db) as conn:

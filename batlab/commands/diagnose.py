@@ -6,7 +6,7 @@ import argparse
 import json
 import sys
 
-from batlab.cli_support import add_plots_argument, progress_printer
+from batlab.cli_support import add_plots_argument, note_printer, progress_printer
 
 EXAMPLE = "batlab diagnose --profile profile.csv --meta meta.json --frf baseline.uff --plots plots/"
 
@@ -41,15 +41,11 @@ def run(args: argparse.Namespace) -> int:
         Exit code: 0 (bad input raises ValueError or OSError; ``batlab.cli`` prints
         it in one line and exits 2).
     """
-    from pathlib import Path
-
     from batlab import pipeline
     from batlab.diagnose_report import format_table, write_plot
     from batlab.report import check_destination
 
-    if args.plots:  # created like every other output directory, and proved writable first
-        check_destination(args.plots, "--plots")
-
+    pipeline.admit(args, note_printer("diagnose"), outputs={"plots": "dir"})
     progress = progress_printer("diagnose")
     meta, result = pipeline.diagnose_files(args.profile, args.meta, args.frf, args.method,
                                            args.min_gain, progress, solid=args.solid)
@@ -57,8 +53,9 @@ def run(args: argparse.Namespace) -> int:
     out["serial"] = meta.serial
     for w in result.warnings:
         print(f"batlab diagnose: warning: {w}", file=sys.stderr)
-    if args.plots:
-        path = write_plot(result, Path(args.plots) / "diagnose.png", title=meta.serial)
+    if args.plots:  # created like every other output folder
+        path = write_plot(result, check_destination(args.plots, "--plots") / "diagnose.png",
+                          title=meta.serial)
         progress(f"wrote {path}")
     if args.json:
         print(json.dumps(out))

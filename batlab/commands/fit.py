@@ -6,7 +6,7 @@ import argparse
 import json
 import sys
 
-from batlab.cli_support import add_out_argument, add_plots_argument
+from batlab.cli_support import add_out_argument, add_plots_argument, note_printer
 from batlab.pipeline import IN_TO_M, KG_M2_TO_LB_IN2, LB_TO_KG, MIN_SNR
 
 EXAMPLE = "batlab fit baseline.uff --json"
@@ -181,13 +181,13 @@ def run(args: argparse.Namespace) -> int:
     """
     from batlab import pipeline
 
-    print(f"batlab fit: reading {args.test}", file=sys.stderr)
-    test = pipeline.read_test_file(args.test, require_driving=False)
+    test = pipeline.admit(args, note_printer("fit"),
+                          outputs={"out": "file", "plots": "dir"})["test"]
     print(f"batlab fit: {test.frf.shape[1]} x {test.frf.shape[2]} FRFs, "
           f"{test.freq_hz.size} lines; fitting ({args.method})", file=sys.stderr)
     fit = pipeline.fit_test_file(test, band_hz=args.band, method=args.method,
                                  max_order=args.max_order, known_mass_kg=args.mass_kg,
-                                 refine=args.refine, min_snr=args.min_snr)
+                                 refine=args.refine, min_snr=args.min_snr, name=args.test)
     print(f"batlab fit: {fit.freq_hz.size} modes"
           + ("" if fit.scaled else " (unscaled shapes: no driving point)"), file=sys.stderr)
     for line in explain(fit):

@@ -21,7 +21,7 @@ import json
 import os
 import time
 
-from batlab.cli_support import add_db_argument, db_path, progress_printer
+from batlab.cli_support import add_db_argument, db_path, note_printer, progress_printer
 
 EXAMPLE = ("batlab fleet calibrate --profile profile.csv --meta meta.json --n 3000 --seed 1 "
            "--json   (or: batlab fleet inspect retests/ --db lab.sqlite --json)")
@@ -67,9 +67,16 @@ def run(args: argparse.Namespace) -> int:
         Exit code: 0, or 1 when a re-test of ``inspect`` was refused (bad input raises
         ValueError or OSError; ``batlab.cli`` prints it in one line and exits 2).
     """
+    from batlab.pipeline import admit
+
     if not 0 < args.false_alarm < 0.5:
-        raise ValueError("--false-alarm must be between 0 and 0.5")
-    if args.action == "inspect":
+        raise ValueError(f"--false-alarm {args.false_alarm:g}: expected a rate between 0 and "
+                         "0.5")
+    inspecting = args.action == "inspect"
+    admit(args, note_printer(f"fleet {args.action}"),
+          outputs=None if inspecting else {"out": "file"},
+          registry=db_path(args) if inspecting else None)  # before any work
+    if inspecting:
         return _inspect(args)
     return _calibrate(args)
 

@@ -6,7 +6,7 @@ import argparse
 import json
 from dataclasses import asdict
 
-from batlab.cli_support import add_db_argument, db_path
+from batlab.cli_support import add_db_argument, db_path, note_printer
 from batlab.formatting import STATUS_WORDS, p_value_words
 
 EXAMPLE = "batlab history HX-1004 --json"
@@ -33,8 +33,10 @@ def run(args: argparse.Namespace) -> int:
         Exit code: 0 (bad input raises ValueError or OSError; ``batlab.cli`` prints
         it in one line and exits 2).
     """
+    from batlab.pipeline import admit
     from batlab.registry import get_bat, history, open_registry
 
+    admit(args, note_printer("history"), serial_label="SERIAL")
     with open_registry(db_path(args), create=False, readonly=True) as conn:
         bat = get_bat(conn, args.serial)
         rows = history(conn, args.serial)

@@ -16,7 +16,13 @@ from __future__ import annotations
 import argparse
 import json
 
-from batlab.cli_support import add_db_argument, add_out_argument, db_path, progress_printer
+from batlab.cli_support import (
+    add_db_argument,
+    add_out_argument,
+    db_path,
+    note_printer,
+    progress_printer,
+)
 
 EXAMPLE = ("batlab inspect --serial HX-1004 retest.uff -o report/   (or: --profile "
            "profile.csv --meta meta.json --baseline baseline.uff --retest retest.uff --json)")
@@ -78,18 +84,19 @@ def run(args: argparse.Namespace) -> int:
     progress = progress_printer("inspect")
     retest = _retest_path(args)
     if not 0 < args.false_alarm < 0.5:
-        raise ValueError("--false-alarm must be between 0 and 0.5")
-    for opt, path in (("-o/--out", args.out), ("--plots", args.plots)):
-        if path:  # before any work: an unwritable destination fails at once
-            from batlab.report import check_destination  # (plotting: only for a report)
-
-            check_destination(path, opt)
+        raise ValueError(f"--false-alarm {args.false_alarm:g}: expected a rate between 0 and "
+                         "0.5")
     stateless = (args.profile, args.meta, args.baseline)
+    if args.serial and any(stateless):
+        raise ValueError("--serial takes the bat from the registry: drop --profile, --meta "
+                         "and --baseline")
+    if not args.serial and not all(stateless):
+        raise ValueError("give --serial S, or all of --profile, --meta and --baseline")
+    db = db_path(args) if args.serial else None
+    pipeline.admit(args, note_printer("inspect"), outputs={"out": "dir", "plots": "dir"},
+                   registry=db)  # before any work: nothing is made or fitted for bad input
     if args.serial:
-        if any(stateless):
-            raise ValueError("--serial takes the bat from the registry: drop --profile, --meta "
-                             "and --baseline")
-        with open_registry(db_path(args), create=False) as conn:
+        with open_registry(db, create=False) as conn:
             done = None if args.again or args.retest_meta else \
                 pipeline.already_inspected(conn, args.serial, retest, args.false_alarm)
             if done is not None:
@@ -118,8 +125,6 @@ def run(args: argparse.Namespace) -> int:
                 if path is not None:
                     pipeline.note_report(conn, stored, path)
     else:
-        if not all(stateless):
-            raise ValueError("give --serial S, or all of --profile, --meta and --baseline")
         result = pipeline.inspect_files(args.profile, args.meta, args.baseline, retest,
                                         args.false_alarm, progress, args.retest_meta,
                                         with_map=bool(args.out or args.plots))

@@ -50,6 +50,7 @@ def run(args: argparse.Namespace) -> int:
     from batlab import pipeline
     from batlab.cli_support import note_printer
 
+    pipeline.admit(args, note_printer("model"))
     profile = pipeline.bat_profile(args.profile)
     material = pipeline.wood(args.meta, args.e_over_g, note_printer("model"))
     rotary = None if args.rotary_inertia is None else args.rotary_inertia == "on"

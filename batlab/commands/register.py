@@ -6,7 +6,7 @@ import argparse
 import json
 from pathlib import Path
 
-from batlab.cli_support import add_db_argument, db_path, progress_printer
+from batlab.cli_support import add_db_argument, db_path, note_printer, progress_printer
 
 EXAMPLE = "batlab register --profile profile.csv --meta meta.json --baseline baseline.uff"
 
@@ -46,8 +46,8 @@ def run(args: argparse.Namespace) -> int:
     from batlab.pipeline import (
         LBF_IN3_TO_KG_M3,
         PSI_TO_PA,
+        admit,
         prepare_registration,
-        read_bat_files,
         require_unregistered,
         store_registration,
     )
@@ -55,7 +55,7 @@ def run(args: argparse.Namespace) -> int:
 
     progress = progress_printer("register")
     path = db_path(args)
-    _, meta = read_bat_files(args.profile, args.meta)  # refused at the door: no registry made
+    meta = admit(args, note_printer("register"), registry=path, create=True)["meta"]
     if not args.replace and (is_url(path) or Path(path).is_file()):  # fail fast, before the fit
         with open_registry(path) as conn:
             require_unregistered(conn, meta.serial)

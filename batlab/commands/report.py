@@ -4,7 +4,13 @@ from __future__ import annotations
 
 import argparse
 
-from batlab.cli_support import add_db_argument, add_out_argument, db_path, progress_printer
+from batlab.cli_support import (
+    add_db_argument,
+    add_out_argument,
+    db_path,
+    note_printer,
+    progress_printer,
+)
 
 EXAMPLE = "batlab report HX-1004 --inspection 3 -o report-HX-1004-3"
 
@@ -40,6 +46,8 @@ def run(args: argparse.Namespace) -> int:
     from batlab.registry import history, open_registry
     from batlab.report import check_destination, write_report
 
+    pipeline.admit(args, note_printer("report"), outputs={"out": "dir", "plots": "dir"},
+                   serial_label="SERIAL")
     progress = progress_printer("report")
     with open_registry(db_path(args), create=False, readonly=True) as conn:
         rows = history(conn, args.serial)

@@ -71,6 +71,7 @@ def run(args: argparse.Namespace) -> int:
         default_info,
     )
 
+    pipeline.admit(args, note_printer("rig"), outputs={"tap_log": "file"})
     faults = tuple(f for f in args.faults.split(",") if f)
     unknown = [f for f in faults if f not in FAULTS]
     if unknown:

@@ -100,6 +100,11 @@ def run(args: argparse.Namespace) -> int:
         Exit code: 0 (bad input raises ValueError or OSError; ``batlab.cli`` prints
         it in one line and exits 2).
     """
+    from batlab import pipeline
+    from batlab.cli_support import note_printer
+
+    pipeline.admit(args, note_printer("simulate"), outputs={"out": "dir" if args.case else
+                                                            "file"})
     if isinstance(args.case, str):  # the old --case DIR
         print("batlab simulate: warning: --case DIR is deprecated and goes in the next "
               "release: use --case -o DIR", file=sys.stderr)
@@ -112,8 +117,6 @@ def run(args: argparse.Namespace) -> int:
         return run_case(args, args.out)
     import numpy as np
 
-    from batlab import pipeline
-    from batlab.cli_support import note_printer
     from batlab.pipeline import IN_TO_M
 
     profile = pipeline.bat_profile(args.profile)

@@ -4,6 +4,8 @@ A command (``batlab/commands/<name>.py``) parses its arguments, calls the functi
 with explicit arguments, and prints what they return (``batlab.formatting`` words it); it
 imports no stage module itself (tests/test_architecture.py checks it). One module per job:
 
+- ``door``: a command's options, input files and outputs checked before any work
+  (``admit``).
 - ``files``: the lab's files in and out (FRF tests, profile.csv, meta.json, retest.json,
   CSV).
 - ``modal``: `batlab fit` -- a test's modal analysis, its modes file and figures.
@@ -44,12 +46,15 @@ _SOURCES = {
     "batlab.pipeline.diagnosis": (
         "check_rig_files", "diagnose_files",
     ),
+    "batlab.pipeline.door": (
+        "admit", "check_output", "check_registry",
+    ),
     "batlab.pipeline.files": (
         "file_sha256", "read_bat_files", "read_conditions", "read_frf", "read_meta_dict",
         "write_csv",
     ),
     "batlab.pipeline.modal": (
-        "MIN_SNR", "fit_test_file", "plot_fit_files", "read_test_file", "write_modes_file",
+        "MIN_SNR", "fit_test_file", "plot_fit_files", "write_modes_file",
     ),
     "batlab.pipeline.inspection": (
         "InspectionCase", "InspectionResult", "calibrate_baseline", "fit_file",
@@ -80,8 +85,8 @@ _SOURCES = {
 """The module each public name is defined in."""
 
 _WHERE = {name: module for module, names in _SOURCES.items() for name in names}
-_SUBMODULES = ("acquisition", "bench", "diagnosis", "files", "inspection", "modal", "paper",
-               "records", "registered", "stored")
+_SUBMODULES = ("acquisition", "bench", "diagnosis", "door", "files", "inspection", "modal",
+               "paper", "records", "registered", "stored")
 
 __all__ = sorted(_WHERE)
 

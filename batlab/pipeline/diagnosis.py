@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from batlab.pipeline.files import Progress, quiet, read_bat_files, read_frf
+from batlab.pipeline.files import Progress, numeric_failure, quiet, read_bat_files, read_frf
 from updating.correlate.measured import from_fit
 from updating.correlate.points import sensor_x_m
 
@@ -41,7 +41,8 @@ def fit_frf_file(frf_path, method: str, progress: Progress = quiet):
 
     test = read_frf(frf_path)
     progress(f"fitting the modes of {frf_path} ...")
-    fit = fit_test(test, method=method)
+    with numeric_failure(str(frf_path)):
+        fit = fit_test(test, method=method)
     measured = from_fit(fit, sensor_x_m(test))
     if measured.freq_hz.size == 0:
         raise ValueError(f"{frf_path}: the fitter found no elastic mode above 20 Hz")

@@ -9,7 +9,8 @@ from __future__ import annotations
 import os
 import tempfile
 import warnings
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
 from pathlib import Path
 
 import numpy as np
@@ -34,35 +35,66 @@ def quiet(_: str) -> None:
     return None
 
 
-def read_frf(path: str | os.PathLike) -> FrfTest:
-    """Read an FRF test file (UFF, CSV, NPZ) with a driving point.
+def read_frf(path: str | os.PathLike, require_driving: bool = True) -> FrfTest:
+    """Read an FRF test file (UFF, CSV, NPZ), with a driving point unless told otherwise.
 
     Parameters
     ----------
     path : str or os.PathLike
         The file.
+    require_driving : bool
+        Refuse a test without a driving-point FRF (``batlab fit`` reads without).
 
     Returns
     -------
     FrfTest
-        Its FRFs.
+        Its FRFs (each holding a signal at a usable scale: ``ema.io.frf_io.read_test``).
 
     Raises
     ------
     ValueError
-        A one-line error naming the file when it is missing or unreadable.
+        A one-line error naming the file when it is missing, unreadable or unusable.
     """
     from ema.io.frf_io import read_test
 
     path = Path(path)
     if not path.is_file():
-        raise ValueError(f"{path}: no such file")
+        raise ValueError(f"{path}: is a directory, not a file" if path.is_dir() else
+                         f"{path}: no such file")
     try:
-        return read_test(path)
-    except (ValueError, OSError):
+        return read_test(path, require_driving=require_driving)
+    except ValueError:
         raise
+    except OSError as exc:
+        raise ValueError(f"{path}: cannot read ({exc.strerror or exc})") from None
     except Exception as exc:  # a reader's internal error on a damaged file
         raise ValueError(f"{path}: unreadable FRF file ({type(exc).__name__}: {exc})") from None
+
+
+@contextmanager
+def numeric_failure(name: str) -> Iterator[None]:
+    """Make a failure inside the block one line naming the file.
+
+    A fit's linear algebra failing on a file's numbers (``LinAlgError`` "Singular matrix",
+    an overflow) is a ValueError naming ``name`` and the usual cause (the file's units or
+    scale); another ValueError (scipy's "Residuals are not finite", a band too narrow) gets
+    the file's name in front.
+
+    Parameters
+    ----------
+    name : str
+        The file the block works on.
+    """
+    try:
+        yield
+    except (ArithmeticError, np.linalg.LinAlgError) as exc:
+        text = " ".join(str(exc).split()) or type(exc).__name__
+        raise ValueError(f"{name}: the fit failed on its numbers ({text}): check the FRFs' "
+                         "units and scale") from None
+    except ValueError as exc:
+        if str(exc).startswith(name):
+            raise
+        raise ValueError(f"{name}: {exc}") from None
 
 
 def frf_from_bytes(content: bytes, name: str, label: str | None = None) -> FrfTest:
@@ -112,11 +144,31 @@ def read_bat_files(profile_path, meta_path) -> tuple[Profile, BatMeta]:
         A missing file, test points off the bat, or a value no wooden bat has
         (``updating.model.plausible``), naming the file.
     """
-    for p in (profile_path, meta_path):
-        if not Path(p).is_file():
-            raise ValueError(f"{p}: no such file")
-    profile = _read_profile_naming_slips(profile_path)
-    meta = _read_meta_naming_slips(meta_path)
+    profile, meta = read_profile(profile_path), read_meta_file(meta_path)
+    check_bat(profile, meta, profile_path, meta_path)
+    return profile, meta
+
+
+def check_bat(profile: Profile, meta: BatMeta, profile_path, meta_path) -> None:
+    """Check a bat's profile and meta.json together against what a wooden bat can be.
+
+    ``updating.model.plausible``: the profile's length and diameters, meta.json's weight and
+    species values, and its test points on the bat.
+
+    Parameters
+    ----------
+    profile : Profile
+        The outer profile.
+    meta : BatMeta
+        The bat's meta.json.
+    profile_path, meta_path : str or os.PathLike
+        The two files, for the message.
+
+    Raises
+    ------
+    ValueError
+        One line naming the file and the key.
+    """
     message = (plausible.check_profile(profile.x_m, profile.diameter_m, str(profile_path))
                or plausible.check_meta(meta.extra, str(meta_path))
                or plausible.check_points(meta.points_m, profile.x_m, POINT_TOL_M, str(meta_path)))
@@ -125,11 +177,13 @@ def read_bat_files(profile_path, meta_path) -> tuple[Profile, BatMeta]:
     if meta.points_m.size and meta.points_m.max() > profile.length_m + POINT_TOL_M:
         raise ValueError(f"{meta_path}: points_in run past the end of the bat "
                          f"({profile.length_m / IN_TO_M:.2f} in long in {profile_path})")
-    return profile, meta
 
 
-def _read_profile_naming_slips(path) -> Profile:
-    """Read profile.csv; one refused for its size that is in mm (or cm, m) is named so."""
+def read_profile(path) -> Profile:
+    """Read profile.csv (``read_profile_csv``).
+
+    One refused for its size that is in mm (or cm, m) is named so.
+    """
     try:
         return read_profile_csv(path)
     except ValueError:
@@ -147,8 +201,11 @@ def _read_profile_naming_slips(path) -> Profile:
         raise
 
 
-def _read_meta_naming_slips(path) -> BatMeta:
-    """Read meta.json; a value outside its range that is a unit slip is named as one."""
+def read_meta_file(path) -> BatMeta:
+    """Read meta.json (``read_meta``).
+
+    A value outside its range that is a unit slip is named as one (``plausible.check_meta``).
+    """
     try:
         return read_meta(path)
     except ValueError:

@@ -17,7 +17,14 @@ from pathlib import Path
 
 import numpy as np
 
-from batlab.pipeline.files import Progress, quiet, read_bat_files, read_conditions, read_frf
+from batlab.pipeline.files import (
+    Progress,
+    numeric_failure,
+    quiet,
+    read_bat_files,
+    read_conditions,
+    read_frf,
+)
 from batlab.pipeline.records import FittedTest
 from ema.io.frf_data import FrfTest
 from updating.correlate import fitted
@@ -126,10 +133,11 @@ def fit_file(name: str, test: FrfTest, weight_kg: float | None,
     Raises
     ------
     ValueError
-        When the fit finds no elastic mode, naming the file.
+        When the fit finds no elastic mode or fails on the numbers, naming the file.
     """
     progress(f"fitting modes of {name} ({test.frf.shape[2]} FRFs, {test.freq_hz.size} lines)")
-    fit, modes = fitted.fit_measured(test, weight_kg)
+    with numeric_failure(name):
+        fit, modes = fitted.fit_measured(test, weight_kg)
     if modes.freq_hz.size == 0:
         raise ValueError(f"{name}: no elastic mode found in the test")
     if order is not None:

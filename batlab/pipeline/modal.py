@@ -6,29 +6,9 @@ from ema.io.frf_data import FrfTest
 from ema.modal_fit import MIN_SNR
 
 
-def read_test_file(path, require_driving: bool = True) -> FrfTest:
-    """Read an FRF test file as ``ema.io.frf_io.read_test`` reads it.
-
-    Parameters
-    ----------
-    path : str or os.PathLike
-        The file.
-    require_driving : bool
-        False allows a test without a driving point (`batlab fit`).
-
-    Returns
-    -------
-    FrfTest
-        Its FRFs.
-    """
-    from ema.io.frf_io import read_test
-
-    return read_test(path, require_driving=require_driving)
-
-
 def fit_test_file(test: FrfTest, band_hz=None, method: str = "lscf", max_order=None,
                   known_mass_kg: float | None = None, refine: bool = False,
-                  min_snr: float = MIN_SNR):
+                  min_snr: float = MIN_SNR, name: str = "the test"):
     """Run `batlab fit`'s automatic modal analysis of a test (``ema.modal_fit.fit_test``).
 
     Parameters
@@ -47,16 +27,20 @@ def fit_test_file(test: FrfTest, band_hz=None, method: str = "lscf", max_order=N
         Refine the poles by a nonlinear fit.
     min_snr : float
         The least signal-to-noise ratio of a kept mode.
+    name : str
+        The file, named when the fit fails on its numbers.
 
     Returns
     -------
     ModalFit
         The fit.
     """
+    from batlab.pipeline.files import numeric_failure
     from ema.modal_fit import fit_test
 
-    return fit_test(test, band_hz=band_hz, method=method, max_order=max_order,
-                    known_mass_kg=known_mass_kg, refine=refine, min_snr=min_snr)
+    with numeric_failure(name):
+        return fit_test(test, band_hz=band_hz, method=method, max_order=max_order,
+                        known_mass_kg=known_mass_kg, refine=refine, min_snr=min_snr)
 
 
 def write_modes_file(path, fit) -> None:

@@ -40,5 +40,8 @@ def finite_number(value, what: str, lo: float = -math.inf, hi: float = math.inf)
     if not math.isfinite(number):
         raise ValueError(f"{what} must be a finite number, not {value!r}")
     if not lo <= number <= hi:
+        if math.isinf(lo) or math.isinf(hi):
+            raise ValueError(f"{what} = {number:g} is " + (f"above {hi:g}" if number > hi
+                                                          else f"below {lo:g}"))
         raise ValueError(f"{what} = {number:g} is outside {lo:g}..{hi:g}")
     return number

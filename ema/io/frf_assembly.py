@@ -1,13 +1,21 @@
 """Checks and assembly shared by the FRF file readers (UFF, CSV).
 
-One frequency axis, an even spacing, finite values, and a full response x reference matrix
-of FRFs.
+One frequency axis, an even spacing, finite values, a full response x reference matrix of
+FRFs, and FRFs that hold a signal at a scale double precision can fit.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
+SCALE_RANGE = (1e-15, 1e15)
+"""Accepted largest |H| of a test, SI: any structure's accelerance, mobility or receptance
+lies well inside (a bat's accelerance peaks at 10-1000 (m/s^2)/N, a stiff machine's
+receptance at 1e-11 m/N); beyond, the file's units or scale are wrong, and a fit's sums of
+squares would overflow or underflow."""
+DEAD_REL = 1e-9
+"""An FRF whose largest |H| is below this fraction of the test's largest holds no signal (a
+missed hit, a dead channel, a zeroed column)."""
 EVEN_TOL = 0.05
 """Largest deviation of a frequency line from the even grid f0 + k df, as a fraction of df.
 
@@ -87,3 +95,35 @@ def assemble(
             "(the FRFs must form a full response x reference matrix)"
         )
     return np.array(resp, dtype=int), np.array(ref, dtype=int), out
+
+
+def require_signal(frf: np.ndarray, response_nodes, reference_nodes, where: str) -> None:
+    """Raise ValueError naming ``where`` unless every FRF holds a signal at a usable scale.
+
+    The test's largest |H| must lie within ``SCALE_RANGE`` and each FRF's largest |H| must
+    reach ``DEAD_REL`` of it (an all-zero FRF is refused by name: its response and
+    reference nodes).
+
+    Parameters
+    ----------
+    frf : numpy.ndarray
+        (F, n_resp, n_ref) FRFs, SI, finite.
+    response_nodes, reference_nodes : sequence of int
+        The node numbers of the FRF matrix's rows and columns.
+    where : str
+        The file, for the message.
+    """
+    peak = np.abs(frf).max(axis=0)  # (n_resp, n_ref)
+    top = float(peak.max(initial=0.0))
+    if top == 0.0:
+        raise ValueError(f"{where}: every FRF is zero at every line (no signal)")
+    lo, hi = SCALE_RANGE
+    if not lo <= top <= hi:
+        raise ValueError(f"{where}: the FRFs' largest magnitude is {top:.3g} (SI), outside "
+                         f"{lo:g}-{hi:g}: check the file's units and scale")
+    dead = np.argwhere(peak < DEAD_REL * top)
+    if dead.size:
+        i, j = dead[0]
+        raise ValueError(f"{where}: the FRF of response node {int(response_nodes[i])} / "
+                         f"reference node {int(reference_nodes[j])} is zero at every line "
+                         f"({len(dead)} such FRF(s): a missed hit or a dead channel)")

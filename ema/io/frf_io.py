@@ -1,7 +1,8 @@
 """One entry point for FRF test files, by extension: .uff/.unv (UFF), .csv, .npz.
 
-``read_test`` is the reader the pipeline uses: besides reading, it demands a driving point
-(a reference node equal to a response node), as the input contract does.
+``read_test`` is the reader the pipeline uses: besides reading, it demands FRFs that hold a
+signal at a usable scale (``frf_assembly.require_signal``) and a driving point (a reference
+node equal to a response node), as the input contract does.
 """
 
 from __future__ import annotations
@@ -9,6 +10,7 @@ from __future__ import annotations
 import os
 from pathlib import Path
 
+from ema.io.frf_assembly import require_signal
 from ema.io.frf_csv import read_frf_csv, write_frf_csv
 from ema.io.frf_data import FrfTest
 from ema.io.frf_npz import read_frf_npz, write_frf_npz
@@ -41,8 +43,9 @@ def require_driving_point(test: FrfTest, path: str | os.PathLike) -> FrfTest:
 def read_test(path: str | os.PathLike, require_driving: bool = True) -> FrfTest:
     """Read an FRF test file of any supported type (.uff/.unv, .csv, .npz).
 
-    By default the test must have a driving point; ``batlab fit`` reads without the check (it
-    then gives unscaled shapes).
+    Every FRF must hold a signal at a usable scale (``require_signal``). By default the test
+    must have a driving point; ``batlab fit`` reads without that check (it then gives
+    unscaled shapes).
 
     Parameters
     ----------
@@ -65,6 +68,7 @@ def read_test(path: str | os.PathLike, require_driving: bool = True) -> FrfTest:
     """
     path = Path(path)
     test = READERS[_suffix(path, READERS)](path)
+    require_signal(test.frf, test.response_nodes, test.reference_nodes, str(path))
     return require_driving_point(test, path) if require_driving else test
 
 

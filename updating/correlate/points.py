@@ -98,6 +98,38 @@ def match_points(baseline_x_m: np.ndarray, retest_x_m: np.ndarray, retest_name: 
     return order
 
 
+def listed_points_reason(listed_m: np.ndarray, tested_m: np.ndarray,
+                         test_name: str) -> str | None:
+    """Say how a list of impact points (meta.json's points_in) differs from a test's.
+
+    They agree when they have as many points and, in order along the bat, each listed point
+    is within ``POINT_TOL_M`` of a tested one.
+
+    Parameters
+    ----------
+    listed_m, tested_m : numpy.ndarray
+        The listed points and the test's impact points, from the knob end, m.
+    test_name : str
+        The test's file, for the message.
+
+    Returns
+    -------
+    str or None
+        What differs, in inches ("has 16 points, baseline.uff has 17 impact points"), None
+        when they agree.
+    """
+    a = np.sort(np.asarray(listed_m, dtype=float))
+    b = np.sort(np.asarray(tested_m, dtype=float))
+    if a.size != b.size:
+        return f"has {a.size} points, {test_name} has {b.size} impact points"
+    miss = np.abs(a - b)
+    if miss.max(initial=0.0) > POINT_TOL_M:
+        k = int(np.argmax(miss))
+        return (f"has {a[k] / IN_TO_M:.2f} in where {test_name} has its impact point at "
+                f"{b[k] / IN_TO_M:.2f} in (more than {POINT_TOL_M / IN_TO_M:.2f} in apart)")
+    return None
+
+
 def reorder(modes: MeasuredModes, order: np.ndarray) -> MeasuredModes:
     """Take the modes' point rows in another order.
 

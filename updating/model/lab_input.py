@@ -1,8 +1,11 @@
 """A bat's lab inputs (meta.json) turned into model inputs, and alteration specs.
 
-meta.json (docs/contract.md): serial, species, nominal_E_psi,
-nominal_weight_density_lbf_in3, weight_lb, points_in; the optional accelerometer_mass_g (the
-accelerometer's data sheet, used by diagnose as a prior); other keys are ignored.
+meta.json (docs/contract.md): ``META_KEYS`` says what each key must hold: serial (a
+``serial_problem``-free text), species, nominal_E_psi, nominal_weight_density_lbf_in3,
+weight_lb (the bat on a scale: the registration's mass-line check needs it) and points_in
+(the impact points) are required; the baseline's own conditions (``CONDITION_KEYS``:
+accelerometer_mass_g, used by diagnose as a prior, temperature_c, tested_on) are optional;
+other keys are ignored (``json_input.unused_keys`` lists them).
 """
 
 from __future__ import annotations
@@ -12,18 +15,62 @@ from pathlib import Path
 
 import numpy as np
 
-from ema.io.finite import finite_number
-from updating.model.json_input import read_json_object
+from updating.model.json_input import Key, read_json_object, read_keys
 from updating.model.material import ISOTROPIC_E_OVER_G, Material, material_from_imperial
 from updating.model.sections import Core
 from updating.model.units import IN_TO_M, LB_TO_KG
 
-META_RANGES = {  # key: (lowest, highest) accepted, in the file's units; wider than any bat
-    "nominal_E_psi": (1e4, 1e8),
-    "nominal_weight_density_lbf_in3": (1e-4, 1.0),
-    "weight_lb": (0.05, 50.0),
-    "points_in": (-10.0, 100.0),
+SERIAL_MAX_CHARS = 64
+"""Longest serial number (a league's are under 20 characters)."""
+
+
+def serial_problem(serial: str) -> str | None:
+    """Say why a text cannot be a bat's serial number, None when it can.
+
+    A serial names the bat in the registry, in reports and in file names
+    (``fleet inspect``'s ``SERIAL.uff``): 1 to ``SERIAL_MAX_CHARS`` printable ASCII
+    characters, no path separator, no space at either end, not ``.`` or ``..``.
+
+    Parameters
+    ----------
+    serial : str
+        The text.
+
+    Returns
+    -------
+    str or None
+        What it must be ("must be at most 64 characters (this one has 10000)"), or None.
+    """
+    if not serial.strip():
+        return "must not be empty"
+    if len(serial) > SERIAL_MAX_CHARS:
+        return f"must be at most {SERIAL_MAX_CHARS} characters (this one has {len(serial)})"
+    if any(not " " <= c <= "~" for c in serial):
+        return "must be printable ASCII (letters, digits, - _ . and the like)"
+    if "/" in serial or "\\" in serial or serial in (".", ".."):
+        return "must not hold a path separator (/ or \\) or be . or .."
+    if serial != serial.strip():
+        return "must not begin or end with a space"
+    return None
+
+
+CONDITION_KEYS = {  # retest.json's keys (every one optional); meta.json's at the baseline
+    "weight_lb": Key("number", "lb", 0.5, 5.0),
+    "accelerometer_mass_g": Key("number", "g", 0.0, 100.0),
+    "temperature_c": Key("number", "C", -20.0, 60.0),
+    "tested_on": Key("date"),
 }
+"""A test's own conditions (the re-test's retest.json, the baseline's in meta.json)."""
+META_KEYS = {  # ranges wider than any bat: plausible.check_meta judges a bat's values
+    "serial": Key("text", required=True, rule=serial_problem),
+    "species": Key("text", required=True),
+    "nominal_E_psi": Key("number", "psi", 1e4, 1e8, required=True),
+    "nominal_weight_density_lbf_in3": Key("number", "lbf/in^3", 1e-4, 1.0, required=True),
+    "weight_lb": Key("number", "lb", 0.05, 50.0, required=True),
+    "points_in": Key("numbers", "in from the knob end", -10.0, 100.0, required=True),
+    **{k: v for k, v in CONDITION_KEYS.items() if k != "weight_lb"},
+}
+"""What each key of meta.json must hold."""
 
 
 @dataclass(frozen=True)
@@ -37,7 +84,7 @@ class BatMeta:
     material : Material
         The species' handbook wood.
     weight_kg : float or None
-        The registered weight, kg.
+        The registered weight, kg (None only for a bat registered before it was required).
     points_m : ndarray
         The impact points from the knob end, m.
     extra : dict
@@ -56,39 +103,29 @@ class BatMeta:
 
 
 def read_meta(path: str | Path, e_over_g: float = ISOTROPIC_E_OVER_G) -> BatMeta:
-    """Read meta.json; raise ValueError naming the file and the missing/bad key."""
+    """Read meta.json; raise ValueError naming the file, the key and what was expected.
+
+    Parameters
+    ----------
+    path : str or Path
+        meta.json.
+    e_over_g : float
+        The wood's E/G.
+
+    Returns
+    -------
+    BatMeta
+        The bat's inputs, SI.
+    """
     path = Path(path)
     raw = read_json_object(path)
-    for key in ("serial", "nominal_E_psi", "nominal_weight_density_lbf_in3"):
-        if key not in raw:
-            raise ValueError(f"{path}: missing key {key!r}")
-
-    def scalar(key: str) -> float:
-        lo, hi = META_RANGES.get(key, (-np.inf, np.inf))
-        return finite_number(raw[key], f"{path}: key {key!r}", lo, hi)
-
-    E = scalar("nominal_E_psi")
-    wd = scalar("nominal_weight_density_lbf_in3")
-    weight_kg = None if raw.get("weight_lb") is None else scalar("weight_lb") * LB_TO_KG
-    try:
-        points = np.asarray(raw.get("points_in", []), dtype=float).reshape(-1)
-    except (TypeError, ValueError, OverflowError):
-        raise ValueError(f"{path}: key 'points_in' must be a list of numbers (inches from the "
-                         "knob end)") from None
-    for k, x in enumerate(points):
-        finite_number(x, f"{path}: key 'points_in'[{k}]", *META_RANGES["points_in"])
-    points = points * IN_TO_M
-    if E <= 0 or wd <= 0 or (weight_kg is not None and weight_kg <= 0):
-        raise ValueError(f"{path}: modulus, density and weight must be positive")
-    sensor_kg = None
-    if raw.get("accelerometer_mass_g") is not None:
-        sensor_g = scalar("accelerometer_mass_g")
-        if not 0.0 <= sensor_g <= 100.0:
-            raise ValueError(f"{path}: key 'accelerometer_mass_g' = {sensor_g:g} is outside "
-                             "0-100 g")
-        sensor_kg = 1e-3 * sensor_g
-    return BatMeta(str(raw["serial"]), str(raw.get("species", "")),
-                   material_from_imperial(E, wd, e_over_g), weight_kg, points, raw, sensor_kg)
+    v = read_keys(raw, META_KEYS, path)
+    sensor_g = v.get("accelerometer_mass_g")
+    return BatMeta(v["serial"], v["species"],
+                   material_from_imperial(v["nominal_E_psi"],
+                                          v["nominal_weight_density_lbf_in3"], e_over_g),
+                   v["weight_lb"] * LB_TO_KG, np.array(v["points_in"]) * IN_TO_M, raw,
+                   None if sensor_g is None else 1e-3 * sensor_g)
 
 
 FILL_DEFAULTS = {"cork": 1 / 3, "heavy": 1.8, "neutral": 1.0, "core": 1 / 3}

@@ -73,12 +73,14 @@ def make_profile(x_m, diameter_m, source: str = "profile") -> Profile:
     return Profile(x - x[0], d)
 
 
-def read_profile_csv(path: str | Path) -> Profile:
-    """Read a caliper profile CSV (``x_in,diameter_in``, inches) into SI.
+PROFILE_COLUMNS = ("x_in", "diameter_in")
+"""The columns profile.csv must have; others are ignored (``unused_columns``)."""
 
-    A spreadsheet's byte-order mark, Windows line ends and blank lines are accepted.
-    """
-    path = Path(path)
+
+def _read_table(path: Path) -> tuple[list[str], list[list[str]]]:
+    """Read a CSV file's header (cells stripped) and its non-blank rows."""
+    if path.is_dir():
+        raise ValueError(f"{path}: is a directory, not a file")
     try:
         with path.open(newline="", encoding="utf-8-sig") as fh:
             reader = csv.reader(fh)
@@ -86,18 +88,56 @@ def read_profile_csv(path: str | Path) -> Profile:
                 header = [h.strip() for h in next(reader)]
             except StopIteration:
                 raise ValueError(f"{path}: empty file") from None
-            rows = [r for r in reader if any(c.strip() for c in r)]
+            return header, [r for r in reader if any(c.strip() for c in r)]
     except UnicodeDecodeError:
         raise ValueError(f"{path}: not a text file (UTF-8 CSV expected)") from None
-    for col in ("x_in", "diameter_in"):
+    except csv.Error as exc:
+        raise ValueError(f"{path}: not a CSV file ({exc})") from None
+    except FileNotFoundError:
+        raise ValueError(f"{path}: no such file") from None
+    except OSError as exc:
+        raise ValueError(f"{path}: cannot read ({exc.strerror})") from None
+
+
+def unused_columns(path: str | Path) -> list[str]:
+    """Return the columns of profile.csv that batlab does not read (ignored), in file order."""
+    header, _ = _read_table(Path(path))
+    return [h for h in header if h not in PROFILE_COLUMNS]
+
+
+def _swapped(path: Path, x: list[float], d: list[float]) -> str | None:
+    """Say whether the two columns hold each other's values (a swapped header)."""
+    xs, ds = np.array(x), np.array(d)
+    if xs.size > 2 and np.all(np.diff(ds) >= 0) and ds.max() > 2 * xs.max() and ds.max() > 5:
+        return (f"{path}: columns x_in and diameter_in look swapped (diameter_in rises to "
+                f"{ds.max():.4g} as x does, x_in stays within {xs.min():.3g}-{xs.max():.3g} "
+                "as a diameter does): the header must name the columns as they are")
+    return None
+
+
+def read_profile_csv(path: str | Path) -> Profile:
+    """Read a caliper profile CSV (``x_in,diameter_in``, inches) into SI.
+
+    A spreadsheet's byte-order mark, Windows line ends and blank lines are accepted; other
+    columns are ignored. Errors are one line naming the file (and the row and column).
+    """
+    path = Path(path)
+    header, rows = _read_table(path)
+    for col in PROFILE_COLUMNS:
         if col not in header:
             raise ValueError(f"{path}: missing column {col!r} (header must be x_in,diameter_in)")
     ix, idia = header.index("x_in"), header.index("diameter_in")
-    try:
-        x = [float(r[ix]) for r in rows]
-        d = [float(r[idia]) for r in rows]
-    except (ValueError, IndexError):
-        raise ValueError(f"{path}: a row is not two numbers") from None
+    x, d = [], []
+    for n, r in enumerate(rows, 2):
+        try:
+            x.append(float(r[ix]))
+            d.append(float(r[idia]))
+        except (ValueError, IndexError):
+            raise ValueError(f"{path}: row {n} is not two numbers x_in,diameter_in "
+                             f"({','.join(r)[:40]!r})") from None
+    swapped = _swapped(path, x, d)
+    if swapped:
+        raise ValueError(swapped)
     for n, (xi, di) in enumerate(zip(x, d, strict=True), 2):
         finite_number(xi, f"{path}: row {n} x_in", -100.0, 200.0)
         finite_number(di, f"{path}: row {n} diameter_in", -np.inf, 20.0)
