@@ -11,6 +11,9 @@ calibration, inspection). Nothing here is altered: every ``altered`` is a false 
     # per bat, search the nuisances for the largest F (random starts, then a (1+1)-ES)
     OPENBLAS_NUM_THREADS=1 nice -n 10 python benchmarks/bench_worst_case.py search \
         --bats 6 --budget 25 --starts 10 --offset 100 --out search.jsonl
+    # the band-edge constructor's bats (issue 36: the other plane's mode last, a legal grip)
+    OPENBLAS_NUM_THREADS=1 nice -n 10 python benchmarks/bench_worst_case.py band_edge \
+        --bats 12 --out band_edge.jsonl
     # the tables again from saved rows
     python benchmarks/bench_worst_case.py summary ablation.jsonl search.jsonl
 
@@ -40,7 +43,7 @@ from pathlib import Path  # noqa: E402
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from batlab.fleet.runner import fleet_map  # noqa: E402
-from batlab.fleet.worst_case import ablation_row, search_bat  # noqa: E402
+from batlab.fleet.worst_case import ablation_row, band_edge_row, search_bat  # noqa: E402
 from updating.simulate import wide  # noqa: E402
 from updating.simulate.worst_case import quantile_table, worst_table  # noqa: E402
 
@@ -78,7 +81,7 @@ def write_rows(path, rows: list[dict]) -> None:
 
 def print_tables(ablation: list[dict], searched: list[dict]) -> None:
     if ablation:
-        print("\n## Clean F per wide nuisance (ablation)\n")
+        print("\n## Clean F per group of wide nuisances\n")
         print(quantile_table(ablation))
     if searched:
         print("\n## Worst cases (searched per bat)\n")
@@ -94,7 +97,7 @@ def print_tables(ablation: list[dict], searched: list[dict]) -> None:
 
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("action", choices=("ablation", "search", "summary"))
+    ap.add_argument("action", choices=("ablation", "band_edge", "search", "summary"))
     ap.add_argument("files", nargs="*", help="summary: JSON-lines files of earlier runs")
     ap.add_argument("--bats", type=int, default=4)
     ap.add_argument("--purpose", choices=("development", "validation"), default="development")
@@ -116,8 +119,14 @@ def main(argv=None) -> int:
                 if s]
         print_tables([r for r in rows if "group" in r], [r for r in rows if "evaluations" in r])
         return 0
-    if args.action == "ablation":
-        rows = fleet_map(ablation_row, ablation_jobs(args), args.workers, "bat", args.scheduler)
+    if args.action in ("ablation", "band_edge"):
+        if args.action == "ablation":
+            fn, jobs = ablation_row, ablation_jobs(args)
+        else:
+            fn, jobs = band_edge_row, [
+                {"seed": s, "with_meta": not args.no_retest_meta, "cache": args.cache}
+                for s in wide.fleet_seeds(args.bats, args.purpose, args.offset)]
+        rows = fleet_map(fn, jobs, args.workers, "bat", args.scheduler)
         write_rows(args.out, rows)
         print_tables(rows, [])
     else:

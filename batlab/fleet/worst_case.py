@@ -6,8 +6,8 @@ An evaluation (``evaluate_wide``) makes the bat of a seed under a nuisance vecto
 inspection, without the MSSO map, which does not change the verdict). With a cache folder the
 built inputs are kept (``<seed>_<hash of the settings>.pkl``) and only the inspection runs
 again on a later call: for re-scoring after a change of the inspection alone (not of the
-modal fit or the calibration). ``ablation_row`` and ``search_bat`` are the benchmark's jobs
-(module-level, for ``fleet_map``).
+modal fit or the calibration). ``ablation_row``, ``band_edge_row`` and ``search_bat`` are the
+benchmark's jobs (module-level, for ``fleet_map``).
 """
 
 from __future__ import annotations
@@ -82,7 +82,12 @@ def evaluate_wide(seed: int, unit: np.ndarray, nuisances, with_meta: bool = True
         The inspection row's main keys (``KEEP``), the settings and what they made (the
         truth's ``drawn``).
     """
-    settings = wide.settings_of(unit, nuisances)
+    return evaluate_settings(seed, wide.settings_of(unit, nuisances), with_meta, cache)
+
+
+def evaluate_settings(seed: int, settings: dict, with_meta: bool = True,
+                      cache: Path | None = None) -> tuple[float | None, str, dict]:
+    """Inspect the bat of ``seed`` under physical ``settings`` (``evaluate_wide``'s result)."""
     bat = _built(seed, settings, with_meta, cache)
     full = score_one(bat, with_map=False)
     row = {k: full[k] for k in KEEP if k in full}
@@ -91,6 +96,22 @@ def evaluate_wide(seed: int, unit: np.ndarray, nuisances, with_meta: bool = True
     row["made"] = {k: v for k, v in drawn.items() if k != "wide"}
     F = full.get("F")
     return (None if F is None else float(F)), full["status"], row
+
+
+def band_edge_row(job: dict) -> dict:
+    """Inspect one ``wide.band_edge_case`` (job: seed, with_meta, cache): a row as ablation's.
+
+    Group "band_edge_case"; a seed the constructor refuses gives status "sim_error".
+    """
+    seed = job["seed"]
+    out = {"group": "band_edge_case", "seed": seed}
+    try:
+        case = wide.band_edge_case(seed)
+    except ValueError as exc:
+        return {**out, "status": "sim_error", "F": None, "reasons": [str(exc)]}
+    F, status, row = evaluate_settings(seed, case.truth["drawn"]["wide"],
+                                       job.get("with_meta", True), job.get("cache"))
+    return {**out, **row, "F": F, "status": status}
 
 
 def ablation_row(job: dict) -> dict:
