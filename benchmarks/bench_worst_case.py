@@ -89,10 +89,13 @@ def print_tables(ablation: list[dict], searched: list[dict]) -> None:
         for b in searched:
             ev = [e for e in b["evaluations"] if e.get("F") is not None]
             bad = [e for e in b["evaluations"] if e["status"] in ("altered", "inconclusive")]
-            for e in ([max(ev, key=lambda e: e["F"])] if ev else []) + bad:
-                print(f"\nbat {b['seed']} evaluation {e['index']} ({e['phase']}): F "
-                      f"{e.get('F')}, {e['status']}; {'; '.join(e.get('reasons', [])[:2])}\n"
-                      f"  settings {json.dumps(e.get('settings'), default=lambda v: round(v, 3))}")
+            top = [max(ev, key=lambda e: e["F"])] if ev else []
+            for e in top + [e for e in bad if e not in top]:
+                F = "-" if e.get("F") is None else f"{e['F']:.3g}"
+                print(f"\n- bat {b['seed']} ({b['handle']}) evaluation {e['index']} "
+                      f"({e['phase']}): F {F}, {e['status']}: "
+                      f"{(e.get('reasons') or [''])[0]}\n"
+                      f"  {wide.describe(e.get('settings') or {}, e.get('made'))}")
 
 
 def main(argv=None) -> int:

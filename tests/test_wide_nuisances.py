@@ -249,3 +249,14 @@ def test_a_tapered_coat_shares_its_mass_by_the_mean_thickness():
     assert tapered.region_in == (1.0, 13.0) and tapered.reading["taper"] == 1.0
     even = coating("pine_tar", 8.0, 1.0, 13.0)
     assert len(even.changes) == 1 and even.reading == {"added_mass_g": 8.0}
+
+
+def test_describe_says_every_nuisance_that_is_on():
+    s = wide.settings_of(wide.random_unit(np.random.default_rng(1), wide.WIDE_NUISANCES),
+                         wide.WIDE_NUISANCES)
+    text = wide.describe(s)
+    for word in ("moisture", "%/pt", " C (E", "angle", "band top", "points", "sensor",
+                 "bungees", "over", "pine tar", "noise"):
+        assert word in text
+    assert wide.describe({}) == "none"
+    assert wide.describe({"bungees": {"factor": 1.25}}) == "bungees x1.25"

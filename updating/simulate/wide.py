@@ -545,3 +545,76 @@ def fleet_nuisances(index: int, nuisances=WIDE_NUISANCES) -> tuple[str, ...]:
 def fleet_start(seed: int, nuisances) -> np.ndarray:
     """Return a fleet bat's random nuisance vector (``random_unit`` of generator [seed, 1])."""
     return random_unit(np.random.default_rng([seed, 1]), nuisances)
+
+
+def describe(settings: dict, made: dict | None = None) -> str:
+    """Say a nuisance vector's settings in one line, in the lab's units.
+
+    Parameters
+    ----------
+    settings : dict
+        ``{nuisance: {coordinate: value}}`` (``settings_of``).
+    made : dict or None
+        What the settings made (``truth["drawn"]`` without ``wide``): the band edge's mode
+        and pair, the moisture's range.
+
+    Returns
+    -------
+    str
+        E.g. "moisture +0.8 pt (ends x1.9 / x1.6, decay 2.0 / 2.0 in); angle 17 -> 20 deg;
+        ...", nuisances in ``WIDE_NUISANCES`` order, "; "-separated ("none" without any).
+    """
+    made = made or {}
+    parts = []
+    m, sh = settings.get("moisture_shape"), settings.get("moisture_shear")
+    if m:
+        txt = (f"moisture {m['middle_pct']:+.2f} pt (ends x{m['knob_ratio']:.1f} / "
+               f"x{m['barrel_ratio']:.1f}, decay {m['knob_decay_in']:.1f} / "
+               f"{m['barrel_decay_in']:.1f} in; gradient {m['gradient_pct']:+.2f} pt; patch "
+               f"{m['patch_pct']:+.2f} pt at {100 * m['patch_at']:.0f} %, "
+               f"+-{m['patch_half_in']:.1f} in)")
+        rng_pct = (made.get("moisture") or {}).get("range_pct")
+        if rng_pct:
+            txt += f" [{rng_pct[0]:+.1f}..{rng_pct[1]:+.1f} pt]"
+        parts.append(txt)
+    if sh:
+        mid = "" if m else f"moisture {sh['middle_pct']:+.2f} pt uniform, "
+        parts.append(f"{mid}E {100 * sh['e_per_point']:.1f} %/pt, G "
+                     f"{100 * sh['g_per_point']:.1f} %/pt")
+    if "temperature" in settings:
+        t = settings["temperature"]
+        parts.append(f"{t['baseline_c']:.1f} -> {t['baseline_c'] + t['change_c']:.1f} C "
+                     f"(E {100 * t['e_per_c']:.2f}, G {100 * t['g_per_c']:.2f} %/C)")
+    if "angle" in settings:
+        a = settings["angle"]
+        th_r = float(np.clip(a["baseline_deg"] + a["change_deg"], 0.0, 90.0))
+        parts.append(f"angle {a['baseline_deg']:.0f} -> {th_r:.0f} deg")
+    if "band_edge" in settings:
+        e = made.get("band_edge")
+        parts.append("band top inside a pair" if e is None else
+                     f"band top inside mode {e['mode']}'s pair "
+                     f"({e['baseline_pair_hz'][0]:.0f} / {e['baseline_pair_hz'][1]:.0f} Hz)")
+    if "points" in settings:
+        p = settings["points"]
+        parts.append(f"{min(20, int(p['count']))} points (warp {p['warp']:+.2f}, jitter "
+                     f"{p['jitter']:.2f})")
+    if "accelerometer" in settings:
+        a = settings["accelerometer"]
+        g_r = float(np.clip(a["baseline_g"] + a["change_g"], *SENSOR_G))
+        parts.append(f"sensor {a['baseline_g']:.1f} -> {g_r:.1f} g, moved "
+                     f"{a['shift_in']:+.2f} in")
+    if "bungees" in settings:
+        parts.append(f"bungees x{settings['bungees']['factor']:.2f}")
+    if "grip" in settings:
+        g = settings["grip"]
+        kind = grip_kind(g["kind_pick"])
+        parts.append(f"{kind} {grip_mass_g(kind, g['mass_share']):.1f} g over "
+                     f"{g['start_in']:.1f}-{g['end_in']:.1f} in (taper {g['taper']:.2f})")
+    if "tar_past_18" in settings:
+        t = settings["tar_past_18"]
+        parts.append(f"pine tar {t['mass_g']:.1f} g over {t['start_in']:.1f}-"
+                     f"{t['end_in']:.1f} in (taper {t['taper']:.2f})")
+    if "noise" in settings:
+        n = settings["noise"]
+        parts.append(f"noise {100 * n['baseline']:.1f} / {100 * n['retest']:.1f} %")
+    return "; ".join(parts) or "none"
