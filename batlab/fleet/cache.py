@@ -99,16 +99,46 @@ def build_one(seed: int, kind: str, integ: str | None, with_meta: bool = True,
               nuisances=NUISANCES, registration: bool = False) -> dict:
     """Build everything ``inspect`` needs for this bat, and its truth (or an error)."""
     rng = np.random.default_rng(seed)
-    out: dict = {"seed": seed, "kind": kind, "integrity": integ}
+    try:
+        case = draw_case(rng, kind, nuisances, integrity=integ, serial=f"F-{seed}")
+    except ValueError as exc:
+        return {"seed": seed, "kind": kind, "integrity": integ,
+                "error": ("sim_error", str(exc))}
+    out = build_case(case, seed, with_meta, registration)
+    if "error" not in out:
+        out["nuisances"] = list(nuisances)
+    return out
+
+
+def build_case(case, seed: int, with_meta: bool = True, registration: bool = False) -> dict:
+    """Write a drawn case's files and run the real path up to the inspection's inputs.
+
+    Parameters
+    ----------
+    case : FieldCase
+        The bat (``field_fleet.draw_case``, ``wide.wide_case``, ...).
+    seed : int
+        Its seed (the FRF noise seeds are ``write_case``'s from it).
+    with_meta : bool
+        Write retest.json.
+    registration : bool
+        meta.json records the baseline's temperature and accelerometer mass.
+
+    Returns
+    -------
+    dict
+        What ``score_one`` takes (seed, kind, integrity, truth, expected, the calibrated
+        reference, both tests' modes, the conditions), or with ``error`` (kind, reason).
+    """
+    out: dict = {"seed": seed, "kind": case.kind, "integrity": case.integrity,
+                 "truth": case.truth, "expected": case.expected}
     with tempfile.TemporaryDirectory(prefix="batlab-cache-") as tmp:
         try:
-            case = draw_case(rng, kind, nuisances, integrity=integ, serial=f"F-{seed}")
             paths = write_case(case, tmp, seed, retest_meta_keys=None if with_meta else [],
                                registration=registration)
         except ValueError as exc:
             out["error"] = ("sim_error", str(exc))
             return out
-        out["truth"], out["expected"] = case.truth, case.expected
         try:
             cond = pipeline.read_conditions(paths["retest_meta"])
             bat = pipeline.stateless_case(paths["profile"], paths["meta"], paths["baseline"],
@@ -116,7 +146,7 @@ def build_one(seed: int, kind: str, integ: str | None, with_meta: bool = True,
         except ValueError as exc:
             out["error"] = ("refused", str(exc))
             return out
-    out.update(nuisances=list(nuisances), registration=registration, serial=bat.serial,
+    out.update(registration=registration, serial=bat.serial,
                profile=bat.profile, reference=bat.reference,
                baseline=bat.baseline.modes, retest=bat.retest.modes, conditions=cond,
                registered=bat.registered)
@@ -137,10 +167,12 @@ def registered_conditions(bat: dict) -> RetestConditions:
                    temperature_c=extra.temperature_c)
 
 
-def score_one(bat: dict, false_alarm: float = 0.01, registration: bool = False) -> dict:
+def score_one(bat: dict, false_alarm: float = 0.01, registration: bool = False,
+              with_map: bool = True) -> dict:
     """Run the inspection alone on a cached bat: ``field_row``'s row.
 
-    With ``registration``: meta.json's baseline temperature and accelerometer mass given.
+    With ``registration``: meta.json's baseline temperature and accelerometer mass given;
+    ``with_map`` False skips the MSSO element map (the verdict is the same).
     """
     row = {"seed": bat["seed"], "kind": bat["kind"], "integrity": bat["integrity"]}
     if "error" in bat:
@@ -152,7 +184,7 @@ def score_one(bat: dict, false_alarm: float = 0.01, registration: bool = False) 
     t0 = time.perf_counter()
     try:
         v = inspect(bat["profile"], bat["reference"], bat["baseline"], bat["retest"],
-                    false_alarm, bat["conditions"], bat["registered"])
+                    false_alarm, bat["conditions"], bat["registered"], with_map=with_map)
     except ValueError as exc:
         row.update(status="refused", reasons=[str(exc)], time_s=time.perf_counter() - t0)
         return row

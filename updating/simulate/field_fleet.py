@@ -456,6 +456,56 @@ def alter_case(
     return replace(case, meta=meta, retest_meta=retest_meta, retest=retest, truth=truth)
 
 
+def restage(
+    case: FieldCase, baseline: VirtualBat, retest: VirtualBat, freq_hz: np.ndarray,
+    rng: np.random.Generator, drawn: dict, nuisances, changes=(),
+) -> FieldCase:
+    """Test the same bat under other conditions: the hook for nuisances drawn elsewhere.
+
+    ``case`` gives the bat (profile, wood, species, serial); ``baseline`` and ``retest`` are
+    its two tests as another drawer set them up (impact points, band, accelerometer,
+    bungees, wood fields, planes, and any rulebook ``changes`` already applied to
+    ``retest``). The scale is read again (``lab_readings``) and meta.json's and
+    retest.json's content written from the new tests, as ``draw_case`` writes them.
+
+    Parameters
+    ----------
+    case : FieldCase
+        A case of the bat (``draw_case``; only its bat and serial are kept).
+    baseline, retest : VirtualBat
+        The truth of the two tests.
+    freq_hz : numpy.ndarray
+        The frequency lines of both tests, Hz.
+    rng : numpy.random.Generator
+        The scale readings' noise.
+    drawn : dict
+        JSON-able record of the conditions (``truth["drawn"]``); a ``temperature`` entry
+        with ``baseline_c`` and ``retest_c`` sets retest.json's and the registration's
+        temperatures (else 21 C).
+    nuisances : iterable of str
+        The names of the nuisances drawn (``truth["nuisances"]``).
+    changes : iterable of RulebookChange
+        The rulebook changes of the re-test (their truth goes into the case's, the last
+        one's top-level keys winning); none: a clean bat.
+
+    Returns
+    -------
+    FieldCase
+        The case with the new tests, lab files' content and truth.
+    """
+    truth = {"kind": "none", "altered": False, "integrity": None, "expected": "not_altered",
+             "nuisances": list(nuisances), "drawn": drawn, "serial": case.truth["serial"],
+             "region_in": None, "core_diameter_in": None, "fill_density_ratio": None}
+    for change in changes:
+        truth.update(change.truth())
+    lab_readings(rng, baseline, retest, truth)
+    points_in = np.asarray(baseline.points_m, dtype=float) / IN_TO_M
+    meta, retest_meta = _lab_meta(case.meta["serial"], case.meta["species"], points_in, retest,
+                                  truth)
+    return FieldCase(case.profile, meta, retest_meta, baseline, retest, np.asarray(freq_hz),
+                     None, truth)
+
+
 def write_retest(
     case: FieldCase, uff_path, json_path, seed: int, retest_meta_keys=None,
 ) -> Path | None:

@@ -204,10 +204,44 @@ def grooves(rng: np.random.Generator, profile: Profile, rho_kg_m3: float) -> Rul
                           reading)
 
 
-def coating(kind: RulebookKind, mass_g: float, x0_in: float, x1_in: float) -> RulebookChange:
-    """Return a surface substance of ``mass_g`` over [x0_in, x1_in] (mass, no stiffness)."""
-    change = LocalChange(x0_in * IN_TO_M, x1_in * IN_TO_M, added_mass_kg=1e-3 * mass_g)
-    return RulebookChange(kind, (change,), (x0_in, x1_in), {"added_mass_g": mass_g})
+def coating(
+    kind: RulebookKind, mass_g: float, x0_in: float, x1_in: float, taper: float = 0.0,
+    segments: int = 4,
+) -> RulebookChange:
+    """Return a surface substance of ``mass_g`` over [x0_in, x1_in] (mass, no stiffness).
+
+    Parameters
+    ----------
+    kind : RulebookKind
+        The substance's kind.
+    mass_g : float
+        Its whole mass, g.
+    x0_in, x1_in : float
+        The covered stretch from the knob, in.
+    taper : float
+        0: an even layer (one ``LocalChange``). t in (0, 1]: a layer thicker near the knob,
+        its thickness falling linearly as 1 - t s over the stretch (s from 0 at ``x0_in`` to
+        1 at ``x1_in``), as ``segments`` even layers whose masses follow the mean thickness
+        of each (the handle's diameter taken as the same in each).
+    segments : int
+        The even layers of a tapered coat.
+
+    Returns
+    -------
+    RulebookChange
+        The coat; its reading is ``added_mass_g`` (and ``taper`` when not 0).
+    """
+    if taper == 0.0:
+        change = LocalChange(x0_in * IN_TO_M, x1_in * IN_TO_M, added_mass_kg=1e-3 * mass_g)
+        return RulebookChange(kind, (change,), (x0_in, x1_in), {"added_mass_g": mass_g})
+    edges = np.linspace(0.0, 1.0, segments + 1)
+    thickness = 1.0 - taper * 0.5 * (edges[:-1] + edges[1:])
+    share = thickness / thickness.sum()
+    x = x0_in + (x1_in - x0_in) * edges
+    changes = tuple(LocalChange(a * IN_TO_M, b * IN_TO_M, added_mass_kg=1e-3 * mass_g * w)
+                    for a, b, w in zip(x[:-1], x[1:], share, strict=True))
+    return RulebookChange(kind, changes, (x0_in, x1_in),
+                          {"added_mass_g": mass_g, "taper": taper})
 
 
 def draw_change(

@@ -1,0 +1,109 @@
+"""The worst-case search (updating/simulate/worst_case.py) on objectives whose maximum is
+known, and a tiny version of the benchmark's search through the real path
+(batlab/fleet/worst_case.py: wide bat -> files -> modal fits -> inspection)."""
+
+import json
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from batlab.fleet.worst_case import evaluate_wide, search_bat
+from updating.simulate import wide
+from updating.simulate.worst_case import quantile_table, reflect, search_worst, worst_table
+
+STATUSES = {"not_altered", "inconclusive", "altered", "refused", "sim_error"}
+
+
+@settings(max_examples=20, deadline=None)
+@given(x=st.lists(st.floats(-5.0, 5.0), min_size=1, max_size=8))
+def test_reflect_folds_into_the_cube_and_keeps_inner_points(x):
+    y = reflect(np.array(x))
+    assert np.all((y >= 0) & (y <= 1))
+    inner = (np.array(x) >= 0) & (np.array(x) <= 1)
+    np.testing.assert_allclose(y[inner], np.array(x)[inner])
+
+
+@settings(max_examples=15, deadline=None)
+@given(seed=st.integers(0, 10_000), dim=st.integers(4, 30))
+def test_the_search_climbs_beyond_its_random_starts(seed, dim):
+    """A smooth objective with its maximum at a random point: the strategy's best is better
+    than the best of its random starts and at least halves the starts' best distance; every
+    evaluation is kept, starts first."""
+    rng = np.random.default_rng(seed)
+    target = rng.uniform(size=dim)
+
+    def evaluate(u):
+        return -float(np.sum((u - target) ** 2)), "not_altered", {}
+
+    starts = [rng.uniform(size=dim) for _ in range(5)]
+    res = search_worst(evaluate, starts, 5 + 20 * dim, np.random.default_rng(seed + 1))
+    assert len(res.evaluations) == 5 + 20 * dim
+    assert [e.phase for e in res.evaluations[:5]] == ["start"] * 5
+    assert [e.index for e in res.evaluations] == list(range(len(res.evaluations)))
+    best, best_start = res.best(), res.best("start")
+    assert best.F > best_start.F
+    assert -best.F < 0.25 * -best_start.F
+
+
+def test_evaluations_without_an_f_do_not_lead_the_search():
+    """Half of the cube gives no F (an inconclusive verdict): the search starts from the best
+    start with an F and its best has one."""
+
+    def evaluate(u):
+        if u[0] < 0.5:
+            return None, "inconclusive", {}
+        return float(u[1]), "not_altered", {}
+
+    rng = np.random.default_rng(3)
+    starts = [np.array([0.1, 0.9]), np.array([0.6, 0.2]), np.array([0.2, 0.99])]
+    res = search_worst(evaluate, starts, 40, rng)
+    assert res.count("inconclusive") >= 1
+    assert res.best().status == "not_altered" and res.best().F > 0.9
+    assert all(np.isnan(e.F) for e in res.evaluations if e.status == "inconclusive")
+
+
+def test_tables_count_what_they_are_given():
+    rows = [{"group": "a", "F": f, "p": 0.5, "status": s}
+            for f, s in ((1.0, "not_altered"), (3.0, "altered"), (None, "inconclusive"))]
+    table = quantile_table(rows)
+    assert "| a | 3 | 2 | 2.8 | 2.98 | 3 | 3 | 0.5 | 1 | 1 | 0 |" in table
+    bats = [{"seed": 1, "handle": "clean", "evaluations": [
+        {"phase": "start", "F": 1.0, "status": "not_altered"},
+        {"phase": "search", "F": 4.0, "status": "altered"}]}]
+    text = worst_table(bats)
+    assert "| 1 | clean | 2 | 1 | 4 | altered | 1 | 0 |" in text
+
+
+def test_a_tiny_search_through_the_real_path(tmp_path):
+    """Two bats (bare, legally gripped) under every wide nuisance, one random start and one
+    step each, through the real files-to-verdict path: every evaluation recorded (and
+    logged), the vector within the cube, the settings within their bounds; the same vector
+    gives the same F again (the search's objective is deterministic)."""
+    log = tmp_path / "search.jsonl.log"
+    bats = []
+    for i, seed in enumerate(wide.fleet_seeds(2, "development", 200)):
+        job = {"seed": seed, "handle": wide.HANDLES[i], "nuisances": wide.fleet_nuisances(i),
+               "budget": 2, "starts": 1, "log": str(log)}
+        bats.append(search_bat(job))
+    logged = [json.loads(s) for s in log.read_text().splitlines()]
+    assert len(logged) == 4
+    for b in bats:
+        ev = b["evaluations"]
+        assert [e["phase"] for e in ev] == ["start", "search"]
+        assert all(e["status"] in STATUSES for e in ev)
+        assert all(0.0 <= u <= 1.0 for e in ev for u in e["unit"])
+        assert ev[0]["unit"] != ev[1]["unit"]
+        s = ev[1]["settings"]
+        for c in wide.space(b["nuisances"]):
+            for owner in c.owners:
+                if owner in s:
+                    assert c.lo <= s[owner][c.name] <= c.hi
+    assert "grip" in bats[1]["nuisances"] and bats[1]["evaluations"][0]["kind"] in wide.GRIP_KINDS
+    first = bats[0]["evaluations"][0]
+    F, status, _ = evaluate_wide(bats[0]["seed"], np.array(first["unit"]), bats[0]["nuisances"])
+    assert status == first["status"]
+    if F is not None:
+        assert F == pytest.approx(first["F"], rel=1e-9)
+    assert "| " + str(bats[0]["seed"]) + " | clean | 2 |" in worst_table(bats)
