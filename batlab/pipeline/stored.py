@@ -14,12 +14,12 @@ from pathlib import Path
 
 import sqlalchemy as sa
 
-from batlab import __version__
 from batlab import registry as reg
 from batlab.pipeline.files import Progress, file_sha256, frf_from_bytes, quiet
 from batlab.pipeline.inspection import InspectionCase, InspectionResult, fit_file, judge
 from batlab.pipeline.records import FittedTest, ReportInputs, same_judgement, verdict_record
 from batlab.pipeline.registered import registered_weight_kg, registration_conditions
+from batlab.version import code_version
 from updating.correlate.points import match_points, point_positions_m
 from updating.inspect.retest_meta import RetestConditions
 from updating.model.profile import make_profile
@@ -65,7 +65,7 @@ def store_inspection(
     path = Path(retest_path)
     content = result.retest_content if result.retest_content is not None else \
         path.read_bytes()
-    inputs = {"false_alarm": float(false_alarm), "batlab_version": __version__,
+    inputs = {"false_alarm": float(false_alarm), "batlab_version": code_version(),
               "retest_meta": bool(retest_meta)}
     if retest_meta and result.conditions is not None:
         inputs["retest_conditions"] = asdict(result.conditions)
@@ -138,7 +138,7 @@ def provenance(
     dict
         The version, file hashes and, for a stored inspection, its records.
     """
-    out = {"batlab_version": __version__, "baseline_sha256": baseline_sha256,
+    out = {"batlab_version": code_version(), "baseline_sha256": baseline_sha256,
            "retest_sha256": retest_sha256}
     if stored is not None and conn is not None:
         out.update({"inspection_id": stored.id, "inspected_at": stored.inspected_at,
@@ -153,7 +153,7 @@ def provenance(
             out.update({"reference_record": ref.seq, "reference_record_sha256":
                         ref.record_sha256})
         if stored.inputs:
-            out["batlab_version"] = stored.inputs.get("batlab_version", __version__)
+            out["batlab_version"] = stored.inputs.get("batlab_version", code_version())
     return out
 
 
@@ -291,7 +291,7 @@ def with_element_map(inputs: ReportInputs, stored_inputs: dict, weight_kg: float
             return replace(inputs, verdict={**v, "details": {
                 **details, "msso": again["details"]["msso"]}, "map_judged_again": True})
         else:
-            emap = {"error": f"judged again by batlab {__version__}, the stored tests give "
+            emap = {"error": f"judged again by batlab {code_version()}, the stored tests give "
                              f"{again['status']} (F {_f(again)}), not the stored "
                              f"{v['status']} (F {_f(v)}): no map is drawn for a verdict it "
                              "does not belong to"}
