@@ -28,6 +28,7 @@ from batlab.pipeline.inspection import (
     judge,
 )
 from batlab.pipeline.records import FORCED_KEY, FittedTest
+from batlab.version import code_version
 from updating.correlate.measured import driving_mass_line
 from updating.correlate.points import match_points, point_positions_m
 from updating.inspect.retest_meta import RetestConditions, conditions_from_dict
@@ -130,7 +131,8 @@ def prepare_registration(
     record = reg.BatRecord(
         serial=meta.serial, profile_x_m=profile.x_m.tolist(),
         profile_diameter_m=profile.diameter_m.tolist(), meta=stored_meta, species=meta.species,
-        reference=diagnosis.reference.to_dict(), modes=reg.encode_modes(baseline.modes))
+        reference=diagnosis.reference.to_dict(), modes=reg.encode_modes(baseline.modes),
+        code=code_version())
     return Registration(record, baseline, diagnosis)
 
 
