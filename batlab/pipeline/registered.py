@@ -12,6 +12,7 @@ from pathlib import Path
 import sqlalchemy as sa
 
 from batlab import registry as reg
+from batlab.pipeline.chance import model_name, with_statement
 from batlab.pipeline.files import (
     Progress,
     frf_from_bytes,
@@ -247,7 +248,8 @@ def registered_case(
     retest = fit_file(Path(retest_path).name, re_test, weight_kg, order, progress)
     return InspectionCase(serial, profile, BatReference.from_dict(bat.reference), baseline,
                           retest, registration_conditions(bat.meta, serial), weight_kg,
-                          bat.reference_seq, retest_content)
+                          bat.reference_seq, retest_content,
+                          model_name(profile, bat.species, bat.meta))
 
 
 def inspect_registered(
@@ -282,9 +284,11 @@ def inspect_registered(
     Returns
     -------
     InspectionResult
-        The verdict and what it was judged on (nothing stored: ``store_inspection``).
+        The verdict and what it was judged on, its chance stated from the registry's
+        latest calibration of the bat's model (``with_statement``; nothing stored:
+        ``store_inspection``).
     """
     conditions = read_conditions(retest_meta_path)
     case = registered_case(conn, serial, retest_path, refit_baseline, progress, baseline_fit)
     progress("inspecting the re-test against the registered reference")
-    return judge(case, false_alarm, conditions, with_map)
+    return with_statement(judge(case, false_alarm, conditions, with_map), conn)

@@ -65,13 +65,13 @@ def store_inspection(
     path = Path(retest_path)
     content = result.retest_content if result.retest_content is not None else \
         path.read_bytes()
-    inputs = {"false_alarm": float(false_alarm), "batlab_version": code_version(),
+    record = verdict_record(result.serial, result.verdict, result.stated)
+    inputs = {"false_alarm": float(false_alarm), "batlab_version": record["code"],
               "retest_meta": bool(retest_meta)}
     if retest_meta and result.conditions is not None:
         inputs["retest_conditions"] = asdict(result.conditions)
-    return reg.add_inspection(
-        conn, result.serial, verdict_record(result.serial, result.verdict), path.name,
-        content, reference_seq=result.reference_seq, inputs=inputs)
+    return reg.add_inspection(conn, result.serial, record, path.name, content,
+                              reference_seq=result.reference_seq, inputs=inputs)
 
 
 def already_inspected(
@@ -175,7 +175,8 @@ def report_inputs(result: InspectionResult, meta: dict, prov: dict) -> ReportInp
         What the report is drawn from.
     """
     return ReportInputs(result.serial, result.profile, result.reference, result.baseline,
-                        result.retest, verdict_record(result.serial, result.verdict), meta, prov)
+                        result.retest, verdict_record(result.serial, result.verdict,
+                                                      result.stated), meta, prov)
 
 
 def _stored_inspection(conn: sa.Connection, serial: str,
