@@ -28,9 +28,10 @@ from updating.model.reference import BatReference
 EXPORT_COLUMNS = [
     "serial", "species", "inspection", "inspected_at", "status", "altered",
     "region_start_in", "region_end_in", "core_diameter_in", "fill_density_ratio",
-    "p_value", "false_alarm_rate", "reasons", "retest_file", "retest_sha256",
+    "p_value", "false_alarm_rate", "chance", "chance_source", "calibration_record",
+    "false_alarm_measured", "false_alarm_upper95", "reasons", "retest_file", "retest_sha256",
     "baseline_sha256", "registration_record", "verdict_record", "verdict_record_sha256",
-    "report_path"]
+    "report_path", "code"]
 """The columns of `batlab export`, in order."""
 
 
@@ -322,7 +323,7 @@ def history_table(conn: sa.Connection, serial: str | None = None):
     """
     import pandas as pd
 
-    from batlab.formatting import p_value
+    from batlab.formatting import decision_level, p_value
 
     species = {b.serial: b.species for b in reg.list_bats(conn)}
     rows = []
@@ -335,11 +336,24 @@ def history_table(conn: sa.Connection, serial: str | None = None):
             "region_start_in": region[0], "region_end_in": region[1],
             "core_diameter_in": v.get("core_diameter_in"),
             "fill_density_ratio": v.get("fill_density_ratio"),
-            "p_value": p_value(v),
-            "false_alarm_rate": v.get("false_alarm_rate"),
+            "p_value": p_value(v), "false_alarm_rate": decision_level(v),
+            **_chance_columns(v),
             "reasons": "; ".join(v.get("reasons") or []),
             "retest_file": i.retest_name, "retest_sha256": i.retest_sha256,
             "baseline_sha256": i.baseline_sha256, "registration_record": i.reference_seq,
             "verdict_record": i.record_seq, "verdict_record_sha256": i.record_sha256,
-            "report_path": i.report_path})
+            "report_path": i.report_path,
+            "code": v.get("code") or (i.inputs or {}).get("batlab_version")})
     return pd.DataFrame(rows, columns=EXPORT_COLUMNS)
+
+
+def _chance_columns(v: dict) -> dict:
+    """Return the export's chance columns of a stored verdict (``chance``, ``false_alarm_rate``)."""
+    from batlab.formatting import stated_chance
+
+    ch = stated_chance(v) or {}
+    cal = ch.get("calibration") or {}
+    fa = v.get("false_alarm_rate") if isinstance(v.get("false_alarm_rate"), dict) else {}
+    return {"chance": ch.get("value"), "chance_source": ch.get("source"),
+            "calibration_record": cal.get("record_seq"),
+            "false_alarm_measured": fa.get("measured"), "false_alarm_upper95": fa.get("upper95")}
