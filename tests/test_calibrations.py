@@ -252,3 +252,17 @@ def test_schema6_migration_on_postgresql(pg_url):
     with reg.open_registry(pg_url, create=False) as conn:
         assert reg.check(conn).ok and reg.latest_calibration(conn, sample_model()).id == \
             stored.id
+
+
+def test_a_report_drawn_by_other_code_says_so(lab, capsys, monkeypatch):
+    """``batlab report`` of a verdict another version of batlab judged shows both versions."""
+    import batlab.report
+
+    stand_in_F(lab, capsys)
+    monkeypatch.setattr(batlab.report, "code_version", lambda: "9.9.9+gfeedface1")
+    code, _, err = run_cli(["report", "HX-2001", "-o", lab / "again"], capsys)
+    assert code == 0, err
+    page = (lab / "again" / "index.html").read_text()
+    assert (f"judged by batlab {code_version()}, this report drawn by batlab 9.9.9+gfeedface1"
+            in page)
+    assert f"<td>Code that judged (batlab version)</td><td>{code_version()}</td>" in page
