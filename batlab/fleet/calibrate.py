@@ -40,7 +40,6 @@ from batlab.pipeline.registered import (
     registration_conditions,
 )
 from batlab.registry import decode_modes
-from batlab.version import code_version
 from updating.inspect.retest_meta import conditions_from_dict
 from updating.simulate.virtual_bat import simulate_test
 
@@ -173,7 +172,7 @@ def inspect_clean(spec: BatSpec, i: int) -> dict:
                 retest.retest_meta, "retest.json"), with_map=False).verdict
         except ValueError as exc:  # refused, as `batlab inspect` refuses it
             row.update(status="refused", reasons=[str(exc)], F=None, p=None, dof=None,
-                       code=code_version(), seconds=time.perf_counter() - t0,
+                       code=pipeline.code_version(), seconds=time.perf_counter() - t0,
                        cpu_s=time.process_time() - cpu0)
             return row
     out = pipeline.contract_dict(reg.case.serial, verdict)
@@ -279,7 +278,7 @@ def summary(rows: list[dict], spec: BatSpec, serial: str | None = None) -> dict:
             "false_alarm_upper95": upper95(alarms, len(rows)), "confidence": 0.95,
             "alarm_indices": [r["index"] for r in rows if r["status"] == "altered"],
             "by_grip": grips, "tail": tail(rows), "serial": serial, "seed": spec.seed,
-            "false_alarm": spec.false_alarm, "code": code_version(), "codes": codes(rows),
+            "false_alarm": spec.false_alarm, "code": pipeline.code_version(), "codes": codes(rows),
             "cpu_s_per_bat": float(np.mean(cpu)) if cpu else None}
 
 
@@ -433,4 +432,4 @@ def store_calibration(conn, model: str, rows: list[dict], out: dict):
     summary = pipeline.jsonable({k: out.get(k) for k in keep})
     return add_calibration(conn, model, out["n"], out["false_alarms"],
                            out["false_alarm_upper95"], STATISTIC, summary, null_of(rows),
-                           code_version())
+                           pipeline.code_version())

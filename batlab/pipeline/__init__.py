@@ -23,7 +23,8 @@ imports no stage module itself (tests/test_architecture.py checks it). One modul
   file written at the end.
 
 Names are loaded on first use (PEP 562), so importing one light module of the package
-loads no stage. The unit constants the commands convert lab units with at the edge are
+loads no stage. The unit constants the commands convert lab units with at the edge, and the
+running code's version (``batlab.version.code_version``, for the fleet's rows), are
 re-exported here.
 """
 
@@ -74,6 +75,9 @@ _SOURCES = {
     "batlab.pipeline.stored": (
         "already_inspected", "history_table", "note_report", "provenance", "report_inputs",
         "store_inspection", "stored_bat", "stored_report_inputs",
+    ),
+    "batlab.version": (
+        "code_version",
     ),
     "updating.model.json_input": (
         "read_json_object",
