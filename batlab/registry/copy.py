@@ -47,6 +47,7 @@ from batlab.registry.schema import (
     stations,
 )
 from batlab.registry.verify import check
+from batlab.version import code_version
 
 
 @dataclass(frozen=True)
@@ -108,7 +109,7 @@ def copy_registry(src: sa.Connection, dst: sa.Connection, trusted: set[str],
             signers = sorted({r.signer for r in custody_rows(src) if r.signer})
             append_record(dst, "seal", "copy", None, canonical({
                 "copied_from": before.head, "source_signers": signers,
-                "source_records": before.n_records, "mode": mode}))
+                "source_records": before.n_records, "mode": mode, "code": code_version()}))
             _refuse_unverified(check(dst, trusted | {lab_key_id()}), destination,
                                "after the copy")
             counts = (_count(src, bats), _count(src, files), _count(src, inspections))
