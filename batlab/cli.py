@@ -101,15 +101,14 @@ def build_parser(wired: Iterable[str] | None = None) -> argparse.ArgumentParser:
     argparse.ArgumentParser
         The parser; ``parse_args`` puts the chosen command's ``run`` in ``args._run``.
     """
-    from batlab import __version__
-
     wired = set(COMMANDS if wired is None else wired)
     parser = argparse.ArgumentParser(
         prog="batlab",
         description="Detect altered wooden baseball bats from impact-hammer vibration tests.",
         epilog="example: batlab demo -o demo/   (then: batlab <command> --help)",
     )
-    parser.add_argument("--version", action="version", version=f"batlab {__version__}")
+    parser.add_argument("--version", action=_Version, nargs=0,
+                        help="print the version of the code (it differs for every commit)")
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
     for name, command in COMMANDS.items():
         p = sub.add_parser(name, help=command.help, description=command.help,
@@ -117,6 +116,16 @@ def build_parser(wired: Iterable[str] | None = None) -> argparse.ArgumentParser:
         if name in wired:
             _wire(p, command)
     return parser
+
+
+class _Version(argparse.Action):
+    """``--version``: print ``batlab VERSION`` and exit (the version looked up only then)."""
+
+    def __call__(self, parser, namespace, values, option_string=None):
+        from batlab.version import code_version
+
+        print(f"batlab {code_version()}")
+        parser.exit()
 
 
 def _wire(p: argparse.ArgumentParser, command: Command) -> None:

@@ -23,7 +23,7 @@ from dataclasses import dataclass
 from batlab import signing
 
 GENESIS_SHA256 = "0" * 64
-KINDS = ("file", "reference", "verdict", "seal")
+KINDS = ("file", "reference", "verdict", "seal", "calibration")
 
 
 def canonical(obj) -> str:

@@ -10,7 +10,7 @@ from __future__ import annotations
 import math
 
 from updating.inspect.details import InspectionDetails
-from updating.inspect.words import chance, percent
+from updating.inspect.words import CHANCE, chance, percent
 
 
 def status_of(verdict: dict) -> str:
@@ -44,13 +44,137 @@ def p_value(verdict: dict) -> float | None:
 
 
 def p_value_words(verdict: dict) -> str | None:
-    """Say a stored verdict's p-value in the one wording (``updating.inspect.words.chance``).
+    """Say a stored verdict's chance in the one wording (``chance_words`` of ``stated_chance``).
 
-    "chance an unaltered bat differs this much: 92 %" (a confidence of 0.075 is not
-    "7.5 % sure"); None when the verdict has none.
+    "chance an unaltered bat differs this much: ..." as measured on the bat model's
+    calibration, or said unmeasured (a confidence of 0.075 is a 92 % chance, not "7.5 %
+    sure"); None when the verdict has none.
     """
+    return chance_words(stated_chance(verdict))
+
+
+def stated_chance(verdict: dict) -> dict | None:
+    """Return a verdict's ``chance`` (a record stored before it existed: nominal, from its p)."""
+    if isinstance(verdict.get("chance"), dict):
+        return verdict["chance"]
     p = p_value(verdict)
-    return None if p is None else chance(p)
+    return None if p is None else {"value": p, "source": "nominal", "calibration": None,
+                                   "nominal": p, "model": None,
+                                   "unmeasured": "judged before batlab measured chances"}
+
+
+def share(p: float) -> str:
+    """Write a measured probability: "2.3 %", "0.033 %" (two digits), "over 99 %"."""
+    return "over 99 %" if p > 0.99 else f"{100 * p:.2g} %"
+
+
+def chance_words(ch: dict | None) -> str | None:
+    """Say the chance an unaltered bat differs this much, with where it was measured.
+
+    Measured: "...: 0.23 % as measured on 3,000 clean re-tests of bat model M, 6 of which
+    differed at least as much"; beyond them: "below 1 in 3,001 ..., none of which differed
+    as much" (and a tail fit's extrapolation, named as one); without a calibration:
+    "...: unmeasured, WHY; the F distribution's nominal 4.2 % is not a measured rate".
+
+    Parameters
+    ----------
+    ch : dict or None
+        The verdict's ``chance`` (``batlab.pipeline.chance.statement``).
+
+    Returns
+    -------
+    str or None
+        One clause; None when the verdict has no chance (no test was made).
+    """
+    if not ch or ch.get("value") is None:
+        return None
+    cal = ch.get("calibration")
+    if ch.get("source") == "calibration" and cal:
+        n, b = int(cal["n"]), cal.get("exceeding")
+        where = f"as measured on {n:,} clean re-tests of bat model {cal['model']}"
+        if not b:
+            text = (f"{CHANCE}: below 1 in {n + 1:,} {where}, none of which differed as "
+                    "much")
+            if ch.get("extrapolated") is not None:
+                text += (f"; beyond that range a generalized-Pareto tail fit extrapolates "
+                         f"{ch['extrapolated']:.1g} (an extrapolation, not a measurement)")
+            return text
+        return (f"{CHANCE}: {share(float(ch['value']))} {where}, {b:,} of which differed at "
+                "least as much")
+    text = f"{CHANCE}: unmeasured, {ch.get('unmeasured') or 'no calibration'}"
+    if ch.get("nominal") is not None:
+        text += (f"; the F distribution's nominal {percent(float(ch['nominal']))} is not a "
+                 "measured rate")
+    return text
+
+
+def false_alarm_words(fa) -> str | None:
+    """Say a verdict's false-alarm rate: measured (k of n, its 95 % bound) or unmeasured.
+
+    Parameters
+    ----------
+    fa : dict or float or None
+        The verdict's ``false_alarm_rate`` (a record stored before it was measured holds the
+        decision's level, a number).
+
+    Returns
+    -------
+    str or None
+        One clause.
+    """
+    if fa is None:
+        return None
+    if not isinstance(fa, dict):
+        return (f"called altered below a nominal {percent(float(fa))} (false-alarm rate "
+                "unmeasured)")
+    level = "" if fa.get("level") is None else \
+        f"; called altered below the F test's nominal {percent(float(fa['level']))}"
+    if fa.get("source") == "calibration":
+        k, n = int(fa["false_alarms"]), int(fa["n"])
+        seen = "none" if k == 0 else f"{k:,} ({share(k / n)})"
+        return (f"false-alarm rate measured on bat model {fa.get('model')}: {seen} of {n:,} "
+                f"clean re-tests called altered, below {share(float(fa['upper95']))} (95 % "
+                f"Clopper-Pearson bound){level}")
+    return f"false-alarm rate unmeasured ({fa.get('unmeasured') or 'no calibration'}){level}"
+
+
+def decision_level(verdict: dict) -> float | None:
+    """Return the decision's level (its nominal false-alarm rate) from any stored verdict."""
+    fa = verdict.get("false_alarm_rate")
+    if isinstance(fa, dict):
+        fa = fa.get("level")
+    return None if fa is None else float(fa)
+
+
+def reasons_with_chance(reasons: list[str], nominal: float | None,
+                        ch: dict | None) -> list[str]:
+    """State the chance in the reasons as ``chance`` does.
+
+    The decision words its reasons with the F distribution's p-value
+    (``updating.inspect.words.chance``); each such clause becomes ``chance_words(ch)``, and
+    when no reason held one, that clause is a reason of its own. Reasons without a chance
+    (no test was made) are kept as they are.
+
+    Parameters
+    ----------
+    reasons : list of str
+        The decision's reasons.
+    nominal : float or None
+        The p-value they were worded with.
+    ch : dict or None
+        The verdict's ``chance``.
+
+    Returns
+    -------
+    list of str
+        The reasons.
+    """
+    said = chance_words(ch)
+    if said is None:
+        return list(reasons)
+    old = None if nominal is None else chance(nominal)
+    out = [r.replace(old, said) if old else r for r in reasons]
+    return out if out != list(reasons) else [*out, said]
 
 
 def readable(out: dict) -> str:
@@ -61,8 +185,10 @@ def readable(out: dict) -> str:
         lines.append(f"  reason: {reason}")
     said = p_value_words(out)
     if said:
-        fa = out.get("false_alarm_rate")
-        lines.append(f"  {said}" + (f" (called altered below {percent(fa)})" if fa else ""))
+        lines.append(f"  {said}")
+        rate = false_alarm_words(out.get("false_alarm_rate"))
+        if rate:
+            lines.append(f"  {rate}")
     words = finding_words(out.get("finding"))
     if words:
         lines.append(f"  finding: {words}")
@@ -79,6 +205,8 @@ def readable(out: dict) -> str:
         big = max(els, key=lambda e: abs(e["alpha"]) + abs(e["beta"]))
         lines.append(f"  {len(els)} elements; largest change at {big['x0_in']:.1f}-"
                      f"{big['x1_in']:.1f} in: alpha {big['alpha']:+.4f}, beta {big['beta']:+.4f}")
+    if out.get("code"):
+        lines.append(f"  judged by batlab {out['code']}")
     return "\n".join(lines)
 
 

@@ -24,13 +24,23 @@ from pathlib import Path
 
 import numpy as np
 
-from batlab.formatting import finding_words, p_value, status_of
+from batlab.formatting import (
+    decision_level,
+    false_alarm_words,
+    finding_words,
+    p_value,
+    p_value_words,
+    share,
+    stated_chance,
+    status_of,
+)
 from batlab.pipeline.records import FORCED_KEY, ReportInputs, jsonable, lab_units
 from batlab.registry import now_utc
 from batlab.report_check import seal_page
+from batlab.version import code_version
 from ema.io.atomic_write import atomic_write
 from updating.inspect.details import InspectionDetails, ModePair
-from updating.inspect.words import chance, percent
+from updating.inspect.words import percent
 from updating.model.mass_properties import MassProperties, mass_properties
 from updating.model.sections import Core
 from updating.model.units import (
@@ -430,8 +440,8 @@ def mass_rows(r: ReportInputs) -> list[tuple[str, float, float, float]]:
 def headline(r: ReportInputs) -> str:
     """One plain sentence (or two): what was found, where, how much and how sure."""
     v, serial = r.verdict, r.serial
-    status, p = status_of(v), p_value(v)
-    alpha = v.get("false_alarm_rate")
+    status, said = status_of(v), p_value_words(v)
+    alpha = decision_level(v)
     if status == "inconclusive":
         reasons = v.get("reasons") or ["the two tests cannot be compared"]
         return (f"No verdict is possible for bat {serial}: " + "; ".join(reasons) +
@@ -455,18 +465,19 @@ def headline(r: ReportInputs) -> str:
             weight = f"{abs(d_oz):.1f} oz {'lighter' if d_oz < 0 else 'heavier'}"
             text += f"; {weight}" if words else f" ({weight})"
         text += "."
-        if p is not None:
-            text += f" The evidence is strong: the {chance(p)}."
+        if said is not None:
+            text += f" The {said}."
         return text
     text = (f"Bat {serial} shows no sign of alteration: the re-test differs from the baseline "
             "no more than moisture, temperature and re-mounting the sensor explain.")
     grip = finding_words(v.get("finding"))
     if grip:
         text += f" Found: {grip}."
-    if p is not None:
-        text += f" The {chance(p)}"
+    if said is not None:
+        text += f" The {said}"
         if alpha:
-            text += f"; a bat is called altered only when that chance is below {percent(alpha)}"
+            text += (f"; a bat is called altered only when the F test's nominal chance is below "
+                     f"{percent(alpha)}")
         text += "."
     return text
 
@@ -622,15 +633,7 @@ def _facts(r: ReportInputs) -> list[list]:
     facts += _finding_facts(v.get("finding"))
     if status == "inconclusive":  # the two tests cannot be compared: no statistic means much
         return facts
-    if p is not None:
-        shown = "< 0.000001" if p < 1e-6 else f"{p:.3g}"
-        facts.append([_Raw("Chance an unaltered bat differs this much <span class='note'>"
-                           "(the p-value: how often a re-test of an unaltered bat differs "
-                           "at least this much from its baseline)</span>"),
-                      _Raw(f"{percent(p)} <span class='note'>(p = {shown})</span>")])
-    if v.get("false_alarm_rate") is not None:
-        facts.append(["Called altered when that chance is below (false-alarm rate)",
-                      percent(float(v["false_alarm_rate"]))])
+    facts += _chance_facts(v, p)
     finding = v.get("finding") or {}
     read = finding.get("reading") or {}
     given = set(read) & set(finding.get("uncertainty") or {})  # shown with the finding
@@ -665,6 +668,46 @@ def _facts(r: ReportInputs) -> list[list]:
                            "moisture explains; the p-value above is what it means)</span>"),
                       _Raw(f"{stat:.4g} <span class='note'>{html.escape(str(name))}</span>")])
     return facts
+
+
+def _chance_facts(v: dict, p: float | None) -> list[list]:
+    """Return the evidence table's rows for the chance and the false-alarm rate.
+
+    The chance as measured on the bat model's calibration (how many clean re-tests, how many
+    at least as different, the record), or said unmeasured; the F distribution's nominal
+    p-value beside it, named as nominal; the false-alarm rate measured or unmeasured; the
+    decision's level.
+    """
+    ch = stated_chance(v) or {}
+    rows: list[list] = []
+    head = _Raw("Chance an unaltered bat differs this much <span class='note'>(how often a "
+                "re-test of an unaltered bat differs at least this much from its "
+                "baseline)</span>")
+    cal = ch.get("calibration") if ch.get("source") == "calibration" else None
+    if cal and ch.get("value") is not None:
+        n, b = int(cal["n"]), int(cal["exceeding"])
+        text = f"below 1 in {n + 1:,}" if b == 0 else share(float(ch["value"]))
+        rows.append([head, _Raw(f"{html.escape(text)} <span class='note'>(measured: {b:,} of "
+                                f"{n:,} clean re-tests at least this different)</span>")])
+        rows.append(["Measured on (calibration)",
+                     f"bat model {cal['model']}: {n:,} clean re-tests, custody record "
+                     f"#{cal['record_seq']}, judged by batlab {cal.get('code')}"])
+        if ch.get("extrapolated") is not None:
+            rows.append(["Beyond the measured range (generalized-Pareto tail fit: an "
+                         "extrapolation, not a measurement)", f"{ch['extrapolated']:.2g}"])
+    elif ch.get("value") is not None:
+        rows.append([head, _Raw("unmeasured <span class='note'>("
+                                f"{html.escape(str(ch.get('unmeasured') or 'no calibration'))}"
+                                ")</span>")])
+    if p is not None:
+        shown = "< 0.000001" if p < 1e-6 else f"{p:.3g}"
+        rows.append([_Raw("Nominal chance <span class='note'>(the F distribution's p-value: "
+                          "not a measured rate)</span>"),
+                     _Raw(f"{percent(p)} <span class='note'>(p = {shown})</span>")])
+    rate = false_alarm_words(v.get("false_alarm_rate"))
+    if rate is not None:
+        rows.append(["False-alarm rate", rate])
+    return rows
 
 
 READING_UNITS = {"_g": ("g", 1), "_in": ("in", 3), "_pct": ("%", 1)}
@@ -703,8 +746,16 @@ def _finding_facts(finding: dict | None) -> list[list]:
 
 def _provenance(r: ReportInputs, generated_at: str) -> list[list]:
     pv, meta = r.provenance, r.meta
+    judged = r.verdict.get("code") or pv.get("batlab_version")
+    drawn = code_version()
     rows: list[list] = [["Report generated (UTC)", generated_at[:19].replace("T", " ")],
-                        ["batlab version", pv.get("batlab_version")]]
+                        ["Code that judged (batlab version)", judged],
+                        ["Code that drew this report", drawn]]
+    if judged != drawn:
+        rows.append(["Other code", f"judged by batlab {judged}, this report drawn by batlab "
+                                   f"{drawn}: the verdict and its chance are as stored; the "
+                                   "figures are refitted (and a missing element map judged "
+                                   "again) by the code that drew it"])
     if pv.get("inspection_id") is not None:
         when = pv["inspected_at"][:19].replace("T", " ")
         rows.append(["Inspection", f"#{pv['inspection_id']}, {when} UTC"])

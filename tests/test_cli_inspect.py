@@ -74,7 +74,10 @@ def test_contract_dict_units_and_nulls():
     assert out["region_in"] is None and out["core_diameter_in"] is None
     assert out["fill_density_ratio"] is None
     json.dumps(out)  # plain JSON types only
-    assert out["status"] == "not_altered" and out["reasons"] == []
+    assert out["status"] == "not_altered" and out["chance"]["source"] == "nominal"
+    assert out["reasons"] == [  # no reason held the chance: it is one, said unmeasured
+        "chance an unaltered bat differs this much: unmeasured, no calibration was looked up; "
+        "the F distribution's nominal 80 % is not a measured rate"]
 
     unsure = Verdict(None, float("nan"), 0.01, float("nan"), None, None, None, {}, x0, x0 + 0.1,
                      np.zeros(3), np.zeros(3), {}, reasons=("units: re-export",))

@@ -95,7 +95,8 @@ def test_corked_retest_found_in_place(registry):
 
     stateless = batlab(["inspect", "--profile", SAMPLE / "profile.csv", "--meta",
                               SAMPLE / "meta.json", "--baseline", SAMPLE / "baseline.uff",
-                              "--retest", SAMPLE / "retest_corked.uff", "--json"])
+                              "--retest", SAMPLE / "retest_corked.uff", "--json",
+                              "--db", db])  # the calibrations it reads: the same registry's
     assert stateless == out
     record = assert_stored_record_reads_back(db)
     details = InspectionDetails.from_json_dict(record["details"])

@@ -99,14 +99,14 @@ def test_fleet_folder_lists_uff_with_their_json(tmp_path):
         retest_jobs(tmp_path / "empty")
 
 
-def _calibrate(capsys, n: int, seed: int, *more) -> dict:
+def _calibrate(capsys, n: int, seed: int, *more) -> tuple[dict, str]:
     code = main(["fleet", "calibrate", "--profile", str(BUILTIN / "profile.csv"), "--meta",
                  str(BUILTIN / "meta.json"), "--n", str(n), "--seed", str(seed), "--json",
                  *more])
     out, err = capsys.readouterr()
     assert code == 0, err
     assert "clean bat: " in err and "a minute" in err  # progress: count, rate, time
-    return json.loads(out)
+    return json.loads(out), err
 
 
 def _rows(path) -> list[dict]:
@@ -117,20 +117,42 @@ def _rows(path) -> list[dict]:
 
 def test_calibrate_on_a_local_cluster_resumed_the_same(capsys, tmp_path):
     """Two bats, then a third by --resume: bat 2 inspected again agrees with its row (the
-    same seed, the same answer), and a row another run made is refused, naming the file."""
-    rows = tmp_path / "rows.jsonl"
-    first = _calibrate(capsys, 2, 7, "-o", str(rows))
+    same seed, the same answer; its row said another code judged it, and that is said with
+    both versions), the three stored as the built-in model's null (--store), from which a
+    real inspection of a bat of that model states its chance; a row another run made is
+    refused, naming the file."""
+    from batlab.version import code_version
+
+    rows, db = tmp_path / "rows.jsonl", tmp_path / "league.sqlite"
+    first, err = _calibrate(capsys, 2, 7, "-o", str(rows))
     assert first["n"] == 2 and first["serial"] == "DEMO-34A"
     counted = first["false_alarms"] + first["inconclusive"] + first["not_altered"]
     assert counted + first["refused"] == 2
     assert first["false_alarm_upper95"] == pytest.approx(upper95(first["false_alarms"], 2))
+    assert first["core_s_per_bat"] > 0 and "core-s a bat" in err
+    assert first["codes"] == {code_version(): 2}
     two = _rows(rows)
-    assert [r["index"] for r in two] == [1, 2]
-    more = _calibrate(capsys, 3, 7, "-o", str(rows), "--resume")
+    assert [r["index"] for r in two] == [1, 2] and all(r["code"] == code_version() for r in two)
+    two[1]["code"] = "0.1.0+gdeadbeef1"  # as if an older batlab had judged re-test 2
+    rows.write_text("".join(json.dumps(r) + "\n" for r in two))
+    more, err = _calibrate(capsys, 3, 7, "-o", str(rows), "--resume", "--store", "--db",
+                           str(db))
+    assert "re-test 2 judged again under other code (stored by batlab 0.1.0+gdeadbeef1, " \
+           f"judged again by batlab {code_version()})" in err
     three = _rows(rows)
     assert [r["index"] for r in three] == [1, 2, 3] and three[:2] == two
     assert more["n"] == 3 and more["false_alarm_upper95"] == pytest.approx(
         upper95(more["false_alarms"], 3))
+    assert more["codes"] == {code_version(): 2, "0.1.0+gdeadbeef1": 1}
+    stored = more["stored"]
+    code = main(["demo", "-o", str(tmp_path / "demo"), "--db", str(db), "--json"])
+    verdict = json.loads(capsys.readouterr().out)
+    assert code == 0 and verdict["chance"]["source"] == "calibration"
+    cal = verdict["chance"]["calibration"]
+    assert (cal["model"], cal["n"], cal["record_seq"]) == (stored["model"], 3,
+                                                          stored["record_seq"])
+    assert cal["false_alarm_upper95"] == more["false_alarm_upper95"]
+    assert verdict["code"] == code_version()
     three[2]["F"] = 2.0 * (three[2]["F"] or 1.0) + 1.0  # as if another seed had made it
     rows.write_text("".join(json.dumps(r) + "\n" for r in three))
     code = main(["fleet", "calibrate", "--profile", str(BUILTIN / "profile.csv"), "--meta",

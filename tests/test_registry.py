@@ -160,9 +160,9 @@ def test_migration_from_v1(tmp_path):
     conn.close()
 
     with reg.open_registry(path) as conn:
-        assert reg.schema_version(conn) == reg.SCHEMA_VERSION == 5
+        assert reg.schema_version(conn) == reg.SCHEMA_VERSION == 6
         versions = [r[0] for r in conn.exec_driver_sql("SELECT version_num FROM alembic_version")]
-        assert versions == ["0005"]  # Alembic ran 0002..0005 in place
+        assert versions == ["0006"]  # Alembic ran 0002..0006 in place
         bat = reg.get_bat(conn, "V1")
         assert bat.profile_x_m == prof["x_m"] and bat.profile_diameter_m == prof["diameter_m"]
         assert bat.species == "maple" and bat.reference == {"E_pa": 1e10}
@@ -244,7 +244,7 @@ def test_concurrent_writers(tmp_path):
         assert sorted(h.retest_sha256 for h in hist) == sorted(
             reg.sha256_bytes(f"{w}-{k}".encode()) for w in range(4) for k in range(15))
         assert conn.exec_driver_sql("SELECT version_num FROM alembic_version").all() == [
-            ("0005",)]  # created once at the head, whoever came first
+            ("0006",)]  # created once at the head, whoever came first
         assert reg.check(conn).ok  # one unbroken chain however the writers interleaved
 
 

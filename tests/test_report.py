@@ -54,7 +54,9 @@ def test_report_is_self_contained(result, tmp_path):
     page = path.read_text()
     assert "Inspection of bat HX-2001" in page
     assert "Bat HX-2001 has been altered: a bore about 1.00 in across from 24.0 to 33.0 in" in page
-    assert "the chance an unaltered bat differs this much: 0.1 %." in page  # 1 - 0.999
+    # no registry to read a calibration from: said unmeasured, the nominal 1 - 0.999 beside
+    assert ("The chance an unaltered bat differs this much: unmeasured, no calibration was"
+            in page and "nominal 0.1 % is not a measured rate." in page)
     assert "confidence" not in page.lower()
     assert pipeline.file_sha256(SAMPLE / "retest_corked.uff") in page  # provenance
     assert "<td>Species</td><td>white ash</td>" in page
@@ -159,12 +161,14 @@ def test_plain_sentence_for_clean_and_inconclusive(result):
     """A clean bat at confidence 0.075 reads as a 92 % chance, never as "7.5 % sure"; an
     inconclusive verdict gives its reasons and no p-value; status derives from ``altered``
     when the verdict has none."""
-    clean = _with_verdict(result, drop=("status", "reasons"), altered=False, confidence=0.075,
-                          region_in=None, core_diameter_in=None, fill_density_ratio=None)
+    clean = _with_verdict(result, drop=("status", "reasons", "chance"), altered=False,
+                          confidence=0.075, region_in=None, core_diameter_in=None,
+                          fill_density_ratio=None)  # as stored before chances were measured
     text = headline(clean)
     assert text.startswith("Bat HX-2001 shows no sign of alteration")
-    assert "The chance an unaltered bat differs this much: 92 %" in text
-    assert "called altered only when that chance is below 1 %" in text
+    assert "The chance an unaltered bat differs this much: unmeasured" in text
+    assert "the F distribution's nominal 92 % is not a measured rate" in text
+    assert "called altered only when the F test's nominal chance is below 1 %" in text
     assert "0.075" not in text and "7.5" not in text
     odd = _with_verdict(result, status="inconclusive", altered=None,
                         reasons=["too few modes pair (2 of 6): re-test with more hits"])

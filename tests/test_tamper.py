@@ -204,7 +204,7 @@ def test_a_chain_recomputed_after_an_edit_is_found(copy, tmp_path, monkeypatch):
     conn.close()
     payload = payload.replace('"status":"altered"', '"status":"not_altered"', 1)
     raw(copy, "UPDATE inspections SET status = 'not_altered' WHERE id = 1",
-        f"UPDATE custody SET payload = '{payload}', content_sha256 = "
+        "UPDATE custody SET payload = '" + payload.replace("'", "''") + "', content_sha256 = "
         f"'{custody.sha256_text(payload)}' WHERE seq = {seq}")
     key_id = _other_key(tmp_path, monkeypatch)
     rows = _rechain(copy, signing.signing_key())

@@ -86,7 +86,7 @@ def _run_in(work: Path, args: argparse.Namespace, keep: bool) -> int:
         report = write_report(work / "report", inputs)
         if keep:
             pipeline.note_report(conn, stored, str(report))
-    out = pipeline.contract_dict(serial, result.verdict)
+    out = pipeline.result_dict(result)
     where = f"under {work}; report: {report}" if keep else "(not kept: give --out DIR to keep them)"
     progress(f"wrote the tests, registry and report {where}")
     if args.json:

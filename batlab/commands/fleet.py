@@ -2,14 +2,18 @@
 
     batlab fleet inspect DIR --db DB [--scheduler tcp://HOST:PORT] [--json]
     batlab fleet calibrate --profile P --meta M --n N [--seed S] [--scheduler ...] [--json]
-                           [-o rows.jsonl [--resume]]
+                           [-o rows.jsonl [--resume]] [--store [--db DB] [--model NAME]]
 
 ``inspect`` judges every ``SERIAL.uff`` of DIR (``SERIAL.json``: its retest.json) against
 the registry as ``batlab inspect --serial`` does and stores each verdict; ``--json`` prints
 the list of the objects ``batlab inspect --json`` prints (a refused re-test:
 ``{"serial", "retest", "error"}``, and exit 1). ``calibrate`` inspects N simulated clean
 re-tests of one bat (every nuisance and legal grip) and bounds its false-alarm rate;
-``--resume`` keeps the rows already in ``-o``'s file and inspects only the missing re-tests.
+``--resume`` keeps the rows already in ``-o``'s file and inspects only the missing re-tests
+(rows judged by other code are said, with both versions); ``--store`` keeps the clean
+re-tests' F and status in the registry as the bat model's measured null (a signed custody
+record), from which ``inspect`` states the chance of the model's bats. The cost is printed
+as core-seconds a bat (stderr, and ``core_s_per_bat`` in the JSON).
 Without ``--scheduler`` a local cluster sized to the machine does the work; progress goes
 to stderr.
 """
@@ -48,6 +52,13 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--resume", action="store_true",
                    help="calibrate: keep the rows already in -o's file (the last one is "
                         "inspected again and must agree) and inspect only the missing ones")
+    p.add_argument("--store", action="store_true",
+                   help="calibrate: keep the clean re-tests' F and status in the registry "
+                        "(--db) as the bat model's measured null, a signed custody record; "
+                        "inspect states its bats' chance from it")
+    p.add_argument("--model", default=None, metavar="NAME",
+                   help="calibrate --store: the bat model's name (default: meta.json's "
+                        "model, else SPECIES-LENGTHin-HASH of the profile)")
     p.add_argument("--false-alarm", type=float, default=0.01,
                    help="false-alarm rate of the decision (default 0.01)")
     p.add_argument("--json", action="store_true", help="print the result as JSON on stdout")
@@ -103,7 +114,7 @@ def _inspect(args: argparse.Namespace) -> int:
 
 
 def _calibrate(args: argparse.Namespace) -> int:
-    from batlab.fleet.calibrate import BatSpec, read_bat, summary
+    from batlab.fleet.calibrate import BatSpec, default_model, read_bat, summary
     from batlab.fleet.cluster import connect
 
     if not (args.profile and args.meta and args.n):
@@ -112,9 +123,18 @@ def _calibrate(args: argparse.Namespace) -> int:
         raise ValueError(f"--n {args.n}: at least one clean bat")
     if args.resume and not args.out:
         raise ValueError("fleet calibrate: --resume needs -o, the rows file to resume")
+    if args.model is not None and not args.store:
+        raise ValueError("fleet calibrate: --model names what --store keeps; give --store")
     progress = progress_printer("fleet calibrate")
     spec = BatSpec(str(args.profile), str(args.meta), args.seed, args.false_alarm)
     serial = read_bat(spec)[2].get("serial")  # a bad file fails here, before any work
+    model = (args.model or default_model(spec)) if args.store else None
+    if args.store:  # an unusable registry fails here, before hours of work
+        from batlab.registry import open_registry, shown
+
+        with open_registry(db_path(args)):
+            progress(f"the calibration will be stored in {shown(db_path(args))} as bat model "
+                     f"{model}")
     stored = _stored_rows(args, progress)
     t0 = time.perf_counter()
     with connect(args.scheduler) as client:
@@ -124,12 +144,32 @@ def _calibrate(args: argparse.Namespace) -> int:
     wall = time.perf_counter() - t0
     rows = sorted(stored + new, key=lambda r: r["index"])
     out = summary(rows, spec, serial)
+    out["core_s_per_bat"] = wall * cores / len(new) if new else None
     if new:
         cpu = sorted(r["cpu_s"] for r in new)
-        progress(f"{wall:.0f} s on {cores} core(s): {wall * cores / len(new):.2f} core-s a "
+        progress(f"{wall:.0f} s on {cores} core(s): {out['core_s_per_bat']:.2f} core-s a "
                  f"bat; CPU {sum(cpu) / len(cpu):.2f} s a bat (median {cpu[len(cpu) // 2]:.2f} s)")
+    if set(out["codes"]) != {out["code"]}:
+        progress("rows judged by other code than this batlab's " + out["code"] + ": "
+                 + ", ".join(f"{n} by {c}" for c, n in out["codes"].items()))
+    if args.store:
+        out["stored"] = _store(args, model, rows, out, progress)
     print(json.dumps(out) if args.json else _words(out))
     return 0
+
+
+def _store(args: argparse.Namespace, model: str, rows: list[dict], out: dict,
+           progress) -> dict:
+    """Store the calibration (``fleet.calibrate.store_calibration``); say where."""
+    from batlab.fleet.calibrate import store_calibration
+    from batlab.registry import open_registry, shown
+
+    with open_registry(db_path(args)) as conn:
+        done = store_calibration(conn, model, rows, out)
+    progress(f"stored as calibration #{done.id} of bat model {model} (custody record "
+             f"#{done.record_seq}) in {shown(db_path(args))}")
+    return {"calibration": done.id, "model": model, "record_seq": done.record_seq,
+            "db": shown(db_path(args))}
 
 
 def _stored_rows(args: argparse.Namespace, progress) -> list[dict]:
@@ -160,7 +200,9 @@ def _new_rows(client, spec, args: argparse.Namespace, stored: list[dict],
     if stored:
         progress(f"re-test {stored[-1]['index']} inspected again: it must agree with its row")
         again = run_calibration(client, spec, [stored[-1]["index"]], progress)[0]
-        check_resumed(args.out, stored[-1], again)
+        other_code = check_resumed(args.out, stored[-1], again)
+        if other_code:
+            progress(other_code)
     if not todo:
         return []
     rows_file = open(args.out, "a" if args.resume else "w") if args.out else None  # noqa: SIM115
@@ -194,6 +236,14 @@ def _words(out: dict) -> str:
              f"refused: {out['refused']}",
              f"  false-alarm rate below {out['false_alarm_upper95']:.2e} (95 % upper bound, "
              "Clopper-Pearson)"]
+    if out.get("core_s_per_bat") is not None:
+        lines.append(f"  cost: {out['core_s_per_bat']:.2f} core-s a bat")
+    lines.append("  judged by " + ", ".join(f"batlab {c} ({n} re-tests)"
+                                            for c, n in out["codes"].items()))
+    if out.get("stored"):
+        st = out["stored"]
+        lines.append(f"  stored: calibration #{st['calibration']} of bat model {st['model']}, "
+                     f"custody record #{st['record_seq']}, in {st['db']}")
     if t.get("smallest_p"):
         lines.append("  smallest p: " + ", ".join(f"{r['p']:.2g} (#{r['index']})"
                                                   for r in t["smallest_p"]))

@@ -8,13 +8,19 @@ Two forms, the same verdict:
 
 A registered bat's re-test file already inspected (same SHA-256, baseline and false-alarm
 rate, no --retest-meta) is not inspected or stored again: its stored verdict is printed;
-``--again`` re-runs and stores it anew.
+``--again`` re-runs and stores it anew. The chance an unaltered bat differs this much is
+stated from the registry's latest calibration of the bat's model (``fleet calibrate
+--store``), else said unmeasured; the stateless form reads calibrations from ``--db``, else
+``$BATLAB_DB`` when set, and stores nothing.
 """
 
 from __future__ import annotations
 
 import argparse
 import json
+import os
+from contextlib import contextmanager
+from pathlib import Path
 
 from batlab.cli_support import (
     add_db_argument,
@@ -49,7 +55,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--again", action="store_true",
                    help="with --serial: inspect and store a re-test file already inspected "
                         "(default: print its stored verdict)")
-    add_db_argument(p)
+    add_db_argument(p)  # the stateless form: where calibrations are read (--db or $BATLAB_DB)
     p.add_argument("--json", action="store_true",
                    help="print the verdict as one JSON object on stdout")
 
@@ -110,7 +116,7 @@ def run(args: argparse.Namespace) -> int:
                                                retest_meta=bool(args.retest_meta))
             progress(f"stored as inspection #{stored.id} of {result.serial} (custody record "
                      f"#{stored.record_seq})")
-            _print(args, pipeline.contract_dict(result.serial, result.verdict), readable)
+            _print(args, pipeline.result_dict(result), readable)
             if args.out or args.plots:
                 bat = pipeline.stored_bat(conn, stored)
                 prov = pipeline.provenance(conn, stored=stored)
@@ -125,10 +131,12 @@ def run(args: argparse.Namespace) -> int:
                 if path is not None:
                     pipeline.note_report(conn, stored, path)
     else:
-        result = pipeline.inspect_files(args.profile, args.meta, args.baseline, retest,
-                                        args.false_alarm, progress, args.retest_meta,
-                                        with_map=bool(args.out or args.plots))
-        _print(args, pipeline.contract_dict(result.serial, result.verdict), readable)
+        with _calibrations(args) as (conn, why):
+            result = pipeline.inspect_files(args.profile, args.meta, args.baseline, retest,
+                                            args.false_alarm, progress, args.retest_meta,
+                                            with_map=bool(args.out or args.plots))
+            result = pipeline.with_statement(result, conn, why)
+        _print(args, pipeline.result_dict(result), readable)
         if args.out or args.plots:
             prov = pipeline.provenance(baseline_sha256=pipeline.file_sha256(args.baseline),
                                        retest_sha256=pipeline.file_sha256(retest))
@@ -143,13 +151,34 @@ def _print_stored(args, conn, done, retest: str, progress, readable) -> int:
 
     progress(f"{retest} was already inspected (inspection #{done.id} of {done.serial}, "
              f"{done.inspected_at}): its stored verdict, not stored again (--again re-runs it)")
-    _print(args, pipeline.stored_contract_dict(done.verdict), readable)
+    _print(args, pipeline.stored_contract_dict(done.verdict, done.inputs), readable)
     if args.out or args.plots:
         path = _report(args, pipeline.stored_report_inputs(conn, done.serial, done.id,
                                                            progress), progress)
         if path is not None:
             pipeline.note_report(conn, done, path)
     return 0
+
+
+@contextmanager
+def _calibrations(args):
+    """Open the registry the stateless form reads calibrations from: ``(conn, why)``.
+
+    ``--db`` (it must exist), else ``$BATLAB_DB`` when set (a registry not there yet is
+    said, not an error), read-only; else none: ``conn`` None and ``why`` says, in words, why
+    the chance is unmeasured. Nothing is stored.
+    """
+    from batlab.registry import open_registry
+
+    if not args.db and not os.environ.get("BATLAB_DB"):
+        yield None, ("no registry was given to read calibrations from (--db or $BATLAB_DB)")
+        return
+    path = db_path(args)
+    if not args.db and isinstance(path, Path) and not path.exists():
+        yield None, "no registry at $BATLAB_DB to read calibrations from"
+        return
+    with open_registry(path, create=False, readonly=True) as conn:
+        yield conn, None
 
 
 def _print(args, out: dict, readable) -> None:

@@ -1,4 +1,4 @@
-"""`batlab registry`: check the registry, print the lab's key or the chain's head, copy it."""
+"""`batlab registry`: check, print the lab's key or the chain's head, copy, list calibrations."""
 
 from __future__ import annotations
 
@@ -9,16 +9,21 @@ from dataclasses import asdict, replace
 from batlab.cli_support import add_db_argument, db_path
 
 EXAMPLE = ("batlab registry check --db lab.sqlite --head 42:<sha256>\n"
-           "  batlab registry copy --from lab.sqlite --to postgresql://lab@league/batlab")
+           "  batlab registry copy --from lab.sqlite --to postgresql://lab@league/batlab\n"
+           "  batlab registry calibrations --db league.sqlite --json")
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
     """Add the ``registry`` arguments to parser ``p``."""
-    p.add_argument("action", choices=["check", "key", "head", "copy"],
+    p.add_argument("action", choices=["check", "key", "head", "copy", "calibrations"],
                    help="check: verify everything stored; key: print the lab's public key "
                         "(ed25519:<base64>) for a league to keep; head: print the chain's "
                         "head, SEQ:SHA256, to note outside the file; copy: copy every bat, "
-                        "file, inspection and custody record --from one registry --to another")
+                        "file, inspection and custody record --from one registry --to "
+                        "another; calibrations: list the stored calibrations of bat models "
+                        "(fleet calibrate --store)")
+    p.add_argument("--model", default=None, metavar="NAME",
+                   help="calibrations: only this bat model's")
     p.add_argument("--report", default=None, metavar="INDEX.html",
                    help="check: also verify a report page: its seal, what it says (verdict, "
                         "reasons, the head it shows) and its records and files")
@@ -35,7 +40,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    help="check: a head printed earlier; fails if that record is no longer in "
                         "the chain (rollback, truncation, fork)")
     add_db_argument(p)
-    p.add_argument("--json", action="store_true", help="check, copy: print the result as JSON")
+    p.add_argument("--json", action="store_true",
+                   help="check, copy, calibrations: print the result as JSON")
 
 
 def run(args: argparse.Namespace) -> int:
@@ -62,6 +68,9 @@ def run(args: argparse.Namespace) -> int:
         return _copy(args)
     from batlab.registry import check, head, open_registry, shown
 
+    if args.action == "calibrations":
+        with open_registry(db_path(args), create=False, readonly=True) as conn:
+            return _calibrations(conn, args)
     path = db_path(args)
     with open_registry(path, create=False, readonly=True) as conn:
         if args.action == "head":
@@ -130,3 +139,47 @@ def _copy(args: argparse.Namespace) -> int:
         print(f"  source head {res.source_head}")
         print(f"  destination head {res.head}")
     return 0
+
+
+def _calibrations(conn, args: argparse.Namespace) -> int:
+    """Print the stored calibrations (JSON: one object each, without the per-re-test null)."""
+    from batlab.registry import list_calibrations
+
+    rows = []
+    for c in list_calibrations(conn, args.model):
+        f = [v for v in c.null.get(c.statistic) or [] if v is not None]
+        q = {} if not f else {k: float(x) for k, x in zip(
+            ("50", "90", "99", "max"), [*_quantiles(f, (0.5, 0.9, 0.99)), max(f)],
+            strict=True)}
+        rows.append({"calibration": c.id, "model": c.model, "n": c.n,
+                     "false_alarms": c.false_alarms,
+                     "false_alarm_upper95": c.false_alarm_upper95,
+                     "inconclusive": c.summary.get("inconclusive"), "statistic": c.statistic,
+                     "with_statistic": len(f), "quantiles": q, "serial": c.summary.get("serial"),
+                     "seed": c.summary.get("seed"), "false_alarm": c.summary.get("false_alarm"),
+                     "codes": c.summary.get("codes"), "code": c.code,
+                     "core_s_per_bat": c.summary.get("core_s_per_bat"),
+                     "calibrated_at": c.calibrated_at, "record_seq": c.record_seq})
+    if args.json:
+        print(json.dumps(rows))
+        return 0
+    if not rows:
+        print("no calibration stored" + (f" for bat model {args.model}" if args.model else ""))
+    for r in rows:
+        q = r["quantiles"]
+        quant = "" if not q else (f"; {r['statistic']} 50/90/99 % {q['50']:.2f} / {q['90']:.2f}"
+                                  f" / {q['99']:.2f}, largest {q['max']:.2f}")
+        print(f"#{r['calibration']} bat model {r['model']}: {r['n']:,} clean re-tests, "
+              f"{r['false_alarms']} called altered (rate below {r['false_alarm_upper95']:.2g}, "
+              f"95 %), {r['inconclusive']} inconclusive{quant}")
+        print(f"  bat {r['serial']}, seed {r['seed']}, level {r['false_alarm']}; judged by "
+              + ", ".join(f"batlab {c} ({n})" for c, n in (r["codes"] or {}).items())
+              + f"; stored {r['calibrated_at'][:19]} UTC, custody record #{r['record_seq']}")
+    return 0
+
+
+def _quantiles(values: list[float], qs: tuple[float, ...]) -> list[float]:
+    """Return the quantiles of ``values`` (linear interpolation, as numpy.quantile)."""
+    import numpy as np
+
+    return [float(x) for x in np.quantile(np.asarray(values, dtype=float), qs)]

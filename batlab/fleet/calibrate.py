@@ -153,8 +153,8 @@ def inspect_clean(spec: BatSpec, i: int) -> dict:
     -------
     dict
         index, status ("not_altered", "inconclusive", "altered" or "refused"), reasons, the
-        statistic F and its p-value, the grip, and the seconds spent (simulation and
-        inspection).
+        statistic F, its p-value and degrees of freedom, the grip, the code that judged it
+        (``batlab.version``) and the seconds spent (simulation and inspection).
     """
     t0, cpu0 = time.perf_counter(), time.process_time()
     reg = registration(spec)
@@ -171,13 +171,16 @@ def inspect_clean(spec: BatSpec, i: int) -> dict:
             verdict = pipeline.judge(case, spec.false_alarm, conditions_from_dict(
                 retest.retest_meta, "retest.json"), with_map=False).verdict
         except ValueError as exc:  # refused, as `batlab inspect` refuses it
-            row.update(status="refused", reasons=[str(exc)], F=None, p=None,
-                       seconds=time.perf_counter() - t0, cpu_s=time.process_time() - cpu0)
+            row.update(status="refused", reasons=[str(exc)], F=None, p=None, dof=None,
+                       code=pipeline.code_version(), seconds=time.perf_counter() - t0,
+                       cpu_s=time.process_time() - cpu0)
             return row
     out = pipeline.contract_dict(reg.case.serial, verdict)
     fit = verdict.details.fit
     row.update(status=out["status"], reasons=out["reasons"], F=verdict.statistic,
-               p=None if fit is None else fit.p_value, seconds=time.perf_counter() - t0,
+               p=None if fit is None else fit.p_value,
+               dof=None if fit is None or fit.dof is None else [int(d) for d in fit.dof],
+               code=out["code"], seconds=time.perf_counter() - t0,
                cpu_s=time.process_time() - cpu0)
     return row
 
@@ -259,7 +262,9 @@ def summary(rows: list[dict], spec: BatSpec, serial: str | None = None) -> dict:
     dict
         n, false_alarms (clean bats called altered), inconclusive, refused,
         false_alarm_upper95 (one-sided Clopper-Pearson, ``upper95``), confidence, the
-        statuses per grip, the statistic's ``tail``, serial, seed and false_alarm.
+        statuses per grip, the statistic's ``tail``, serial, seed, false_alarm, the code
+        summarising (``code``) and the codes that judged the rows with their counts
+        (``codes``), and the mean CPU seconds a row took (``cpu_s_per_bat``).
     """
     status = [r["status"] for r in rows]
     grips: dict = {}
@@ -267,12 +272,27 @@ def summary(rows: list[dict], spec: BatSpec, serial: str | None = None) -> dict:
         g = grips.setdefault(r["grip"] or "none", {})
         g[r["status"]] = g.get(r["status"], 0) + 1
     alarms = status.count("altered")
+    cpu = [r["cpu_s"] for r in rows if r.get("cpu_s") is not None]
     return {"n": len(rows), "false_alarms": alarms, "inconclusive": status.count("inconclusive"),
             "refused": status.count("refused"), "not_altered": status.count("not_altered"),
             "false_alarm_upper95": upper95(alarms, len(rows)), "confidence": 0.95,
             "alarm_indices": [r["index"] for r in rows if r["status"] == "altered"],
             "by_grip": grips, "tail": tail(rows), "serial": serial, "seed": spec.seed,
-            "false_alarm": spec.false_alarm}
+            "false_alarm": spec.false_alarm, "code": pipeline.code_version(), "codes": codes(rows),
+            "cpu_s_per_bat": float(np.mean(cpu)) if cpu else None}
+
+
+UNNAMED_CODE = "unnamed"
+"""The code of a row written before rows named theirs."""
+
+
+def codes(rows: list[dict]) -> dict[str, int]:
+    """Count the rows each code judged (``UNNAMED_CODE``: a row that does not say)."""
+    out: dict[str, int] = {}
+    for r in rows:
+        name = r.get("code") or UNNAMED_CODE
+        out[name] = out.get(name, 0) + 1
+    return out
 
 
 def run_calibration(client, spec: BatSpec, indices: list[int], progress,
@@ -337,16 +357,79 @@ def same_row(stored: dict, again: dict, rtol: float = 1e-6) -> bool:
                           rtol)
 
 
-def check_resumed(path: str, stored: dict, again: dict) -> None:
+def check_resumed(path: str, stored: dict, again: dict) -> str | None:
     """Refuse to go on with rows another bat, seed or code made (``same_row``).
+
+    Returns
+    -------
+    str or None
+        When the re-test was judged again under other code than its row names and gave the
+        same status and F: a line saying so, with both versions (None: the same code).
 
     Raises
     ------
     ValueError
-        Naming the file, the re-test and both answers.
+        Naming the file, the re-test, both answers and both codes.
     """
+    then, now = stored.get("code") or UNNAMED_CODE, again.get("code") or UNNAMED_CODE
+    codes_said = f"stored by batlab {then}, judged again by batlab {now}"
     if not same_row(stored, again):
         raise ValueError(
             f"{path}: re-test {stored['index']} was stored as {stored['status']} "
-            f"(F {stored.get('F')}) but is now {again['status']} (F {again.get('F')}): "
-            "these rows come from another bat, seed or version of batlab")
+            f"(F {stored.get('F')}) but is now {again['status']} (F {again.get('F')}); "
+            f"{codes_said}: these rows come from another bat, seed or version of batlab")
+    if then != now:
+        return (f"re-test {stored['index']} judged again under other code ({codes_said}): "
+                "the same status and F, so the rows are kept; the summary counts the rows "
+                "each code judged")
+    return None
+
+
+def null_of(rows: list[dict]) -> dict:
+    """Return what a stored calibration keeps of each clean re-test (lists in index order).
+
+    ``index``, ``status``, ``F`` (None without one), ``p``, ``dof`` and ``code``, JSON
+    types (NaN as None).
+    """
+    def num(v):
+        return None if v is None or not np.isfinite(float(v)) else float(v)
+
+    return {"index": [int(r["index"]) for r in rows], "status": [r["status"] for r in rows],
+            "F": [num(r.get("F")) for r in rows], "p": [num(r.get("p")) for r in rows],
+            "dof": [r.get("dof") for r in rows], "code": [r.get("code") for r in rows]}
+
+
+def default_model(spec: BatSpec) -> str:
+    """Return the bat model a calibration's profile and meta.json name (``model_name``)."""
+    profile, _, meta = read_bat(spec)
+    return pipeline.model_name(profile, str(meta.get("species", "")), meta)
+
+
+def store_calibration(conn, model: str, rows: list[dict], out: dict):
+    """Store a calibration's rows and summary as the model's measured null (signed record).
+
+    Parameters
+    ----------
+    conn : sa.Connection
+        The registry (written).
+    model : str
+        The bat model the calibration is of.
+    rows : list of dict
+        ``inspect_clean``'s rows, one per clean re-test, in index order.
+    out : dict
+        Their ``summary`` (with the run's cost).
+
+    Returns
+    -------
+    StoredCalibration
+        The stored calibration (its custody record in ``record_seq``).
+    """
+    from batlab.pipeline.chance import STATISTIC
+    from batlab.registry import add_calibration
+
+    keep = ("serial", "seed", "false_alarm", "inconclusive", "refused", "not_altered",
+            "alarm_indices", "by_grip", "codes", "cpu_s_per_bat", "core_s_per_bat")
+    summary = pipeline.jsonable({k: out.get(k) for k in keep})
+    return add_calibration(conn, model, out["n"], out["false_alarms"],
+                           out["false_alarm_upper95"], STATISTIC, summary, null_of(rows),
+                           pipeline.code_version())

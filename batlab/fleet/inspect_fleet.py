@@ -90,7 +90,7 @@ def _stored_before(conn, job: RetestJob, false_alarm: float) -> dict | None:
         done = pipeline.already_inspected(conn, job.serial, job.retest_path, false_alarm)
     except (ValueError, OSError):  # not registered: the worker words the refusal
         return None
-    return None if done is None else pipeline.stored_contract_dict(done.verdict)
+    return None if done is None else pipeline.stored_contract_dict(done.verdict, done.inputs)
 
 
 def inspect_fleet(client, db, jobs: list[RetestJob], false_alarm: float,
@@ -130,7 +130,7 @@ def inspect_fleet(client, db, jobs: list[RetestJob], false_alarm: float,
                 return {"serial": job.serial, "retest": job.retest_path, "error": result}
             stored = pipeline.store_inspection(conn, result, job.retest_path, false_alarm,
                                                retest_meta=job.retest_meta_path is not None)
-            out = pipeline.contract_dict(result.serial, result.verdict)
+            out = pipeline.result_dict(result)
             progress(f"{job.serial}: {out['status']} (stored as inspection #{stored.id})")
             return out
 

@@ -11,6 +11,8 @@ imports no stage module itself (tests/test_architecture.py checks it). One modul
 - ``modal``: `batlab fit` -- a test's modal analysis, its modes file and figures.
 - ``records``: the fitted tests, a report's inputs and the contract's JSON (light: the
   report imports it without the stages).
+- ``chance``: a bat's model, and its verdict's chance and false-alarm rate as measured on
+  the model's stored calibration (or said unmeasured).
 - ``inspection``: files to verdict -- a bat's inputs read once (``InspectionCase``), then
   the method's one call (``judge``); the stateless form.
 - ``registered``: register a bat, inspect a re-test against it.
@@ -23,7 +25,8 @@ imports no stage module itself (tests/test_architecture.py checks it). One modul
   file written at the end.
 
 Names are loaded on first use (PEP 562), so importing one light module of the package
-loads no stage. The unit constants the commands convert lab units with at the edge are
+loads no stage. The unit constants the commands convert lab units with at the edge, and the
+running code's version (``batlab.version.code_version``, for the fleet's rows), are
 re-exported here.
 """
 
@@ -42,6 +45,9 @@ _SOURCES = {
         "bat_model", "bat_profile", "default_info", "meta_points_m", "nuisance_names",
         "simulate_bat_test", "simulate_demo_pair", "simulate_field_case", "summarise_model",
         "uniform_beam_model", "virtual_bat", "wood", "write_frf",
+    ),
+    "batlab.pipeline.chance": (
+        "model_name", "result_dict", "statement", "with_statement",
     ),
     "batlab.pipeline.diagnosis": (
         "check_rig_files", "diagnose_files",
@@ -75,6 +81,9 @@ _SOURCES = {
         "already_inspected", "history_table", "note_report", "provenance", "report_inputs",
         "store_inspection", "stored_bat", "stored_report_inputs",
     ),
+    "batlab.version": (
+        "code_version",
+    ),
     "updating.model.json_input": (
         "read_json_object",
     ),
@@ -85,8 +94,8 @@ _SOURCES = {
 """The module each public name is defined in."""
 
 _WHERE = {name: module for module, names in _SOURCES.items() for name in names}
-_SUBMODULES = ("acquisition", "bench", "diagnosis", "door", "files", "inspection", "modal",
-               "paper", "records", "registered", "stored")
+_SUBMODULES = ("acquisition", "bench", "chance", "diagnosis", "door", "files", "inspection",
+               "modal", "paper", "records", "registered", "stored")
 
 __all__ = sorted(_WHERE)
 

@@ -17,6 +17,7 @@ from pathlib import Path
 
 import numpy as np
 
+from batlab.pipeline.chance import model_name
 from batlab.pipeline.files import (
     Progress,
     numeric_failure,
@@ -61,6 +62,9 @@ class InspectionCase:
         The registration (custody record) a registered inspection is judged against.
     retest_content : bytes or None
         The re-test file's bytes as read (the registry keeps exactly the file judged).
+    model : str or None
+        The bat's model (``batlab.pipeline.chance.model_name``): whose calibration states
+        its chance.
     """
 
     serial: str
@@ -72,6 +76,7 @@ class InspectionCase:
     weight_kg: float | None
     reference_seq: int | None = None
     retest_content: bytes | None = None
+    model: str | None = None
 
 
 @dataclass(frozen=True)
@@ -94,6 +99,11 @@ class InspectionResult:
     conditions : RetestConditions or None
         The retest.json's conditions it was judged with (stored, so that a report can judge
         the stored tests again for the element map).
+    model : str or None
+        The bat's model.
+    stated : dict or None
+        The verdict's chance and false-alarm rate (``batlab.pipeline.chance.statement``,
+        by ``with_statement``); None: nominal, no calibration looked up.
     """
 
     serial: str
@@ -106,6 +116,8 @@ class InspectionResult:
     weight_kg: float | None = None
     retest_content: bytes | None = None
     conditions: RetestConditions | None = None
+    model: str | None = None
+    stated: dict | None = None
 
 
 def fit_file(name: str, test: FrfTest, weight_kg: float | None,
@@ -193,7 +205,7 @@ def judge(case: InspectionCase, false_alarm: float,
                       false_alarm, conditions, case.registered, with_map=with_map)
     return InspectionResult(case.serial, case.profile, case.reference, case.baseline,
                             case.retest, verdict, case.reference_seq, case.weight_kg,
-                            case.retest_content, conditions)
+                            case.retest_content, conditions, case.model)
 
 
 def stateless_case(profile_path, meta_path, baseline_path, retest_path,
@@ -221,7 +233,8 @@ def stateless_case(profile_path, meta_path, baseline_path, retest_path,
     reference = calibrate_baseline(profile, meta, baseline).reference
     retest = fit_file(Path(retest_path).name, re_test, meta.weight_kg, order, progress)
     return InspectionCase(meta.serial, profile, reference, baseline, retest,
-                          conditions_from_dict(meta.extra, meta_path), meta.weight_kg)
+                          conditions_from_dict(meta.extra, meta_path), meta.weight_kg,
+                          model=model_name(profile, meta.species, meta.extra))
 
 
 def inspect_files(

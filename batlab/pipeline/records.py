@@ -139,11 +139,15 @@ def finding_dict(finding, spread: dict | None = None) -> dict | None:
     return out
 
 
-def contract_dict(serial: str, verdict: Verdict) -> dict:
+def contract_dict(serial: str, verdict: Verdict, stated: dict | None = None) -> dict:
     """Write the verdict as docs/contract.md fixes it.
 
     Status, altered true/false/null, reasons; inches from the knob end; region, core and
-    fill null unless altered; plus the decision's confidence and significance level.
+    fill null unless altered; the chance an unaltered bat differs this much (``chance``) and
+    the false-alarm rate (``false_alarm_rate``), as measured on the bat model's stored
+    calibration or said unmeasured (``batlab.pipeline.chance.statement``); the decision's
+    confidence; and the code that judged (``code``, ``batlab.version``). The reasons state
+    the chance as ``chance`` does (``batlab.formatting.reasons_with_chance``).
 
     Parameters
     ----------
@@ -151,12 +155,20 @@ def contract_dict(serial: str, verdict: Verdict) -> dict:
         The bat's serial number.
     verdict : Verdict
         The inspection's verdict.
+    stated : dict or None
+        ``statement``'s chance and false-alarm rate; None: nominal, no calibration looked up.
 
     Returns
     -------
     dict
         The contract's JSON object.
     """
+    from batlab.formatting import reasons_with_chance
+    from batlab.pipeline.chance import nominal_p, statement
+    from batlab.version import code_version
+
+    if stated is None:
+        stated = statement(verdict, None)
     altered = verdict.altered is True
     region = verdict.region_m if altered else None
     core = verdict.core_diameter_m if altered else None
@@ -166,18 +178,22 @@ def contract_dict(serial: str, verdict: Verdict) -> dict:
         for a, b, al, be in zip(verdict.element_x0_m, verdict.element_x1_m, verdict.alpha,
                                 verdict.beta, strict=True)
     ]
+    chance = jsonable(stated["chance"])
     return {
         "serial": serial,
         "status": verdict.status.value,
         "altered": verdict.altered if verdict.altered is None else bool(verdict.altered),
-        "reasons": [str(r) for r in verdict.reasons],
+        "reasons": reasons_with_chance([str(r) for r in verdict.reasons], nominal_p(verdict),
+                                       chance),
         "region_in": None if region is None else [_in(region[0]), _in(region[1])],
         "core_diameter_in": None if core is None else round(float(core) / IN_TO_M, 4),
         "fill_density_ratio": _num(fill),
         "finding": finding_dict(verdict.finding, _spread(verdict)),
         "elements": elements,
+        "chance": chance,
         "confidence": _num(verdict.confidence),
-        "false_alarm_rate": _num(verdict.false_alarm_rate),
+        "false_alarm_rate": jsonable(stated["false_alarm_rate"]),
+        "code": code_version(),
     }
 
 
@@ -224,23 +240,37 @@ RECORD_ONLY_KEYS = ("statistic", "moisture", "uncertainty", "modes", "details")
 """What ``verdict_record`` adds to the contract dict."""
 
 
-def stored_contract_dict(record: dict) -> dict:
+def stored_contract_dict(record: dict, inputs: dict | None = None) -> dict:
     """Return the contract dict of a stored verdict record (``verdict_record``'s inverse part).
+
+    A record stored before verdicts named their code and chance gets ``code`` from its
+    inputs' ``batlab_version`` and a nominal ``chance`` (said unmeasured) from its p-value.
 
     Parameters
     ----------
     record : dict
         A stored inspection's verdict.
+    inputs : dict or None
+        The inspection's stored inputs.
 
     Returns
     -------
     dict
         The contract's JSON object, as ``contract_dict`` wrote it.
     """
-    return {k: v for k, v in record.items() if k not in RECORD_ONLY_KEYS}
+    out = {k: v for k, v in record.items() if k not in RECORD_ONLY_KEYS}
+    if "code" not in out:
+        out["code"] = (inputs or {}).get("batlab_version")
+    if "chance" not in out:
+        from batlab.formatting import p_value
+
+        p = None if out.get("status") == "inconclusive" else p_value(record)
+        out["chance"] = {"value": p, "source": "nominal", "calibration": None, "nominal": p,
+                         "model": None, "unmeasured": "judged before batlab measured chances"}
+    return out
 
 
-def verdict_record(serial: str, verdict: Verdict) -> dict:
+def verdict_record(serial: str, verdict: Verdict, stated: dict | None = None) -> dict:
     """Write what the registry keeps of an inspection.
 
     Parameters
@@ -249,6 +279,8 @@ def verdict_record(serial: str, verdict: Verdict) -> dict:
         The bat's serial number.
     verdict : Verdict
         The inspection's verdict.
+    stated : dict or None
+        Its chance and false-alarm rate (``contract_dict``).
 
     Returns
     -------
@@ -256,7 +288,7 @@ def verdict_record(serial: str, verdict: Verdict) -> dict:
         The contract dict and the verdict's statistic, drift, uncertainties, paired modes
         and details, in JSON types.
     """
-    out = contract_dict(serial, verdict)
+    out = contract_dict(serial, verdict, stated)
     details = {} if verdict.details is None else verdict.details.to_json_dict()
     out.update(jsonable({"statistic": verdict.statistic, "moisture": verdict.moisture,
                          "uncertainty": verdict.uncertainty,

@@ -12,6 +12,7 @@ from pathlib import Path
 import sqlalchemy as sa
 
 from batlab import registry as reg
+from batlab.pipeline.chance import model_name, with_statement
 from batlab.pipeline.files import (
     Progress,
     frf_from_bytes,
@@ -28,6 +29,7 @@ from batlab.pipeline.inspection import (
     judge,
 )
 from batlab.pipeline.records import FORCED_KEY, FittedTest
+from batlab.version import code_version
 from updating.correlate.measured import driving_mass_line
 from updating.correlate.points import match_points, point_positions_m
 from updating.inspect.retest_meta import RetestConditions, conditions_from_dict
@@ -130,7 +132,8 @@ def prepare_registration(
     record = reg.BatRecord(
         serial=meta.serial, profile_x_m=profile.x_m.tolist(),
         profile_diameter_m=profile.diameter_m.tolist(), meta=stored_meta, species=meta.species,
-        reference=diagnosis.reference.to_dict(), modes=reg.encode_modes(baseline.modes))
+        reference=diagnosis.reference.to_dict(), modes=reg.encode_modes(baseline.modes),
+        code=code_version())
     return Registration(record, baseline, diagnosis)
 
 
@@ -245,7 +248,8 @@ def registered_case(
     retest = fit_file(Path(retest_path).name, re_test, weight_kg, order, progress)
     return InspectionCase(serial, profile, BatReference.from_dict(bat.reference), baseline,
                           retest, registration_conditions(bat.meta, serial), weight_kg,
-                          bat.reference_seq, retest_content)
+                          bat.reference_seq, retest_content,
+                          model_name(profile, bat.species, bat.meta))
 
 
 def inspect_registered(
@@ -280,9 +284,11 @@ def inspect_registered(
     Returns
     -------
     InspectionResult
-        The verdict and what it was judged on (nothing stored: ``store_inspection``).
+        The verdict and what it was judged on, its chance stated from the registry's
+        latest calibration of the bat's model (``with_statement``; nothing stored:
+        ``store_inspection``).
     """
     conditions = read_conditions(retest_meta_path)
     case = registered_case(conn, serial, retest_path, refit_baseline, progress, baseline_fit)
     progress("inspecting the re-test against the registered reference")
-    return judge(case, false_alarm, conditions, with_map)
+    return with_statement(judge(case, false_alarm, conditions, with_map), conn)

@@ -14,12 +14,12 @@ from pathlib import Path
 
 import sqlalchemy as sa
 
-from batlab import __version__
 from batlab import registry as reg
 from batlab.pipeline.files import Progress, file_sha256, frf_from_bytes, quiet
 from batlab.pipeline.inspection import InspectionCase, InspectionResult, fit_file, judge
 from batlab.pipeline.records import FittedTest, ReportInputs, same_judgement, verdict_record
 from batlab.pipeline.registered import registered_weight_kg, registration_conditions
+from batlab.version import code_version
 from updating.correlate.points import match_points, point_positions_m
 from updating.inspect.retest_meta import RetestConditions
 from updating.model.profile import make_profile
@@ -28,9 +28,10 @@ from updating.model.reference import BatReference
 EXPORT_COLUMNS = [
     "serial", "species", "inspection", "inspected_at", "status", "altered",
     "region_start_in", "region_end_in", "core_diameter_in", "fill_density_ratio",
-    "p_value", "false_alarm_rate", "reasons", "retest_file", "retest_sha256",
+    "p_value", "false_alarm_rate", "chance", "chance_source", "calibration_record",
+    "false_alarm_measured", "false_alarm_upper95", "reasons", "retest_file", "retest_sha256",
     "baseline_sha256", "registration_record", "verdict_record", "verdict_record_sha256",
-    "report_path"]
+    "report_path", "code"]
 """The columns of `batlab export`, in order."""
 
 
@@ -65,13 +66,13 @@ def store_inspection(
     path = Path(retest_path)
     content = result.retest_content if result.retest_content is not None else \
         path.read_bytes()
-    inputs = {"false_alarm": float(false_alarm), "batlab_version": __version__,
+    record = verdict_record(result.serial, result.verdict, result.stated)
+    inputs = {"false_alarm": float(false_alarm), "batlab_version": record["code"],
               "retest_meta": bool(retest_meta)}
     if retest_meta and result.conditions is not None:
         inputs["retest_conditions"] = asdict(result.conditions)
-    return reg.add_inspection(
-        conn, result.serial, verdict_record(result.serial, result.verdict), path.name,
-        content, reference_seq=result.reference_seq, inputs=inputs)
+    return reg.add_inspection(conn, result.serial, record, path.name, content,
+                              reference_seq=result.reference_seq, inputs=inputs)
 
 
 def already_inspected(
@@ -138,7 +139,7 @@ def provenance(
     dict
         The version, file hashes and, for a stored inspection, its records.
     """
-    out = {"batlab_version": __version__, "baseline_sha256": baseline_sha256,
+    out = {"batlab_version": code_version(), "baseline_sha256": baseline_sha256,
            "retest_sha256": retest_sha256}
     if stored is not None and conn is not None:
         out.update({"inspection_id": stored.id, "inspected_at": stored.inspected_at,
@@ -153,7 +154,7 @@ def provenance(
             out.update({"reference_record": ref.seq, "reference_record_sha256":
                         ref.record_sha256})
         if stored.inputs:
-            out["batlab_version"] = stored.inputs.get("batlab_version", __version__)
+            out["batlab_version"] = stored.inputs.get("batlab_version", code_version())
     return out
 
 
@@ -175,7 +176,8 @@ def report_inputs(result: InspectionResult, meta: dict, prov: dict) -> ReportInp
         What the report is drawn from.
     """
     return ReportInputs(result.serial, result.profile, result.reference, result.baseline,
-                        result.retest, verdict_record(result.serial, result.verdict), meta, prov)
+                        result.retest, verdict_record(result.serial, result.verdict,
+                                                      result.stated), meta, prov)
 
 
 def _stored_inspection(conn: sa.Connection, serial: str,
@@ -291,7 +293,7 @@ def with_element_map(inputs: ReportInputs, stored_inputs: dict, weight_kg: float
             return replace(inputs, verdict={**v, "details": {
                 **details, "msso": again["details"]["msso"]}, "map_judged_again": True})
         else:
-            emap = {"error": f"judged again by batlab {__version__}, the stored tests give "
+            emap = {"error": f"judged again by batlab {code_version()}, the stored tests give "
                              f"{again['status']} (F {_f(again)}), not the stored "
                              f"{v['status']} (F {_f(v)}): no map is drawn for a verdict it "
                              "does not belong to"}
@@ -321,7 +323,7 @@ def history_table(conn: sa.Connection, serial: str | None = None):
     """
     import pandas as pd
 
-    from batlab.formatting import p_value
+    from batlab.formatting import decision_level, p_value
 
     species = {b.serial: b.species for b in reg.list_bats(conn)}
     rows = []
@@ -334,11 +336,24 @@ def history_table(conn: sa.Connection, serial: str | None = None):
             "region_start_in": region[0], "region_end_in": region[1],
             "core_diameter_in": v.get("core_diameter_in"),
             "fill_density_ratio": v.get("fill_density_ratio"),
-            "p_value": p_value(v),
-            "false_alarm_rate": v.get("false_alarm_rate"),
+            "p_value": p_value(v), "false_alarm_rate": decision_level(v),
+            **_chance_columns(v),
             "reasons": "; ".join(v.get("reasons") or []),
             "retest_file": i.retest_name, "retest_sha256": i.retest_sha256,
             "baseline_sha256": i.baseline_sha256, "registration_record": i.reference_seq,
             "verdict_record": i.record_seq, "verdict_record_sha256": i.record_sha256,
-            "report_path": i.report_path})
+            "report_path": i.report_path,
+            "code": v.get("code") or (i.inputs or {}).get("batlab_version")})
     return pd.DataFrame(rows, columns=EXPORT_COLUMNS)
+
+
+def _chance_columns(v: dict) -> dict:
+    """Return the export's chance columns of a stored verdict (``chance``, ``false_alarm_rate``)."""
+    from batlab.formatting import stated_chance
+
+    ch = stated_chance(v) or {}
+    cal = ch.get("calibration") or {}
+    fa = v.get("false_alarm_rate") if isinstance(v.get("false_alarm_rate"), dict) else {}
+    return {"chance": ch.get("value"), "chance_source": ch.get("source"),
+            "calibration_record": cal.get("record_seq"),
+            "false_alarm_measured": fa.get("measured"), "false_alarm_upper95": fa.get("upper95")}

@@ -10,10 +10,18 @@ The package, one job a module: ``common`` (where the registry is, hashes, time s
 ``schema`` (the tables, SQLAlchemy Core), ``lock`` (write transactions and their lock),
 ``migration`` and ``migrations/`` (Alembic), ``engine`` (opening a file or a server),
 ``chain`` (appending and reading custody records), ``records`` (bats, files, inspections),
+``calibrations`` (bat models' measured nulls),
 ``verify`` (``registry check``) and ``copy`` (``registry copy``). Layout, locking and
 migrations: docs/registry.md.
 """
 
+from batlab.registry.calibrations import (
+    StoredCalibration,
+    add_calibration,
+    get_calibration,
+    latest_calibration,
+    list_calibrations,
+)
 from batlab.registry.chain import (
     GENESIS_SHA256,
     CustodyRecord,
@@ -61,7 +69,9 @@ from batlab.registry.verify import CheckResult, check
 
 __all__ = [
     "BUSY_TIMEOUT_S", "GENESIS_SHA256", "SCHEMA_VERSION", "BatRecord", "BatSummary",
-    "CheckResult", "CopyResult", "CustodyRecord", "Inspection", "add_bat", "add_inspection",
+    "CheckResult", "CopyResult", "CustodyRecord", "Inspection", "StoredCalibration", "add_bat",
+    "add_calibration", "add_inspection", "get_calibration", "latest_calibration",
+    "list_calibrations",
     "all_inspections", "baseline_file", "bat_as_registered", "chain_head", "check", "connect",
     "copy_registry", "custody_record", "custody_rows", "decode_modes", "default_db_path",
     "encode_modes", "get_bat", "get_inspection", "has_bat", "has_file", "head", "history",

@@ -14,7 +14,14 @@ import sqlalchemy as sa
 
 from batlab import custody, signing
 from batlab.registry.common import now_utc, sha256_bytes
-from batlab.registry.schema import CUSTODY_COLUMNS, bats, files, inspections, stations
+from batlab.registry.schema import (
+    CUSTODY_COLUMNS,
+    bats,
+    calibrations,
+    files,
+    inspections,
+    stations,
+)
 from batlab.registry.schema import custody as custody_table
 
 GENESIS_SHA256 = custody.GENESIS_SHA256
@@ -80,19 +87,28 @@ def append_record(conn: sa.Connection, kind: str, subject: str,
 
 
 def bat_payload(conn: sa.Connection, serial: str) -> dict:
-    """Return what a reference record holds: the bat's row and profile as stored now."""
-    row = conn.execute(sa.select(bats.c.serial, bats.c.species, bats.c.meta_json,
-                                 bats.c.reference_json, bats.c.modes_json,
-                                 bats.c.baseline_sha256, bats.c.registered_at)
-                       .where(bats.c.serial == serial)).first()
+    """Return what a reference record holds: the bat's row and profile as stored now.
+
+    ``code`` (the version that registered it) only when the row has one, so a registration
+    stored before schema 6 still equals its record.
+    """
+    # every column there is: migration 3 builds its records with this function, on a table
+    # without the columns of later schemas (``code``, schema 6)
+    row = conn.execute(sa.select(sa.text("*")).select_from(bats)
+                       .where(bats.c.serial == serial)).mappings().first()
     profile = conn.execute(sa.select(stations.c.x_m, stations.c.diameter_m)
                            .where(stations.c.serial == serial).order_by(stations.c.idx)).all()
-    name = conn.execute(sa.select(files.c.name).where(files.c.sha256 == row[5])).first()
-    return {"serial": row[0], "species": row[1], "meta": json.loads(row[2]),
-            "reference": json.loads(row[3]), "modes": json.loads(row[4]),
-            "baseline_sha256": row[5], "baseline_name": name[0] if name else "",
-            "registered_at": row[6], "profile_x_m": [s[0] for s in profile],
-            "profile_diameter_m": [s[1] for s in profile]}
+    name = conn.execute(sa.select(files.c.name)
+                        .where(files.c.sha256 == row["baseline_sha256"])).first()
+    out = {"serial": row["serial"], "species": row["species"],
+           "meta": json.loads(row["meta_json"]), "reference": json.loads(row["reference_json"]),
+           "modes": json.loads(row["modes_json"]), "baseline_sha256": row["baseline_sha256"],
+           "baseline_name": name[0] if name else "", "registered_at": row["registered_at"],
+           "profile_x_m": [s[0] for s in profile],
+           "profile_diameter_m": [s[1] for s in profile]}
+    if row.get("code") is not None:  # the code that registered it (schema 6; absent before)
+        out["code"] = row["code"]
+    return out
 
 
 def inspection_payload(conn: sa.Connection, inspection_id: int) -> dict:
@@ -110,6 +126,21 @@ def inspection_payload(conn: sa.Connection, inspection_id: int) -> dict:
             "retest_name": row[4], "retest_sha256": row[5], "baseline_sha256": row[6],
             "reference_seq": row[7], "inputs": None if row[8] is None else json.loads(row[8]),
             "inspected_at": row[9]}
+
+
+def calibration_payload(conn: sa.Connection, calibration_id: int) -> dict:
+    """Return what a calibration record holds: the calibration's row as stored now.
+
+    All but ``record_seq``; the row's JSON columns as the objects they hold.
+    """
+    c = calibrations.c
+    row = conn.execute(sa.select(c.id, c.model, c.n, c.false_alarms, c.false_alarm_upper95,
+                                 c.statistic, c.summary_json, c.null_json, c.code,
+                                 c.calibrated_at).where(c.id == calibration_id)).first()
+    return {"id": row[0], "model": row[1], "n": row[2], "false_alarms": row[3],
+            "false_alarm_upper95": row[4], "statistic": row[5],
+            "summary": json.loads(row[6]), "null": json.loads(row[7]), "code": row[8],
+            "calibrated_at": row[9]}
 
 
 @dataclass(frozen=True)

@@ -1,4 +1,4 @@
-"""``registry copy``: every bat, file, inspection and custody record of one registry into another.
+"""``registry copy``: every bat, file, inspection, calibration and custody record into another.
 
 The source's chain is verified first, from one snapshot; everything is written in one write
 transaction on the destination, whose chain is verified before that transaction commits, so
@@ -28,6 +28,7 @@ import sqlalchemy as sa
 from batlab.registry.chain import (
     append_record,
     bat_payload,
+    calibration_payload,
     canonical,
     custody_rows,
     head,
@@ -36,8 +37,17 @@ from batlab.registry.chain import (
 )
 from batlab.registry.lock import snapshot, transaction
 from batlab.registry.records import store_file
-from batlab.registry.schema import TABLES, bats, custody, files, inspections, stations
+from batlab.registry.schema import (
+    TABLES,
+    bats,
+    calibrations,
+    custody,
+    files,
+    inspections,
+    stations,
+)
 from batlab.registry.verify import check
+from batlab.version import code_version
 
 
 @dataclass(frozen=True)
@@ -99,7 +109,7 @@ def copy_registry(src: sa.Connection, dst: sa.Connection, trusted: set[str],
             signers = sorted({r.signer for r in custody_rows(src) if r.signer})
             append_record(dst, "seal", "copy", None, canonical({
                 "copied_from": before.head, "source_signers": signers,
-                "source_records": before.n_records, "mode": mode}))
+                "source_records": before.n_records, "mode": mode, "code": code_version()}))
             _refuse_unverified(check(dst, trusted | {lab_key_id()}), destination,
                                "after the copy")
             counts = (_count(src, bats), _count(src, files), _count(src, inspections))
@@ -126,9 +136,10 @@ def _copy_verbatim(src: sa.Connection, dst: sa.Connection) -> None:
         rows = [dict(r) for r in src.execute(sa.select(table)).mappings()]
         if rows:
             dst.execute(sa.insert(table), rows)
-    if dst.dialect.name == "postgresql":  # ids were given: move the id sequence past them
-        dst.exec_driver_sql("SELECT setval(pg_get_serial_sequence('inspections', 'id'), "
-                            "coalesce(max(id), 0) + 1, false) FROM inspections")
+    if dst.dialect.name == "postgresql":  # ids were given: move the id sequences past them
+        for table in ("inspections", "calibrations"):
+            dst.exec_driver_sql(f"SELECT setval(pg_get_serial_sequence('{table}', 'id'), "
+                                f"coalesce(max(id), 0) + 1, false) FROM {table}")
 
 
 def _copy_appended(src: sa.Connection, dst: sa.Connection) -> None:
@@ -152,6 +163,8 @@ def _copy_appended(src: sa.Connection, dst: sa.Connection) -> None:
             new_seq[r.seq] = append_record(dst, "reference", r.subject, None, payload)
         elif r.kind == "verdict":
             _copy_inspection(src, dst, int(r.subject), new_seq)
+        elif r.kind == "calibration":
+            _copy_calibration(src, dst, int(r.subject))
 
 
 def _copy_inspection(src: sa.Connection, dst: sa.Connection, inspection_id: int,
@@ -166,3 +179,16 @@ def _copy_inspection(src: sa.Connection, dst: sa.Connection, inspection_id: int,
     seq = append_record(dst, "verdict", str(new_id), None,
                         canonical(inspection_payload(dst, new_id)))
     dst.execute(sa.update(inspections).where(inspections.c.id == new_id).values(record_seq=seq))
+
+
+def _copy_calibration(src: sa.Connection, dst: sa.Connection, calibration_id: int) -> None:
+    """Store one source calibration anew, renumbered, with its calibration record."""
+    row = dict(src.execute(sa.select(calibrations).where(calibrations.c.id == calibration_id))
+               .mappings().one())
+    del row["id"]
+    row["record_seq"] = None
+    new_id = int(dst.execute(sa.insert(calibrations).values(**row)).inserted_primary_key[0])
+    seq = append_record(dst, "calibration", str(new_id), None,
+                        canonical(calibration_payload(dst, new_id)))
+    dst.execute(sa.update(calibrations).where(calibrations.c.id == new_id)
+                .values(record_seq=seq))

@@ -1,6 +1,6 @@
 """The registry's schema version and its migrations (Alembic; scripts in ``migrations/``).
 
-Revisions are numbered ``0001``..``0005``: revision N brings a registry to schema version N.
+Revisions are numbered ``0001``..``0006``: revision N brings a registry to schema version N.
 A new registry is created at the head from ``schema.metadata`` and stamped (Alembic's
 "create_all, then stamp head"); a registry made before Alembic (a ``schema_version`` table
 and no ``alembic_version``) is stamped at the version it names, then upgraded. Every step runs
@@ -16,12 +16,12 @@ import sqlalchemy as sa
 
 from batlab.registry.lock import transaction
 
-SCHEMA_VERSION = 5
+SCHEMA_VERSION = 6
 MIGRATIONS_DIR = Path(__file__).with_name("migrations")
 
 
 def revision(version: int) -> str:
-    """Return the Alembic revision id of schema ``version`` (``0005`` for 5)."""
+    """Return the Alembic revision id of schema ``version`` (``0006`` for 6)."""
     return f"{version:04d}"
 
 

@@ -40,6 +40,8 @@ class BatRecord:
         baseline_sha256: checksum of the stored baseline file.
         registered_at: UTC time stamp.
         reference_seq: the custody record of this registration (0 before it is stored).
+        code: the version of batlab that registered it (``batlab.version``; None for a bat
+            registered before schema 6).
     """
 
     serial: str
@@ -53,6 +55,7 @@ class BatRecord:
     baseline_sha256: str = ""
     registered_at: str = ""
     reference_seq: int = 0
+    code: str | None = None
 
 
 @dataclass(frozen=True)
@@ -171,7 +174,7 @@ def add_bat(
         digest = store_file(conn, baseline_name, baseline)
         row = {"species": bat.species, "meta_json": json.dumps(bat.meta),
                "reference_json": json.dumps(bat.reference), "modes_json": json.dumps(bat.modes),
-               "baseline_sha256": digest, "registered_at": stamp}
+               "baseline_sha256": digest, "registered_at": stamp, "code": bat.code}
         if exists:
             conn.execute(sa.update(bats).where(bats.c.serial == bat.serial).values(**row))
             conn.execute(sa.delete(stations).where(stations.c.serial == bat.serial))
@@ -192,7 +195,7 @@ def _bat_from_payload(p: dict, seq: int) -> BatRecord:
         profile_diameter_m=p["profile_diameter_m"], meta=p["meta"], species=p["species"],
         reference=p["reference"], modes=p["modes"], baseline_name=p["baseline_name"],
         baseline_sha256=p["baseline_sha256"], registered_at=p["registered_at"],
-        reference_seq=seq)
+        reference_seq=seq, code=p.get("code"))
 
 
 def get_bat(conn: sa.Connection, serial: str) -> BatRecord:

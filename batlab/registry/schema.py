@@ -1,8 +1,9 @@
-"""The registry's tables, one SQLAlchemy Core metadata for SQLite and PostgreSQL (schema 5).
+"""The registry's tables, one SQLAlchemy Core metadata for SQLite and PostgreSQL (schema 6).
 
 ``files`` keeps every judged file once by its SHA-256; ``bats`` and ``stations`` the
-registered bats; ``inspections`` every stored verdict; ``custody`` the signed hash chain over
-all of them (batlab/custody.py). Migrations to this layout: ``batlab/registry/migrations``.
+registered bats; ``inspections`` every stored verdict; ``calibrations`` the measured nulls of
+bat models (``fleet calibrate --store``); ``custody`` the signed hash chain over all of them
+(batlab/custody.py). Migrations to this layout: ``batlab/registry/migrations``.
 """
 
 from __future__ import annotations
@@ -30,6 +31,7 @@ bats = sa.Table(
     sa.Column("modes_json", sa.Text, nullable=False),
     sa.Column("baseline_sha256", sa.Text, sa.ForeignKey("files.sha256"), nullable=False),
     sa.Column("registered_at", sa.Text, nullable=False),
+    sa.Column("code", sa.Text),  # the version that registered it (NULL before schema 6)
 )
 
 stations = sa.Table(
@@ -60,6 +62,23 @@ inspections = sa.Table(
     sqlite_autoincrement=True,
 )
 
+calibrations = sa.Table(
+    "calibrations", metadata,
+    sa.Column("id", sa.Integer, primary_key=True, autoincrement=True),
+    sa.Column("model", sa.Text, nullable=False),
+    sa.Column("n", sa.Integer, nullable=False),
+    sa.Column("false_alarms", sa.Integer, nullable=False),
+    sa.Column("false_alarm_upper95", sa.Float, nullable=False),
+    sa.Column("statistic", sa.Text, nullable=False),
+    sa.Column("summary_json", sa.Text, nullable=False),
+    sa.Column("null_json", sa.Text, nullable=False),
+    sa.Column("code", sa.Text, nullable=False),
+    sa.Column("calibrated_at", sa.Text, nullable=False),
+    sa.Column("record_seq", sa.Integer),
+    sa.Index("calibrations_by_model", "model", "id"),
+    sqlite_autoincrement=True,
+)
+
 custody = sa.Table(
     "custody", metadata,
     sa.Column("seq", sa.Integer, primary_key=True, autoincrement=False),
@@ -77,7 +96,7 @@ custody = sa.Table(
     sa.Index("custody_by_subject", "kind", "subject"),
 )
 
-TABLES = (files, bats, stations, inspections, custody)
+TABLES = (files, bats, stations, inspections, calibrations, custody)
 """Every table, parents before children (the order a copy inserts them in)."""
 
 CUSTODY_COLUMNS = tuple(c.name for c in custody.columns)

@@ -8,9 +8,15 @@ from dataclasses import dataclass
 import sqlalchemy as sa
 
 from batlab import custody, signing
-from batlab.registry.chain import bat_payload, canonical, custody_rows, inspection_payload
+from batlab.registry.chain import (
+    bat_payload,
+    calibration_payload,
+    canonical,
+    custody_rows,
+    inspection_payload,
+)
 from batlab.registry.common import sha256_bytes
-from batlab.registry.schema import bats, files, inspections
+from batlab.registry.schema import bats, calibrations, files, inspections
 
 
 @dataclass(frozen=True)
@@ -42,8 +48,8 @@ def check(conn: sa.Connection, trusted: set[str] | None = None,
     SQLite's integrity and foreign keys (a PostgreSQL server keeps both itself), every stored
     file against its SHA-256, every file an inspection or bat names is present, the custody
     chain (each record's hash, link, content hash and signature by a trusted key: ``trusted``,
-    default the lab's own key), coverage (every bat, file and inspection row has its one
-    custody record, every record's row exists) and, with ``head_seen`` (``SEQ:SHA256`` noted
+    default the lab's own key), coverage (every bat, file, inspection and calibration row has its
+    one custody record, every record's row exists) and, with ``head_seen`` (``SEQ:SHA256`` noted
     earlier), that the chain still holds that record. Names the first changed record; a
     registry too damaged to read is one problem naming the database's complaint.
     """
@@ -157,31 +163,38 @@ def _check_coverage(conn: sa.Connection, rows: list[custody.Row], by_sha: dict,
             changed.append(refs[serial][-1].seq)
     problems += [f"custody record #{recs[0].seq}: bat {s!r} is no longer in the registry "
                  "(row deleted)" for s, recs in refs.items() if s not in serials]
-    changed += _check_verdicts(conn, _by_subject(rows, "verdict"), problems)
+    changed += _check_stored(conn, inspections, "inspection", "verdict",
+                             inspection_payload, _by_subject(rows, "verdict"), problems)
+    changed += _check_stored(conn, calibrations, "calibration", "calibration",
+                             calibration_payload, _by_subject(rows, "calibration"), problems)
     return changed
 
 
-def _check_verdicts(conn: sa.Connection, verdicts: dict[str, list[custody.Row]],
-                    problems: list[str]) -> list[int]:
-    """Check each inspection row against its one verdict record (and its ``record_seq``)."""
+def _check_stored(conn: sa.Connection, table: sa.Table, noun: str, kind: str, payload,
+                  records: dict[str, list[custody.Row]], problems: list[str]) -> list[int]:
+    """Check each row (an inspection, a calibration) against its one record of ``kind``.
+
+    The row's ``record_seq`` must name it, and ``payload(conn, id)`` must equal the record's
+    payload; returns the numbers of the records whose row was changed.
+    """
     changed = []
-    rows = dict(conn.execute(sa.select(inspections.c.id, inspections.c.record_seq)).all())
-    for iid in sorted(rows):
-        recs = verdicts.get(str(iid))
+    rows = dict(conn.execute(sa.select(table.c.id, table.c.record_seq)).all())
+    for rid in sorted(rows):
+        recs = records.get(str(rid))
         if recs is None:
-            problems.append(f"inspection #{iid}: no custody record")
+            problems.append(f"{noun} #{rid}: no custody record")
             continue
         if len(recs) > 1:
-            problems.append(f"inspection #{iid}: {len(recs)} verdict records "
+            problems.append(f"{noun} #{rid}: {len(recs)} {kind} records "
                             f"(#{', #'.join(str(r.seq) for r in recs)}), expected one")
-        if rows[iid] != recs[0].seq:
-            problems.append(f"inspection #{iid}: names verdict record #{rows[iid]}, its record "
+        if rows[rid] != recs[0].seq:
+            problems.append(f"{noun} #{rid}: names {kind} record #{rows[rid]}, its record "
                             f"is #{recs[0].seq}")
-        if canonical(inspection_payload(conn, iid)) != recs[0].payload:
-            problems.append(f"inspection #{iid}: stored verdict differs from custody record "
+        if canonical(payload(conn, rid)) != recs[0].payload:
+            problems.append(f"{noun} #{rid}: stored {kind} differs from custody record "
                             f"#{recs[0].seq}")
             changed.append(recs[0].seq)
-    problems += [f"custody record #{recs[0].seq}: inspection #{s} is no longer in the "
-                 "registry (rows deleted)" for s, recs in verdicts.items()
+    problems += [f"custody record #{recs[0].seq}: {noun} #{s} is no longer in the "
+                 "registry (rows deleted)" for s, recs in records.items()
                  if not s.isdigit() or int(s) not in rows]
     return changed

@@ -1,1 +1,1 @@
-"""Alembic migrations of the registry: env.py, versions/ (0001..0005), legacy helpers."""
+"""Alembic migrations of the registry: env.py, versions/ (0001..0006), legacy helpers."""

@@ -1,0 +1,190 @@
+"""The chance as measured: a verdict's statistic against its bat model's stored clean null.
+
+A *bat model* is what one calibration carries to (docs/scale.md): meta.json's ``model`` when
+the lab names it, else the profile itself (``model_name``: the species, the length and a hash
+of the profile's stations). ``fleet calibrate --store`` keeps a model's clean re-tests'
+statistic F and status (``batlab.registry.calibrations``); ``statement`` turns an inspection's
+verdict and the latest calibration of its model into the two things a verdict states:
+
+- ``chance``: how often an unaltered bat differs this much. With a calibration, ``value`` is
+  ``updating.tails.measured_chance`` ((1 + b) / (n + 1), b of the n stored clean re-tests at
+  least this F) and ``source`` "calibration"; without one, ``value`` is the F distribution's
+  p-value and ``source`` "nominal", said as unmeasured wherever it is shown. ``nominal`` is
+  that p-value either way.
+- ``false_alarm_rate``: the calibration's measured rate (k of n called altered) and its 95 %
+  Clopper-Pearson bound, when it was run at the inspection's decision level; else unmeasured.
+
+The decision itself (``status``) is the method's (``updating.inspect``); the chance is stated
+beside it. Light: numpy; ``updating.tails`` when a calibration is used.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import math
+import re
+from dataclasses import replace
+
+import numpy as np
+
+from updating.model.units import IN_TO_M
+
+STATISTIC = "F"
+"""The statistic a calibration stores and the chance ranks by (the verdict's ``statistic``)."""
+
+
+def model_name(profile, species: str, meta: dict | None = None) -> str:
+    """Name a bat's model: meta.json's ``model``, else one derived from its profile.
+
+    The derived name is ``SPECIES-LENGTHin-HASH``: the species (lower case, spaces as
+    hyphens), the length to 0.1 in and the first 10 hex digits of the SHA-256 of the
+    canonical JSON of the species and the profile's stations in inches to 1e-4 in. Two
+    profile.csv files with the same stations and species name the same model; any other
+    profile (another bat of the same model measured again by caliper included) names
+    another, so a lab that wants one calibration to carry across bats of a model says so in
+    meta.json (``"model": "..."``) and in ``fleet calibrate --model``.
+
+    Parameters
+    ----------
+    profile : Profile
+        The bat's profile (SI).
+    species : str
+        meta.json's species.
+    meta : dict or None
+        meta.json's content (its ``model`` key, when present, is the name).
+
+    Returns
+    -------
+    str
+        The model's name.
+    """
+    named = (meta or {}).get("model")
+    if isinstance(named, str) and named.strip():
+        return named.strip()
+    x_in = [round(float(x) / IN_TO_M, 4) for x in profile.x_m]
+    d_in = [round(float(d) / IN_TO_M, 4) for d in profile.diameter_m]
+    text = json.dumps({"species": species.strip().lower(), "x_in": x_in, "diameter_in": d_in},
+                      sort_keys=True, separators=(",", ":"))
+    slug = re.sub(r"[^a-z0-9]+", "-", species.strip().lower()).strip("-") or "wood"
+    digest = hashlib.sha256(text.encode("utf-8")).hexdigest()[:10]
+    return f"{slug}-{x_in[-1]:.1f}in-{digest}"
+
+
+def nominal_p(verdict) -> float | None:
+    """Return a verdict's p-value from the F distribution (None when no test was made)."""
+    fit = None if verdict.details is None else verdict.details.fit
+    p = None if fit is None else fit.p_value
+    if p is None or not math.isfinite(float(p)):
+        conf = verdict.confidence
+        p = None if conf is None or not math.isfinite(float(conf)) else 1.0 - float(conf)
+    return None if p is None else min(max(float(p), 0.0), 1.0)
+
+
+def null_statistics(calibration) -> np.ndarray:
+    """Return a stored calibration's clean statistics (NaN where a re-test had none)."""
+    values = calibration.null.get(calibration.statistic) or []
+    return np.array([np.nan if v is None else float(v) for v in values], dtype=float)
+
+
+def _calibration_dict(calibration, exceeding: int | None) -> dict:
+    return {"model": calibration.model, "n": calibration.n, "exceeding": exceeding,
+            "false_alarms": calibration.false_alarms,
+            "false_alarm_upper95": calibration.false_alarm_upper95,
+            "record_seq": calibration.record_seq, "statistic": calibration.statistic,
+            "code": calibration.code}
+
+
+def statement(verdict, model: str | None, calibration=None,
+              unmeasured_why: str | None = None) -> dict:
+    """State a verdict's chance and false-alarm rate (module docstring).
+
+    Parameters
+    ----------
+    verdict : updating.inspect.verdict.Verdict
+        The inspection's verdict (its ``statistic``, p-value and decision level).
+    model : str or None
+        The bat's model (None: not known, no calibration looked up).
+    calibration : StoredCalibration or None
+        The latest stored calibration of the model.
+    unmeasured_why : str or None
+        Why there is no calibration, in words (default: none stored for the model).
+
+    Returns
+    -------
+    dict
+        ``{"chance": {...}, "false_alarm_rate": {...}}`` in JSON types.
+    """
+    nominal = nominal_p(verdict)
+    level = float(verdict.false_alarm_rate)
+    stat = float(verdict.statistic) if verdict.statistic is not None else math.nan
+    if calibration is not None and calibration.statistic != STATISTIC:
+        unmeasured_why = (f"the calibration of bat model {model} measured "
+                          f"{calibration.statistic}, not {STATISTIC}")
+        calibration = None
+    if calibration is None:
+        why = unmeasured_why or (f"no calibration of bat model {model} is stored"
+                                 if model else "no calibration was looked up")
+        chance = {"value": nominal, "source": "nominal", "calibration": None,
+                  "nominal": nominal, "model": model, "unmeasured": why}
+        return {"chance": chance, "false_alarm_rate": {
+            "source": "unmeasured", "false_alarms": None, "n": None, "measured": None,
+            "upper95": None, "level": level, "model": model, "unmeasured": why}}
+    from updating.tails import measured_chance, pareto_tail
+
+    null = null_statistics(calibration)
+    value = exceeding = tail = None
+    if math.isfinite(stat) and nominal is not None:
+        measured = measured_chance(stat, null)
+        value, exceeding = measured.value, measured.exceeding
+        if exceeding == 0:
+            tail = pareto_tail(stat, null)
+    chance = {"value": value, "source": "calibration",
+              "calibration": _calibration_dict(calibration, exceeding), "nominal": nominal,
+              "model": model, "beyond_measured": exceeding == 0 if exceeding is not None
+              else None, "extrapolated": tail}
+    run_level = calibration.summary.get("false_alarm")
+    if run_level is not None and math.isclose(float(run_level), level):
+        k, n = calibration.false_alarms, calibration.n
+        rate = {"source": "calibration", "false_alarms": k, "n": n, "measured": k / n,
+                "upper95": calibration.false_alarm_upper95, "level": level, "model": model}
+    else:
+        rate = {"source": "unmeasured", "false_alarms": None, "n": None, "measured": None,
+                "upper95": None, "level": level, "model": model,
+                "unmeasured": f"the calibration of bat model {model} was run at a decision "
+                              f"level of {run_level}, this inspection's is {level:g}"}
+    return {"chance": chance, "false_alarm_rate": rate}
+
+
+def with_statement(result, conn=None, unmeasured_why: str | None = None):
+    """Return an inspection's result with its chance stated (``statement``).
+
+    Parameters
+    ----------
+    result : InspectionResult
+        The inspection (its ``model`` names the calibration).
+    conn : sa.Connection or None
+        The registry whose latest calibration of the model is used; None: no registry, the
+        chance is nominal and said unmeasured (``unmeasured_why``).
+    unmeasured_why : str or None
+        Why no registry was read, in words.
+
+    Returns
+    -------
+    InspectionResult
+        The result with ``stated``.
+    """
+    calibration = None
+    if conn is not None and result.model:
+        from batlab.registry import latest_calibration
+
+        calibration = latest_calibration(conn, result.model)
+    return replace(result, stated=statement(result.verdict, result.model, calibration,
+                                            unmeasured_why))
+
+
+def result_dict(result) -> dict:
+    """Return an inspection result's contract dict, its chance as stated."""
+    from batlab.pipeline.records import contract_dict
+
+    return contract_dict(result.serial, result.verdict, result.stated)
