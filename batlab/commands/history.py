@@ -6,7 +6,7 @@ import argparse
 import json
 from dataclasses import asdict
 
-from batlab.cli_support import add_db_argument, db_path
+from batlab.cli_support import add_db_argument, read_registry
 from batlab.formatting import STATUS_WORDS, p_value_words
 
 EXAMPLE = "batlab history HX-1004 --json"
@@ -33,9 +33,9 @@ def run(args: argparse.Namespace) -> int:
         Exit code: 0 (bad input raises ValueError or OSError; ``batlab.cli`` prints
         it in one line and exits 2).
     """
-    from batlab.registry import get_bat, history, open_registry
+    from batlab.registry import get_bat, history
 
-    with open_registry(db_path(args), create=False, readonly=True) as conn:
+    with read_registry(args, "history") as conn:
         bat = get_bat(conn, args.serial)
         rows = history(conn, args.serial)
     if args.json:
