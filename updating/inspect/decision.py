@@ -24,8 +24,8 @@ unexplained change     significant, local, but no kind fits it         None
 weight                 significant, weight changed beyond moisture     None
 small change           significant, below its kind's gate              False
 drift beyond bounds    a nuisance the data want beyond its bound       None
-grip (in H0)           a grip substance read by H0 (legal)             False
-drift                  otherwise                                       False
+drift                  otherwise (a grip substance H0 read on the      False
+                       handle is named in its reasons: legal)
 =====================  ==============================================  ============
 """
 

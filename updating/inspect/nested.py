@@ -1,4 +1,4 @@
-"""The nested test of H1 (drift and a core) against H0 (drift alone) and its evidence.
+"""The nested test of H1 (drift and a local change) against H0 (drift alone) and its evidence.
 
 H0 and H1 fitted with each mode's shape noise (``fit_hypotheses``), the F test
 (``nested_test``, module docstring of ``updating.inspect.run``, step 3), and the checks the
@@ -13,9 +13,6 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from updating.inspect.decision import CONFUSABLE, GRIP_MIN_G, Evidence, is_significant
-from updating.inspect.details import (
-    PositionScan,
-)
 from updating.inspect.finding import RULES, Finding, describe
 from updating.inspect.hypotheses import (
     HANDLE_MAX_IN,
@@ -53,8 +50,6 @@ class Hypotheses:
         and the kinds' families (``kinds``), each of at most ``N_SEGMENT`` parameters.
     sigma_rel : numpy.ndarray
         (m,) relative shape noise per paired mode (``hypotheses.shape_noise``).
-    scan : PositionScan
-        The core family's position scan (empty: not recorded).
     kinds : KindFits
         Every family fitted on the same null and noise (``kinds.classify``); ``full`` is
         the one with the lowest residual.
@@ -63,7 +58,6 @@ class Hypotheses:
     null: ChangeFit
     full: ChangeFit
     sigma_rel: np.ndarray
-    scan: PositionScan
     kinds: KindFits
     family: str = "local_change"
     """The family ``full`` belongs to."""
@@ -99,7 +93,7 @@ def fit_hypotheses(predict: ChangePredictor, diff: Differences, space: ParamSpac
     dof = max(diff.n_data - N_NULL - N_PARAMS[kinds.family], 1)
     kinds = replace(kinds, fits=fits, fit=fits[kinds.family],
                     cov=covariance(fits[kinds.family], dof))
-    return Hypotheses(null, full, sigma, PositionScan(), kinds, best)
+    return Hypotheses(null, full, sigma, kinds, best)
 
 
 def nested_f(rss_null: float, rss_core: float, q: int, dof: int) -> tuple[float, float]:
@@ -116,14 +110,15 @@ def nested_f(rss_null: float, rss_core: float, q: int, dof: int) -> tuple[float,
 
 @dataclass(frozen=True)
 class NestedTest:
-    """The nested F test of H1 (drift and a core) against H0 (drift alone).
+    """The nested F test of H1 (drift and a local change) against H0 (drift alone).
 
     Attributes
     ----------
     F, p_value : float
         The statistic and P(F_{q, dof} > F) (``nested_f``).
     q, dof : int
-        Its degrees of freedom: the core's parameters, the data less H1's parameters.
+        Its degrees of freedom: the generic local change's parameters (``N_SEGMENT``), the
+        data less H1's parameters.
     n : int
         Number of data (frequencies, shapes, weight).
     rss_null, rss_core : float
