@@ -5,6 +5,10 @@ from __future__ import annotations
 from ema.io.frf_data import FrfTest
 from ema.modal_fit import MIN_SNR
 
+__all__ = [
+    "MIN_SNR", "fit_test_file", "plot_fit_files", "read_test_file", "write_modes_file",
+]
+
 
 def read_test_file(path, require_driving: bool = True) -> FrfTest:
     """Read an FRF test file as ``ema.io.frf_io.read_test`` reads it.
