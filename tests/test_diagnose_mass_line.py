@@ -80,13 +80,13 @@ def test_barrel_end_accelerometer_recovered_from_the_frf_test(sensor_g, e_scale,
     assert result.extended.std("sensor_g") < 0.5
     assert any(w.startswith("mass line at the driving point") for w in result.warnings)
     # the mass line and the mode shifts, combined: within their stated uncertainty (which
-    # counts the billet's unknown density gradient, 1.3-1.5 g on this bat), and the two
-    # together sharper than either
+    # counts a billet's unknown density gradient: 1.3-1.5 g for the mass line, several g for
+    # the shifts, which such a gradient mimics), and the two together sharper than either
     est = result.sensor
-    for e in (est.mass_line, est.combined):
+    for e in (est.mass_line, est.shifts, est.combined):
         assert abs(1e3 * e.mass_kg - sensor_g) <= max(3 * 1e3 * e.std_kg, 0.05)
     assert est.combined.std_kg < min(est.mass_line.std_kg, est.shifts.std_kg)
-    assert 1e3 * est.combined.std_kg < 1.5
+    assert 1e3 * est.combined.std_kg < 2.0
 
 
 @settings(max_examples=4, deadline=None, derandomize=True,
@@ -100,7 +100,8 @@ def test_a_billets_density_gradient_stays_within_the_stated_uncertainty(
     accelerometer; the scale weighs the bat as it is. The mass line's accelerometer moves by
     what the true bare bat's mass line says, 1 / a_0(true) - 1 / a_0(uniform) (up to about
     2 g), and its stated uncertainty (``sensor.billet_spread`` counted) holds the truth
-    within 3 of them."""
+    within 3 of them; so do the shifts' and the combined estimate's
+    (``sensor.billet_shift_spread``)."""
     from updating.diagnose.sensor import billet_spread
     from updating.model.mass_properties import MassProperties, rigid_mass_line
     from updating.simulate.wood import apply_wood_field, billet_field
@@ -125,6 +126,8 @@ def test_a_billets_density_gradient_stays_within_the_stated_uncertainty(
     fit_g = np.sqrt(max(std_g**2 - spread_g**2, 0.0))  # the fit's own share
     assert err_g == pytest.approx(shift_g, abs=max(3 * fit_g, 0.05)), (err_g, shift_g)
     assert abs(err_g) <= 3 * std_g and 0.5 < spread_g < 2.0
+    for e in (est.shifts, est.combined):  # the shifts read the gradient too: within theirs
+        assert abs(1e3 * e.mass_kg - sensor_g) <= 3 * 1e3 * e.std_kg
 
 
 @settings(max_examples=5, deadline=None, derandomize=True)

@@ -41,8 +41,18 @@ BILLET_DENSITY_AMPLITUDE = 0.03
 """Largest amplitude of a billet's density gradient along the bat, 1 + a cos(pi x / L +
 phase) (docs/bat_physics.md: a few percent, smooth; the virtual rig's billets,
 ``updating.simulate.nuisances.draw_billet``, draw the same)."""
-BILLET_PHASES = 24
-"""Phases in [0, pi) over which ``billet_spread`` averages."""
+BILLET_PHASES = 12
+"""Phases in [0, pi) over which ``billet_spread`` and ``billet_shift_spread`` average."""
+
+
+def _billet_phases() -> np.ndarray:
+    return np.linspace(0.0, np.pi, BILLET_PHASES, endpoint=False)
+
+
+def _billet(setup: Setup, amplitude: float, phase: float):
+    """Return the density factor 1 + a cos(pi x / L + phase) along the bat."""
+    length = setup.profile.length_m
+    return lambda x: 1.0 + amplitude * np.cos(np.pi * np.asarray(x) / length + phase)
 
 
 def billet_spread(setup: Setup) -> float:
@@ -66,20 +76,59 @@ def billet_spread(setup: Setup) -> float:
         std(a_0) / a_0.
     """
     model = build_model(setup.profile, Material(1.0, 1.0))
-    length, xs, amp = setup.profile.length_m, setup.sensor_x_m, BILLET_DENSITY_AMPLITUDE
+    xs, amp = setup.sensor_x_m, BILLET_DENSITY_AMPLITUDE
 
     def ln_a0(a: float, phase: float) -> float:
-        mp = mass_properties(model, density_factor=lambda x: 1.0 + a * np.cos(
-            np.pi * x / length + phase))
+        mp = mass_properties(model, density_factor=_billet(setup, a, phase))
         scale = setup.unit_mass.mass_kg / mp.mass_kg  # the same weight on the scale
         return float(np.log(rigid_mass_line(replace(mp, mass_kg=mp.mass_kg * scale,
                                                     i_cg_kg_m2=mp.i_cg_kg_m2 * scale),
                                             xs, xs)))
 
     base = ln_a0(0.0, 0.0)
-    slopes = [(ln_a0(amp, p) - base) / amp
-              for p in np.linspace(0.0, np.pi, BILLET_PHASES, endpoint=False)]
+    slopes = [(ln_a0(amp, p) - base) / amp for p in _billet_phases()]
     return float(amp / np.sqrt(3.0) * np.sqrt(np.mean(np.square(slopes))))
+
+
+def billet_shift_spread(setup: Setup, active: frozenset, bare, n_modes: int, idx: np.ndarray,
+                        per_g: np.ndarray, sigma: float) -> float:
+    """Return the standard uncertainty (kg) a billet's gradient gives the shifts' estimate.
+
+    The model's frequencies with the density of ``billet_spread``'s gradients (at the same
+    total mass, ``model.build``) differ from the uniform model's by a pattern that the
+    shifts read, in part, as an accelerometer (``sensor_mass_from_shifts``, c free): what
+    amplitude A reads, per A, RMS over the phases, times A / sqrt(3).
+
+    Parameters
+    ----------
+    setup : Setup
+        The bat and its test.
+    active : frozenset
+        The calibrated model's extensions (the accelerometer's switched on).
+    bare : State
+        Its values, the accelerometer at 0.
+    n_modes : int
+        Model modes solved.
+    idx : ndarray
+        The paired model columns.
+    per_g : ndarray
+        d ln f / d m of those columns, per gram.
+    sigma : float
+        Each mode's relative frequency uncertainty.
+
+    Returns
+    -------
+    float
+        The standard uncertainty, kg.
+    """
+    amp = BILLET_DENSITY_AMPLITUDE
+    f0 = modal_sensitivities(setup, active, bare, n_modes).elastic_hz[idx]
+    reads = []
+    for phase in _billet_phases():
+        dense = replace(setup, density_factor=_billet(setup, amp, phase))
+        f = modal_sensitivities(dense, active, bare, n_modes).elastic_hz[idx]
+        reads.append(sensor_mass_from_shifts(np.log(f / f0), per_g, sigma).mass_kg / amp)
+    return float(amp / np.sqrt(3.0) * np.sqrt(np.mean(np.square(reads))))
 
 
 @dataclass(frozen=True)
@@ -138,6 +187,10 @@ def estimate_sensor_mass(setup: Setup, obs: Observations, final: DiagnosisFit) -
     rel = np.log(obs.freq_hz / sol.elastic_hz[idx])
     sigma = float(np.hypot(obs.sigma_f, final.rms_pct / 100))
     shifts = sensor_mass_from_shifts(rel, 1e3 * sol.dlnf[0, idx], sigma)
+    if np.isfinite(shifts.std_kg):  # the billet's gradient read as an accelerometer
+        spread = billet_shift_spread(setup, final.active | {"sensor_mass"}, bare,
+                                     obs.n_model_modes, idx, 1e3 * sol.dlnf[0, idx], sigma)
+        shifts = replace(shifts, std_kg=float(np.hypot(shifts.std_kg, spread)))
     combined = combine_masses([e for e in (ml, shifts) if e is not None])
     return SensorMass(ml, shifts, combined)
 
