@@ -14,7 +14,9 @@ than the other by a few percent in a smooth gradient no profile shows (docs/bat_
 and that moves a_0: its standard uncertainty under the gradients of ``billet_spread`` is
 counted in the mass line's (1.3-1.5 g on the sample and random pro bats, where the fit's
 own is 0.1-0.2 g: a billet 3 % lighter at the barrel end reads about 2 g low on the 3D
-bats, benchmarks/bench_solid_diagnose.py --billet).
+bats, benchmarks/bench_solid_diagnose.py --billet). The same gradients change the modes in
+a pattern the shifts partly read as an accelerometer (a denser barrel end is much like a
+mass there): ``billet_shift_spread`` counts that in the shifts' uncertainty (several g).
 They are combined weighted by their inverse variances; the shifts check the mass line, and
 carry the estimate when the test gave no mass line.
 """
