@@ -207,8 +207,9 @@ def main(argv: Sequence[str] | None = None) -> int:
         return 2
     except sqlite3.DatabaseError as exc:  # damage found after the registry opened
         db = getattr(args, "db", None) or "the registry"
-        print(f"batlab {args.command}: error: {db}: registry damaged ({exc}); "
-              "`batlab registry check` says where", file=sys.stderr)
+        print(f"batlab {args.command}: error: {db}: registry damaged "
+              f"({' '.join(str(exc).split())}); `batlab registry check` says where",
+              file=sys.stderr)
         return 2
     except KeyboardInterrupt:
         print(f"batlab {args.command}: interrupted", file=sys.stderr)

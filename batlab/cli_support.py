@@ -56,6 +56,30 @@ def db_path(args: argparse.Namespace) -> Path | str:
     return Path(args.db).expanduser() if args.db else default_db_path()
 
 
+def read_registry(args: argparse.Namespace, command: str):
+    """Open the registry of ``--db`` read-only for a block (it must exist).
+
+    A registry that fails the storage check (``batlab.registry.health``) is read, with one
+    warning line on stderr (``batlab COMMAND: warning: ...``).
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        Parsed options of a command that called ``add_db_argument``.
+    command : str
+        The command's name, shown in the warning.
+
+    Returns
+    -------
+    contextmanager
+        ``batlab.registry.open_registry(..., create=False, readonly=True)``.
+    """
+    from batlab.registry import open_registry
+
+    return open_registry(db_path(args), create=False, readonly=True,
+                         warn=note_printer(command))
+
+
 HEARTBEAT_S = 5.0
 """A step running this long without a new line gets a 'still ...' line on stderr."""
 _RUNNING: list[Progress] = []

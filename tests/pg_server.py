@@ -58,14 +58,11 @@ def pg_server(folder: Path, database: str = "batlab") -> Iterator[str]:
     if os.geteuid() == 0:  # the folder's parents must let the server user through
         entry = pwd.getpwnam(PG_USER)
         shutil.chown(folder, entry.pw_uid, entry.pw_gid)
-    data, log = folder / "data", folder / "server.log"
+    data = folder / "data"
     run = dict(check=True, capture_output=True, text=True)
     subprocess.run(_as_server_user([str(PG_BIN / "initdb"), "-D", str(data), "-U", PG_USER,
                                     "-A", "trust", "--no-sync"]), **run)
-    opts = (f"-c listen_addresses='' -c unix_socket_directories={folder} -c fsync=off "
-            "-c max_connections=40")
-    subprocess.run(_as_server_user([str(PG_BIN / "pg_ctl"), "-D", str(data), "-l", str(log),
-                                    "-o", opts, "-w", "start"]), **run)
+    _pg_ctl(folder, "start")
     try:
         subprocess.run(_as_server_user([str(PG_BIN / "createdb"), "-h", str(folder), "-U",
                                         PG_USER, database]), **run)
@@ -73,6 +70,27 @@ def pg_server(folder: Path, database: str = "batlab") -> Iterator[str]:
     finally:
         subprocess.run(_as_server_user([str(PG_BIN / "pg_ctl"), "-D", str(data), "-m", "fast",
                                         "-w", "stop"]), capture_output=True)
+
+
+def _pg_ctl(folder: Path, action: str) -> None:
+    """``pg_ctl start`` or ``stop`` the server of ``folder`` (its socket there, no TCP)."""
+    opts = (f"-c listen_addresses='' -c unix_socket_directories={folder} -c fsync=off "
+            "-c max_connections=40")
+    how = ["-l", str(folder / "server.log"), "-o", opts] if action == "start" else \
+        ["-m", "fast"]
+    subprocess.run(_as_server_user([str(PG_BIN / "pg_ctl"), "-D", str(folder / "data"), *how,
+                                    "-w", action]), check=True, capture_output=True, text=True)
+
+
+@contextmanager
+def server_stopped(url: str) -> Iterator[Path]:
+    """Stop the server of ``url`` for the block (yielding its data folder), start it after."""
+    folder = Path(dict(p.split("=", 1) for p in url.partition("?")[2].split("&"))["host"])
+    _pg_ctl(folder, "stop")
+    try:
+        yield folder / "data"
+    finally:
+        _pg_ctl(folder, "start")
 
 
 def create_database(url: str, name: str) -> str:

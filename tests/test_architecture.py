@@ -178,3 +178,26 @@ def test_no_function_of_100_lines_or_more():
                     if n >= 100:
                         long.append(f"{path.relative_to(ROOT)}:{node.name} ({n} lines)")
     assert not long, long
+
+
+def test_pipeline_serves_the_names_its_modules_declare():
+    """``batlab.pipeline``'s public names are declared once, in each module's ``__all__``:
+    the declarations the package reads from the source are the imported modules' own, no
+    name is declared twice, each is served as the module's object, and every module of the
+    package is one it serves from."""
+    import importlib
+
+    import batlab.pipeline as pipeline
+
+    folder = ROOT / "batlab" / "pipeline"
+    modules = sorted(p.stem for p in folder.glob("*.py") if p.stem != "__init__")
+    assert sorted(pipeline._SUBMODULES) == modules
+    seen: dict[str, str] = {}
+    for name in modules:
+        module = importlib.import_module(f"batlab.pipeline.{name}")
+        assert pipeline.declared(name) == tuple(module.__all__), name
+        for public in module.__all__:
+            assert public not in seen, f"{public} declared by {seen.get(public)} and {name}"
+            seen[public] = name
+            assert getattr(pipeline, public) is getattr(module, public)
+    assert sorted(pipeline.__all__) == sorted(seen)

@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 
 from batlab.pipeline import jsonable
-from batlab.pipeline.stored import stored_report_inputs, with_element_map
+from batlab.pipeline.stored import stored_case, stored_report_inputs, with_element_map
 from batlab.registry import history, open_registry
 from batlab.report import MAP_JUDGED_AGAIN, regions_note
 from ema.io.frf_io import write_test
@@ -114,6 +114,7 @@ def test_element_map_drawn_when_a_report_asks(registry):
     batlab(["inspect", "--serial", "HX-2001", retest, "--db", db, "--again", "--json"])
     with open_registry(db, create=False) as conn:
         inputs = stored_report_inputs(conn, "HX-2001")
+        case = stored_case(conn, "HX-2001")[2]
         bare = history(conn, "HX-2001")[-1]
     assert bare.verdict["details"]["msso"] == {}
     drawn = inputs.verdict["details"]["msso"]
@@ -128,7 +129,7 @@ def test_element_map_drawn_when_a_report_asks(registry):
     assert untimed[0] == untimed[1]
     # a verdict this batlab does not reproduce (here: its status changed) gets no map
     other = {**bare.verdict, "status": "not_altered"}
-    again = with_element_map(replace(inputs, verdict=other), bare.inputs, None)
+    again = with_element_map(replace(inputs, verdict=other), case, bare.inputs)
     assert "no map is drawn" in again.verdict["details"]["msso"]["error"]
     (tmp / "retest.json").write_text(json.dumps({"weight_lb": 1.90, "temperature_c": 21.0}))
     batlab(["inspect", "--serial", "HX-2001", tmp / "drifted.uff", "--db", db,

@@ -79,11 +79,55 @@ def test_barrel_end_accelerometer_recovered_from_the_frf_test(sensor_g, e_scale,
     assert ref.E_pa / bat.material.E_pa - 1 == pytest.approx(0.0, abs=0.005)
     assert result.extended.std("sensor_g") < 0.5
     assert any(w.startswith("mass line at the driving point") for w in result.warnings)
-    # the mass line and the mode shifts, combined: within their stated uncertainty
+    # the mass line and the mode shifts, combined: within their stated uncertainty (which
+    # counts a billet's unknown density gradient: 1.3-1.5 g for the mass line, several g for
+    # the shifts, which such a gradient mimics), and the two together sharper than either
     est = result.sensor
-    for e in (est.mass_line, est.combined):
+    for e in (est.mass_line, est.shifts, est.combined):
         assert abs(1e3 * e.mass_kg - sensor_g) <= max(3 * 1e3 * e.std_kg, 0.05)
-    assert 1e3 * est.combined.std_kg < 0.5 and est.shifts.std_kg > est.combined.std_kg
+    assert est.combined.std_kg < min(est.mass_line.std_kg, est.shifts.std_kg)
+    assert 1e3 * est.combined.std_kg < 2.0
+
+
+@settings(max_examples=4, deadline=None, derandomize=True,
+          suppress_health_check=[HealthCheck.too_slow])
+@given(amplitude=st.floats(-0.03, 0.03), phase=st.floats(0.0, np.pi),
+       sensor_g=st.floats(2.0, 6.0), seed=st.integers(0, 10_000))
+def test_a_billets_density_gradient_stays_within_the_stated_uncertainty(
+        amplitude, phase, sensor_g, seed):
+    """Hidden: a billet's density 1 + a cos(pi x / L + phase) (|a| up to 3 %, the virtual
+    rig's billets), which the profile at uniform density does not show, beside a 2-6 g
+    accelerometer; the scale weighs the bat as it is. The mass line's accelerometer moves by
+    what the true bare bat's mass line says, 1 / a_0(true) - 1 / a_0(uniform) (up to about
+    2 g), and its stated uncertainty (``sensor.billet_spread`` counted) holds the truth
+    within 3 of them; so do the shifts' and the combined estimate's
+    (``sensor.billet_shift_spread``)."""
+    from updating.diagnose.sensor import billet_spread
+    from updating.model.mass_properties import MassProperties, rigid_mass_line
+    from updating.simulate.wood import apply_wood_field, billet_field
+
+    field = billet_field(PROFILE.length_m, 0.0, amplitude, phase)
+    wood = Material(HANDBOOK.E_pa, HANDBOOK.rho_kg_m3 * 0.97, 13.0)
+    bat = VirtualBat(PROFILE, wood, POINTS, sensor_mass_kg=1e-3 * sensor_g,
+                     bungee_k_n_per_m=200.0, wood=field)
+    true_bare = mass_properties(apply_wood_field(build_model(PROFILE, wood), field))
+    weight = true_bare.mass_kg
+    unit = mass_properties(build_model(PROFILE, Material(1.0, 1.0)))
+    rho = weight / unit.mass_kg
+    uniform = MassProperties(weight, unit.cg_m, rho * unit.i_knob_kg_m2,
+                             rho * unit.i_cg_kg_m2)
+    xs = POINTS[-1]
+    a0_true, a0_model = (rigid_mass_line(mp, xs, xs) for mp in (true_bare, uniform))
+    shift_g = 1e3 * (1 / a0_true - 1 / a0_model)  # what the gradient does to the reading
+    est = _run(bat, BatMeta("T-1", "ash", HANDBOOK, weight, POINTS), seed).sensor
+    err_g = 1e3 * est.mass_line.mass_kg - sensor_g
+    std_g = 1e3 * est.mass_line.std_kg
+    spread_g = 1e3 * billet_spread(Setup(PROFILE, HANDBOOK, weight, POINTS, xs)) / a0_model
+    fit_g = np.sqrt(max(std_g**2 - spread_g**2, 0.0))  # the fit's own share
+    assert err_g == pytest.approx(shift_g, abs=max(3 * fit_g, 0.05)), (err_g, shift_g)
+    assert abs(err_g) <= 3 * std_g and 0.5 < spread_g < 2.0
+    for e in (est.shifts, est.combined):  # the shifts read the gradient too: within theirs
+        assert abs(1e3 * e.mass_kg - sensor_g) <= 3 * 1e3 * e.std_kg
 
 
 @settings(max_examples=5, deadline=None, derandomize=True)

@@ -20,7 +20,6 @@ from updating.inspect.details import (
     FitEvidence,
     InspectionDetails,
     ModePair,
-    PositionScan,
 )
 from updating.inspect.msso_map import MssoMap
 
@@ -62,8 +61,6 @@ def details(draw):
     floats = st.lists(num, max_size=5).map(tuple)
     core = CoreCandidate((draw(nan_or_num), draw(nan_or_num)), draw(nan_or_num),
                          draw(nan_or_num), draw(st.dictionaries(names, num, max_size=3)))
-    scan = draw(st.just(PositionScan()) | st.builds(
-        PositionScan, floats, st.lists(st.tuples(num, num), max_size=3).map(tuple), floats))
     fit = FitEvidence(
         draw(names), (draw(st.integers(0, 9)), draw(st.integers(0, 999))), draw(nan_or_num),
         draw(nan_or_num), draw(nan_or_num), draw(st.integers(0, 999)), draw(floats),
@@ -71,7 +68,7 @@ def details(draw):
         tuple(draw(st.lists(names, max_size=3))), tuple(draw(st.lists(names, max_size=3))),
         draw(maybe_num), draw(names), draw(floats), core,
         draw(st.dictionaries(names, num, max_size=3)), draw(nan_or_num), draw(nan_or_num),
-        scan, draw(element_maps()), draw(nan_or_num), draw(nan_or_num))
+        draw(element_maps()), draw(nan_or_num), draw(nan_or_num))
     return InspectionDetails(n_modes, draw(maybe_num), fit)
 
 
@@ -122,7 +119,10 @@ def test_older_records_missing_keys_read_as_not_computed():
     old = InspectionDetails.from_json_dict({"p_value": 0.2, "n_modes": 5})
     assert old.p_value == 0.2 and old.n_modes == 5 and old.time_s is None
     assert old.msso.result is None and old.msso.error is None
-    assert old.fit.position_scan == PositionScan() and old.fit.weight_change_rel is None
+    assert old.fit.weight_change_rel is None
+    # a key no longer written (the empty position scan every record held) is ignored
+    scan = {"p_value": 0.2, "position_scan": {}}
+    assert "position_scan" not in InspectionDetails.from_json_dict(scan).to_json_dict()
     assert math.isnan(old.fit.candidate_core.diameter_m)
     assert ElementMap.from_json_dict({"alpha": [0.1]}).result.alpha_std.size == 0
     assert math.isnan(ModePair.from_json_dict({"retest_hz": 5.0}).baseline_hz)

@@ -131,18 +131,33 @@ def test_fitted_core_mass_change_matches_hand_calculation(result):
     assert cored[2] == pytest.approx(expect_cg, abs=0.01)
 
 
-@pytest.mark.skipif(shutil.which("chromium") is None,
-                    reason="chromium not installed (apt-get install chromium) - render check "
-                           "skipped")
+NO_CHROMIUM = pytest.mark.skipif(
+    shutil.which("chromium") is None,
+    reason="chromium not installed (apt-get install chromium; .ci/run installs it)")
+
+
+def chromium(args: list[str], tmp_path: Path, text: bool = False) -> str | bytes:
+    """Run headless Chromium on ``args`` and return its stdout.
+
+    The flags a CI machine needs: no sandbox (it cannot start as root), no GPU, nothing fetched
+    or synchronised in the background, no first-run page, and a fresh profile folder.
+    """
+    profile = tmp_path / "chromium-profile"
+    return subprocess.run(
+        ["chromium", "--headless", "--no-sandbox", "--disable-gpu",
+         "--disable-background-networking", "--disable-component-update", "--disable-sync",
+         "--no-first-run", f"--user-data-dir={profile}", *args],
+        check=True, capture_output=True, text=text, timeout=90).stdout
+
+
+@NO_CHROMIUM
 def test_report_renders_in_headless_chromium(result, tmp_path):
     from matplotlib.image import imread
 
     path = write_report(tmp_path / "rep", result)
     shot = tmp_path / "shot.png"
-    subprocess.run(
-        ["chromium", "--headless", "--no-sandbox", "--disable-gpu", "--hide-scrollbars",
-         f"--screenshot={shot}", "--window-size=1100,1800", path.resolve().as_uri()],
-        check=True, capture_output=True, timeout=90)
+    chromium(["--hide-scrollbars", f"--screenshot={shot}", "--window-size=1100,1800",
+              path.resolve().as_uri()], tmp_path)
     img = imread(shot)
     assert img.shape[0] >= 1000 and img.shape[1] >= 1000
     gray = img[..., :3].mean(axis=2)
@@ -197,18 +212,14 @@ def overflowing(page: str, tmp_path: Path, width: int = 1100) -> str:
     report itself has no script: the probe is added to a copy)."""
     probe = tmp_path / "probe.html"
     probe.write_text(page.replace("</body>", OVERFLOW_PROBE + "</body>"))
-    dom = subprocess.run(
-        ["chromium", "--headless", "--no-sandbox", "--disable-gpu",
-         f"--window-size={width},1200", "--dump-dom", probe.resolve().as_uri()],
-        check=True, capture_output=True, text=True, timeout=90).stdout
+    dom = chromium([f"--window-size={width},1200", "--dump-dom", probe.resolve().as_uri()],
+                   tmp_path, text=True)
     found = re.search(r'data-overflow="([^"]*)"', dom)
     assert found, "the probe did not run"
     return found.group(1)
 
 
-@pytest.mark.skipif(shutil.which("chromium") is None,
-                    reason="chromium not installed (apt-get install chromium) - layout check "
-                           "skipped")
+@NO_CHROMIUM
 def test_no_table_overflows_in_chromium(monkeypatch, tmp_path):
     """Every table and figure fits the page, the paired-modes table with all its columns too
     (its headers wrap); and the check fails on a table that does not fit."""

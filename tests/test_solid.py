@@ -97,6 +97,28 @@ def test_rigid_body_of_the_solid(cylinder_modes):
     assert inertia == pytest.approx(m * (0.8**2 / 12 + 0.03**2 / 4), rel=1e-3)
 
 
+@pytest.mark.parametrize("amplitude", [-0.03, 0.05])
+def test_a_density_gradient_moves_the_solids_mass_as_integrated(amplitude):
+    """A billet's density factor 1 + a cos(pi x / L) on the cylinder: the same mass (the
+    half-wave averages to 0), the centre of mass at L/2 - 2 a L / pi^2 and the pitch inertia
+    about the knob end m L^2 / 3 + m r^2 / 4 - 2 a m L^2 / pi^2, integrated by hand."""
+    from updating.solid.modes import assemble_solid, rigid_body
+
+    length, r = 0.8, 0.03
+
+    def factor(x):
+        return 1.0 + amplitude * np.cos(np.pi * x / length)
+
+    _, M, basis = assemble_solid(bat_mesh(CYLINDER, 16, 2, 1), isotropic(*STEEL),
+                                 density_factor=factor)
+    mass, cg, inertia = rigid_body(M, basis.doflocs)
+    m = STEEL[1] * np.pi * r**2 * length
+    assert mass == pytest.approx(m, rel=1e-3)
+    assert cg == pytest.approx(length / 2 - 2 * amplitude * length / np.pi**2, rel=1e-4)
+    i_knob = m * length**2 / 3 + m * r**2 / 4 - 2 * amplitude * m * length**2 / np.pi**2
+    assert inertia + mass * cg**2 == pytest.approx(i_knob, rel=1e-3)
+
+
 def test_frf_test_of_the_solid_carries_its_modes_and_mass_line(cylinder_modes):
     """3D-simulated roving-hammer FRFs (updating.simulate.solid_test) through the real modal
     fit: the bending frequencies of the solid and its exact mass line

@@ -6,7 +6,7 @@ import argparse
 import json
 from dataclasses import asdict
 
-from batlab.cli_support import add_db_argument, db_path
+from batlab.cli_support import add_db_argument, read_registry
 from batlab.formatting import STATUS_WORDS
 
 EXAMPLE = "batlab bats --db lab.sqlite"
@@ -32,9 +32,9 @@ def run(args: argparse.Namespace) -> int:
         Exit code: 0 (bad input raises ValueError or OSError; ``batlab.cli`` prints
         it in one line and exits 2).
     """
-    from batlab.registry import list_bats, open_registry
+    from batlab.registry import list_bats
 
-    with open_registry(db_path(args), create=False, readonly=True) as conn:
+    with read_registry(args, "bats") as conn:
         bats = list_bats(conn)
     if args.json:
         print(json.dumps([asdict(b) for b in bats]))

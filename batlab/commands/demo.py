@@ -71,10 +71,10 @@ def _run_in(work: Path, args: argparse.Namespace, keep: bool) -> int:
 
     progress = progress_printer("demo")
     check_destination(work, "--out")
-    db = db_path(args) if args.db else work / "registry.sqlite"
-    files = pipeline.simulate_demo_pair(work, args.seed, progress)
-    profile, meta, baseline, retest = files.profile, files.meta, files.baseline, files.retest
-    with open_registry(db) as conn:
+    db = db_path(args) if args.db else work / "registry.sqlite"  # a file, or a server's URL
+    with open_registry(db) as conn:  # a damaged --db is refused before the simulation
+        files = pipeline.simulate_demo_pair(work, args.seed, progress)
+        profile, meta, baseline, retest = files.profile, files.meta, files.baseline, files.retest
         done = pipeline.register_files(conn, profile, meta, baseline, replace=True,
                                        progress=progress)
         serial = done.record.serial

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import argparse
 
-from batlab.cli_support import add_db_argument, add_out_argument, db_path, note_printer
+from batlab.cli_support import add_db_argument, add_out_argument, note_printer, read_registry
 
 EXAMPLE = "batlab export HX-1004 -o HX-1004.csv"
 
@@ -31,12 +31,11 @@ def run(args: argparse.Namespace) -> int:
         it in one line and exits 2).
     """
     from batlab.pipeline import admit, history_table, write_csv
-    from batlab.registry import open_registry
 
     if not args.out:  # not argparse's required=: the old --output must satisfy it too
         raise ValueError("-o/--out FILE.csv is required (the CSV file to write)")
     admit(args, note_printer("export"), outputs={"out": "file"}, serial_label="SERIAL")
-    with open_registry(db_path(args), create=False, readonly=True) as conn:
+    with read_registry(args, "export") as conn:
         table = history_table(conn, args.serial)
     write_csv(args.out, table)
     print(f"{len(table)} inspection(s) written to {args.out}")

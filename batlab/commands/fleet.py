@@ -96,12 +96,15 @@ def _inspect(args: argparse.Namespace) -> int:
     from batlab.fleet.cluster import connect
     from batlab.fleet.inspect_fleet import inspect_fleet, retest_jobs
     from batlab.formatting import readable
+    from batlab.registry import open_registry
 
     if not args.folder:
         raise ValueError("fleet inspect: give the folder of SERIAL.uff re-tests")
     progress = progress_printer("fleet inspect")
     jobs = retest_jobs(args.folder)
     db = db_path(args)
+    with open_registry(db, create=False):  # missing or damaged: refused before a cluster starts
+        pass
     with connect(args.scheduler) as client:
         progress(f"{len(jobs)} re-test(s) on {_describe(client)}")
         out = inspect_fleet(client, db, jobs, args.false_alarm, progress)

@@ -6,7 +6,7 @@ import argparse
 import json
 from dataclasses import asdict
 
-from batlab.cli_support import add_db_argument, db_path, note_printer
+from batlab.cli_support import add_db_argument, note_printer, read_registry
 from batlab.formatting import STATUS_WORDS, p_value_words
 
 EXAMPLE = "batlab history HX-1004 --json"
@@ -34,10 +34,10 @@ def run(args: argparse.Namespace) -> int:
         it in one line and exits 2).
     """
     from batlab.pipeline import admit
-    from batlab.registry import get_bat, history, open_registry
+    from batlab.registry import get_bat, history
 
     admit(args, note_printer("history"), serial_label="SERIAL")
-    with open_registry(db_path(args), create=False, readonly=True) as conn:
+    with read_registry(args, "history") as conn:
         bat = get_bat(conn, args.serial)
         rows = history(conn, args.serial)
     if args.json:

@@ -56,9 +56,10 @@ def run(args: argparse.Namespace) -> int:
     progress = progress_printer("register")
     path = db_path(args)
     meta = admit(args, note_printer("register"), registry=path, create=True)["meta"]
-    if not args.replace and (is_url(path) or Path(path).is_file()):  # fail fast, before the fit
+    if is_url(path) or Path(path).is_file():  # fail fast, before the fit (damaged, registered)
         with open_registry(path) as conn:
-            require_unregistered(conn, meta.serial)
+            if not args.replace:
+                require_unregistered(conn, meta.serial)
     prepared = prepare_registration(args.profile, args.meta, args.baseline, args.serial,
                                     progress, force=args.force)
     with open_registry(path) as conn:

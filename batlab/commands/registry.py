@@ -6,7 +6,7 @@ import argparse
 import json
 from dataclasses import asdict, replace
 
-from batlab.cli_support import add_db_argument, db_path
+from batlab.cli_support import add_db_argument, db_path, note_printer
 
 EXAMPLE = ("batlab registry check --db lab.sqlite --head 42:<sha256>\n"
            "  batlab registry copy --from lab.sqlite --to postgresql://lab@league/batlab\n"
@@ -72,7 +72,8 @@ def run(args: argparse.Namespace) -> int:
         with open_registry(db_path(args), create=False, readonly=True) as conn:
             return _calibrations(conn, args)
     path = db_path(args)
-    with open_registry(path, create=False, readonly=True) as conn:
+    warn = None if args.action == "check" else note_printer("registry")  # check says it all
+    with open_registry(path, create=False, readonly=True, warn=warn) as conn:
         if args.action == "head":
             text = head(conn)
             if text is None:
@@ -127,7 +128,8 @@ def _copy(args: argparse.Namespace) -> int:
     if str(source) == str(destination):
         raise ValueError(f"{shown(source)}: --from and --to name the same registry")
     trusted = signing.trusted_keys(args.trust)
-    with open_registry(source, create=False, readonly=True) as src, \
+    with open_registry(source, create=False, readonly=True,
+                       warn=note_printer("registry copy")) as src, \
             open_registry(destination) as dst:
         res = copy_registry(src, dst, trusted, shown(source), shown(destination))
     if args.json:

@@ -7,9 +7,9 @@ import argparse
 from batlab.cli_support import (
     add_db_argument,
     add_out_argument,
-    db_path,
     note_printer,
     progress_printer,
+    read_registry,
 )
 
 EXAMPLE = "batlab report HX-1004 --inspection 3 -o report-HX-1004-3"
@@ -43,13 +43,13 @@ def run(args: argparse.Namespace) -> int:
     from pathlib import Path
 
     from batlab import pipeline
-    from batlab.registry import history, open_registry
+    from batlab.registry import history
     from batlab.report import check_destination, write_report
 
     pipeline.admit(args, note_printer("report"), outputs={"out": "dir", "plots": "dir"},
                    serial_label="SERIAL")
     progress = progress_printer("report")
-    with open_registry(db_path(args), create=False, readonly=True) as conn:
+    with read_registry(args, "report") as conn:
         rows = history(conn, args.serial)
         n = args.inspection if args.inspection is not None else (rows[-1].id if rows else 0)
         out = Path(args.out) if args.out else Path(f"report-{args.serial}-{n}")

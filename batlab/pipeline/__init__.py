@@ -23,89 +23,54 @@ imports no stage module itself (tests/test_architecture.py checks it). One modul
 - ``paper``: the paper's corked-bat case (SEREP + MSSO, the refinement, Figures 2 and 3).
 - ``acquisition``: the acquisition box's driver and session, the session's files, the FRF
   file written at the end.
+- ``edge``: the unit constants the commands convert lab units with at the edge, and the
+  JSON object reader (re-exported from the stages).
 
-Names are loaded on first use (PEP 562), so importing one light module of the package
-loads no stage. The unit constants the commands convert lab units with at the edge, and the
-running code's version (``batlab.version.code_version``, for the fleet's rows), are
-re-exported here.
+Each module declares its public names in its ``__all__``; this package serves them all,
+each loaded on first use (PEP 562): importing one light module of the package loads no
+stage. The declarations are read from the modules' source (a literal ``__all__ = [...]``),
+not by importing them; tests/test_architecture.py checks them against the imported
+modules' ``__all__``.
 """
 
 from __future__ import annotations
 
+import ast
+import functools
 import importlib
+import re
+from pathlib import Path
 
-_SOURCES = {
-    "batlab.pipeline.acquisition": (
-        "CaptureSettings", "DEFAULT_POINTS_IN", "ReplaySource", "SerialDevice",
-        "SessionInterrupted", "combine", "device_info_from_dict", "load_points", "open_port",
-        "run_session", "save_points", "write_json_atomic", "write_session_test",
-    ),
-    "batlab.pipeline.bench": (
-        "BoxConfig", "DEMO_RETEST", "DemoFiles", "FAULTS", "VirtualBox", "bat_modal_model",
-        "bat_model", "bat_profile", "default_info", "meta_points_m", "nuisance_names",
-        "simulate_bat_test", "simulate_demo_pair", "simulate_field_case", "summarise_model",
-        "uniform_beam_model", "virtual_bat", "wood", "write_frf",
-    ),
-    "batlab.pipeline.chance": (
-        "model_name", "result_dict", "statement", "with_statement",
-    ),
-    "batlab.pipeline.diagnosis": (
-        "check_rig_files", "diagnose_files",
-    ),
-    "batlab.pipeline.door": (
-        "admit", "check_output", "check_registry",
-    ),
-    "batlab.pipeline.files": (
-        "file_sha256", "read_bat_files", "read_conditions", "read_frf", "read_meta_dict",
-        "write_csv",
-    ),
-    "batlab.pipeline.modal": (
-        "MIN_SNR", "fit_test_file", "plot_fit_files", "write_modes_file",
-    ),
-    "batlab.pipeline.inspection": (
-        "InspectionCase", "InspectionResult", "calibrate_baseline", "fit_file",
-        "inspect_files", "judge", "stateless_case",
-    ),
-    "batlab.pipeline.paper": (
-        "PAPER", "PaperCase", "TRUE", "element_rows", "plot_figures", "run_paper_case",
-    ),
-    "batlab.pipeline.records": (
-        "FittedTest", "ReportInputs", "contract_dict", "jsonable", "stored_contract_dict",
-        "verdict_record",
-    ),
-    "batlab.pipeline.registered": (
-        "Registration", "inspect_registered", "prepare_registration", "register_files",
-        "registered_case", "require_unregistered", "store_registration",
-    ),
-    "batlab.pipeline.stored": (
-        "already_inspected", "history_table", "note_report", "provenance", "report_inputs",
-        "store_inspection", "stored_bat", "stored_report_inputs",
-    ),
-    "batlab.version": (
-        "code_version",
-    ),
-    "updating.model.json_input": (
-        "read_json_object",
-    ),
-    "updating.model.units": (
-        "IN_TO_M", "KG_M2_TO_LB_IN2", "LBF_IN3_TO_KG_M3", "LB_TO_KG", "PSI_TO_PA",
-    ),
-}
-"""The module each public name is defined in."""
+_SUBMODULES = ("acquisition", "bench", "chance", "diagnosis", "door", "edge", "files",
+               "inspection", "modal", "paper", "records", "registered", "stored")
+_ALL = re.compile(r"^__all__ = (\[[^\]]*\])", re.MULTILINE)
 
-_WHERE = {name: module for module, names in _SOURCES.items() for name in names}
-_SUBMODULES = ("acquisition", "bench", "chance", "diagnosis", "door", "files", "inspection",
-               "modal", "paper", "records", "registered", "stored")
 
-__all__ = sorted(_WHERE)
+def declared(module: str) -> tuple[str, ...]:
+    """Return the public names sub-module ``module`` declares (its literal ``__all__``).
+
+    Read from its source, without importing it.
+    """
+    found = _ALL.search(Path(__file__).with_name(f"{module}.py").read_text())
+    if found is None:
+        raise ImportError(f"batlab.pipeline.{module} declares no __all__ = [...]")
+    return tuple(ast.literal_eval(found.group(1)))
+
+
+@functools.cache
+def _where() -> dict[str, str]:
+    """Map every public name to the sub-module that declares it (read once)."""
+    return {name: f"{__name__}.{m}" for m in _SUBMODULES for name in declared(m)}
 
 
 def __getattr__(name: str):
-    """Load a public name (or a sub-module) on first use."""
-    if name in _WHERE:
-        value = getattr(importlib.import_module(_WHERE[name]), name)
+    """Load a public name (or a sub-module, or ``__all__``) on first use."""
+    if name == "__all__":
+        value = sorted(_where())
     elif name in _SUBMODULES:
         value = importlib.import_module(f"{__name__}.{name}")
+    elif name in _where():
+        value = getattr(importlib.import_module(_where()[name]), name)
     else:
         raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
     globals()[name] = value
@@ -114,4 +79,4 @@ def __getattr__(name: str):
 
 def __dir__() -> list[str]:
     """List the public names and sub-modules."""
-    return sorted(set(globals()) | set(_WHERE) | set(_SUBMODULES))
+    return sorted(set(globals()) | set(_where()) | set(_SUBMODULES))

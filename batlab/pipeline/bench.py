@@ -28,6 +28,14 @@ from rigs.virtual_box import VirtualBox as VirtualBox
 from rigs.virtual_box import default_info as default_info
 from updating.model.units import IN_TO_M, KG_M2_TO_LB_IN2, LB_TO_KG, LBF_IN3_TO_KG_M3, PSI_TO_PA
 
+__all__ = [
+    "BoxConfig", "DEMO_RETEST", "DemoFiles", "FAULTS", "VirtualBox", "bat_modal_model",
+    "bat_model", "bat_profile", "default_info", "meta_points_m", "nuisance_names",
+    "simulate_bat_test", "simulate_demo_pair", "simulate_field_case", "summarise_model",
+    "uniform_beam_model", "virtual_bat", "wood", "write_frf",
+]
+
+
 if TYPE_CHECKING:  # option types only; the stage modules load inside the functions
     from updating.model.assembly import Beam
     from updating.simulate.field_fleet import FieldKind

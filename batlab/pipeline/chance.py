@@ -30,6 +30,8 @@ import numpy as np
 
 from updating.model.units import IN_TO_M
 
+__all__ = ["model_name", "result_dict", "statement", "with_statement"]
+
 STATISTIC = "F"
 """The statistic a calibration stores and the chance ranks by (the verdict's ``statistic``)."""
 

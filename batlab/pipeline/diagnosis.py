@@ -12,6 +12,10 @@ from batlab.pipeline.files import Progress, numeric_failure, quiet, read_bat_fil
 from updating.correlate.measured import from_fit
 from updating.correlate.points import sensor_x_m
 
+__all__ = [
+    "check_rig_files", "diagnose_files",
+]
+
 
 def fit_frf_file(frf_path, method: str, progress: Progress = quiet):
     """Fit a test file's modes by ``ema.modal_fit.fit_test`` with ``method``.

@@ -45,6 +45,8 @@ from updating.model.json_input import read_json_object, shown, unused_keys
 from updating.model.lab_input import CONDITION_KEYS, META_KEYS, serial_problem
 from updating.model.profile import unused_columns
 
+__all__ = ["admit", "check_output", "check_registry"]
+
 
 @dataclass(frozen=True)
 class LabFile:

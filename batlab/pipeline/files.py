@@ -26,6 +26,12 @@ from updating.model.lab_input import BatMeta, read_meta
 from updating.model.profile import Profile, read_profile_csv
 from updating.model.units import IN_TO_M
 
+__all__ = [
+    "file_sha256", "read_bat_files", "read_conditions", "read_frf", "read_meta_dict",
+    "write_csv",
+]
+
+
 Progress = Callable[[str], None]
 """A callable taking one-line progress messages."""
 

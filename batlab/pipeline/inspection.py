@@ -39,6 +39,11 @@ from updating.model.lab_input import BatMeta
 from updating.model.profile import Profile
 from updating.model.reference import BatReference
 
+__all__ = [
+    "InspectionCase", "InspectionResult", "calibrate_baseline", "fit_file", "inspect_files",
+    "judge", "stateless_case",
+]
+
 
 @dataclass(frozen=True)
 class InspectionCase:

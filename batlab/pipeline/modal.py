@@ -5,6 +5,10 @@ from __future__ import annotations
 from ema.io.frf_data import FrfTest
 from ema.modal_fit import MIN_SNR
 
+__all__ = [
+    "MIN_SNR", "fit_test_file", "plot_fit_files", "write_modes_file",
+]
+
 
 def fit_test_file(test: FrfTest, band_hz=None, method: str = "lscf", max_order=None,
                   known_mass_kg: float | None = None, refine: bool = False,

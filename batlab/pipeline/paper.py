@@ -23,6 +23,11 @@ from updating.msso.core_reading import CoreReading, read_core
 from updating.msso.factors import ElementFactors
 from updating.msso.update import ElementUpdate, update_elements
 
+__all__ = [
+    "PAPER", "PaperCase", "TRUE", "element_rows", "plot_figures", "run_paper_case",
+]
+
+
 PAPER = {"alpha_mean": -0.0918, "beta_mean": -0.0167, "core_diameter_in": 0.971,
          "density_ratio": 0.291}
 TRUE = {"alpha_mean": -(2 / 3) / 2.7**2, "beta_mean": -(1 / 2.7) ** 4, "core_diameter_in": 1.0,

@@ -15,6 +15,12 @@ import numpy as np
 
 from updating.model.units import IN_TO_M
 
+__all__ = [
+    "FittedTest", "ReportInputs", "contract_dict", "jsonable", "stored_contract_dict",
+    "verdict_record",
+]
+
+
 if TYPE_CHECKING:
     from ema.io.frf_data import FrfTest
     from updating.correlate.measured import MeasuredModes

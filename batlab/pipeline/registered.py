@@ -39,6 +39,11 @@ from updating.model.profile import Profile, make_profile
 from updating.model.reference import BatReference
 from updating.model.units import LB_TO_KG, PSI_TO_PA
 
+__all__ = [
+    "Registration", "inspect_registered", "prepare_registration", "register_files",
+    "registered_case", "require_unregistered", "store_registration",
+]
+
 
 @dataclass(frozen=True)
 class Registration:
@@ -201,6 +206,60 @@ def store_registration(conn: sa.Connection, done: Registration, baseline_path,
     return Registration(stored, done.baseline, done.diagnosis)
 
 
+def registration_case(
+    bat: reg.BatRecord, serial: str, baseline: tuple[str, bytes], retest: tuple[str, bytes],
+    retest_label: str | None = None, refit_baseline: bool = False,
+    progress: Progress = quiet, baseline_fit=None,
+) -> InspectionCase:
+    """Read a registration and the bytes of its two tests into the method's inputs.
+
+    The one reading of a registered bat and a re-test (``registered_case``: a re-test file
+    against the bat's current registration; ``stored.stored_case``: a stored inspection
+    against the registration it was judged with): both tests read from their bytes, the
+    re-test's points put in the baseline's order, the profile, the registered weight and
+    conditions, the baseline's registered modes (its file refitted only for a report's
+    figures), the re-test fitted.
+
+    Parameters
+    ----------
+    bat : BatRecord
+        The registration.
+    serial : str
+        The bat's serial number.
+    baseline, retest : (str, bytes)
+        Each test file's name (its extension gives the format) and bytes.
+    retest_label : str or None
+        What errors call the re-test (default its name).
+    refit_baseline : bool
+        Refit the baseline file (for a report's figures).
+    progress : Progress
+        Receives one-line messages.
+    baseline_fit : ModalFit or None
+        A fit of that same baseline file already at hand (saves the refit).
+
+    Returns
+    -------
+    InspectionCase
+        The case, with the registration it is judged against and the re-test's bytes.
+    """
+    (base_name, base_bytes), (re_name, re_bytes) = baseline, retest
+    base_test = frf_from_bytes(base_bytes, base_name)
+    re_test = frf_from_bytes(re_bytes, re_name, retest_label)
+    base_modes = reg.decode_modes(bat.modes)
+    order = match_points(base_modes.x_m, point_positions_m(re_test), retest_label or re_name)
+    profile = make_profile(bat.profile_x_m, bat.profile_diameter_m, f"registry bat {serial}")
+    weight_kg = registered_weight_kg(bat)
+    fit = baseline_fit
+    if refit_baseline and fit is None:
+        fit = fit_file(base_name, base_test, weight_kg, None, progress).fit
+    fitted = FittedTest(base_name, base_test, fit, base_modes)
+    re_fit = fit_file(re_name, re_test, weight_kg, order, progress)
+    return InspectionCase(serial, profile, BatReference.from_dict(bat.reference), fitted,
+                          re_fit, registration_conditions(bat.meta, serial), weight_kg,
+                          bat.reference_seq, re_bytes,
+                          model_name(profile, bat.species, bat.meta))
+
+
 def registered_case(
     conn: sa.Connection, serial: str, retest_path, refit_baseline: bool = False,
     progress: Progress = quiet, baseline_fit=None,
@@ -209,7 +268,7 @@ def registered_case(
 
     The stored baseline file is read (its checksum checked) to check the re-test's points
     and, with ``refit_baseline`` (for a report), to show its FRFs and stabilisation diagram;
-    the baseline's modes and the reference are the registered ones.
+    the baseline's modes and the reference are the registered ones (``registration_case``).
 
     Parameters
     ----------
@@ -232,24 +291,12 @@ def registered_case(
         The case, with the registration it is judged against and the re-test's bytes.
     """
     bat = reg.get_bat(conn, serial)
-    base_test = frf_from_bytes(reg.baseline_file(conn, bat), bat.baseline_name)
+    baseline = (bat.baseline_name, reg.baseline_file(conn, bat))
     if not Path(retest_path).is_file():
         raise ValueError(f"{retest_path}: no such file")
-    retest_content = Path(retest_path).read_bytes()
-    re_test = frf_from_bytes(retest_content, Path(retest_path).name, str(retest_path))
-    base_modes = reg.decode_modes(bat.modes)
-    order = match_points(base_modes.x_m, point_positions_m(re_test), str(retest_path))
-    profile = make_profile(bat.profile_x_m, bat.profile_diameter_m, f"registry bat {serial}")
-    weight_kg = registered_weight_kg(bat)
-    fit = baseline_fit
-    if refit_baseline and fit is None:
-        fit = fit_file(bat.baseline_name, base_test, weight_kg, None, progress).fit
-    baseline = FittedTest(bat.baseline_name, base_test, fit, base_modes)
-    retest = fit_file(Path(retest_path).name, re_test, weight_kg, order, progress)
-    return InspectionCase(serial, profile, BatReference.from_dict(bat.reference), baseline,
-                          retest, registration_conditions(bat.meta, serial), weight_kg,
-                          bat.reference_seq, retest_content,
-                          model_name(profile, bat.species, bat.meta))
+    retest = (Path(retest_path).name, Path(retest_path).read_bytes())
+    return registration_case(bat, serial, baseline, retest, str(retest_path), refit_baseline,
+                             progress, baseline_fit)
 
 
 def inspect_registered(

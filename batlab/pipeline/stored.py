@@ -15,15 +15,18 @@ from pathlib import Path
 import sqlalchemy as sa
 
 from batlab import registry as reg
-from batlab.pipeline.files import Progress, file_sha256, frf_from_bytes, quiet
-from batlab.pipeline.inspection import InspectionCase, InspectionResult, fit_file, judge
-from batlab.pipeline.records import FittedTest, ReportInputs, same_judgement, verdict_record
-from batlab.pipeline.registered import registered_weight_kg, registration_conditions
+from batlab.pipeline.files import Progress, file_sha256, quiet
+from batlab.pipeline.inspection import InspectionCase, InspectionResult, judge
+from batlab.pipeline.records import ReportInputs, same_judgement, verdict_record
+from batlab.pipeline.registered import registration_case
 from batlab.version import code_version
-from updating.correlate.points import match_points, point_positions_m
 from updating.inspect.retest_meta import RetestConditions
-from updating.model.profile import make_profile
-from updating.model.reference import BatReference
+
+__all__ = [
+    "already_inspected", "history_table", "note_report", "provenance", "report_inputs",
+    "store_inspection", "stored_bat", "stored_report_inputs",
+]
+
 
 EXPORT_COLUMNS = [
     "serial", "species", "inspection", "inspected_at", "status", "altered",
@@ -201,15 +204,56 @@ def _stored_inspection(conn: sa.Connection, serial: str,
     return stored
 
 
+def stored_case(
+    conn: sa.Connection, serial: str, inspection_id: int | None = None,
+    progress: Progress = quiet,
+) -> tuple[reg.Inspection, reg.BatRecord, InspectionCase]:
+    """Read a past inspection's case back from the registry alone.
+
+    The registration it was judged against (custody record, also after ``register
+    --replace``) and both test files read back (checksums verified) and refitted
+    (``registered.registration_case``).
+
+    Parameters
+    ----------
+    conn : sa.Connection
+        The registry.
+    serial : str
+        The bat's serial number.
+    inspection_id : int or None
+        The inspection; None for the bat's latest.
+    progress : Progress
+        Receives one-line messages.
+
+    Returns
+    -------
+    stored : Inspection
+        The stored inspection.
+    bat : BatRecord
+        The registration it was judged against.
+    case : InspectionCase
+        Its case, both tests fitted.
+    """
+    stored = _stored_inspection(conn, serial, inspection_id)
+    bat = reg.bat_as_registered(conn, stored.reference_seq)
+    base_name, base_bytes = reg.stored_file(conn, stored.baseline_sha256,
+                                            f"inspection #{stored.id} baseline")
+    re_name, re_bytes = reg.stored_file(conn, stored.retest_sha256,
+                                        f"inspection #{stored.id} re-test")
+    case = registration_case(bat, serial, (bat.baseline_name or base_name, base_bytes),
+                             (stored.retest_name or re_name, re_bytes),
+                             refit_baseline=True, progress=progress)
+    return stored, bat, case
+
+
 def stored_report_inputs(
     conn: sa.Connection, serial: str, inspection_id: int | None = None,
     progress: Progress = quiet,
 ) -> ReportInputs:
     """Rebuild a past inspection's report inputs from the registry alone.
 
-    The verdict as stored, the registration it was judged against (custody record, also
-    after ``register --replace``), and both test files read back (checksums verified) and
-    refitted for the figures.
+    The verdict as stored and its case read back (``stored_case``), with its element map
+    (``with_element_map``).
 
     Parameters
     ----------
@@ -227,28 +271,13 @@ def stored_report_inputs(
     ReportInputs
         What the report is drawn from.
     """
-    stored = _stored_inspection(conn, serial, inspection_id)
-    bat = reg.bat_as_registered(conn, stored.reference_seq)
-    base_name, base_bytes = reg.stored_file(conn, stored.baseline_sha256,
-                                            f"inspection #{stored.id} baseline")
-    re_name, re_bytes = reg.stored_file(conn, stored.retest_sha256,
-                                        f"inspection #{stored.id} re-test")
-    base_test = frf_from_bytes(base_bytes, bat.baseline_name or base_name)
-    re_test = frf_from_bytes(re_bytes, stored.retest_name or re_name)
-    base_modes = reg.decode_modes(bat.modes)
-    order = match_points(base_modes.x_m, point_positions_m(re_test), stored.retest_name)
-    weight_kg = registered_weight_kg(bat)
-    base_fit = fit_file(bat.baseline_name, base_test, weight_kg, None, progress).fit
-    retest = fit_file(stored.retest_name, re_test, weight_kg, order, progress)
-    profile = make_profile(bat.profile_x_m, bat.profile_diameter_m, f"registry bat {serial}")
-    inputs = ReportInputs(
-        serial, profile, BatReference.from_dict(bat.reference),
-        FittedTest(bat.baseline_name, base_test, base_fit, base_modes), retest,
-        stored.verdict, bat.meta, provenance(conn, stored=stored))
-    return with_element_map(inputs, stored.inputs or {}, weight_kg, progress)
+    stored, bat, case = stored_case(conn, serial, inspection_id, progress)
+    inputs = ReportInputs(serial, case.profile, case.reference, case.baseline, case.retest,
+                          stored.verdict, bat.meta, provenance(conn, stored=stored))
+    return with_element_map(inputs, case, stored.inputs or {}, progress)
 
 
-def with_element_map(inputs: ReportInputs, stored_inputs: dict, weight_kg: float | None,
+def with_element_map(inputs: ReportInputs, case: InspectionCase, stored_inputs: dict,
                      progress: Progress = quiet) -> ReportInputs:
     """Return a stored inspection's report inputs with its MSSO element map (module docstring).
 
@@ -256,10 +285,10 @@ def with_element_map(inputs: ReportInputs, stored_inputs: dict, weight_kg: float
     ----------
     inputs : ReportInputs
         The stored verdict, the registration it was judged against and both tests refitted.
+    case : InspectionCase
+        The same, as the method judges it (``stored_case``).
     stored_inputs : dict
         The inspection's stored inputs (false-alarm rate, retest.json's conditions).
-    weight_kg : float or None
-        The registered weight, kg.
     progress : Progress
         Receives one-line messages.
 
@@ -283,9 +312,6 @@ def with_element_map(inputs: ReportInputs, stored_inputs: dict, weight_kg: float
         conditions = None if cond is None else RetestConditions(**cond)
         progress("judging the stored tests again for the element map (an inspection without "
                  "a report does not compute it)")
-        case = InspectionCase(inputs.serial, inputs.profile, inputs.reference, inputs.baseline,
-                              inputs.retest, registration_conditions(inputs.meta, inputs.serial),
-                              weight_kg)
         again = verdict_record(inputs.serial, judge(
             case, float(stored_inputs.get("false_alarm", 0.01)), conditions).verdict)
         if same_judgement(v["status"], v.get("statistic"), again["status"],

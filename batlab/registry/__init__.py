@@ -9,6 +9,7 @@ stored thing gets a signed record in the custody chain.
 The package, one job a module: ``common`` (where the registry is, hashes, time stamps),
 ``schema`` (the tables, SQLAlchemy Core), ``lock`` (write transactions and their lock),
 ``migration`` and ``migrations/`` (Alembic), ``engine`` (opening a file or a server),
+``health`` (the database's own storage check, run before any write),
 ``chain`` (appending and reading custody records), ``records`` (bats, files, inspections),
 ``calibrations`` (bat models' measured nulls),
 ``verify`` (``registry check``) and ``copy`` (``registry copy``). Layout, locking and

@@ -5,6 +5,11 @@ and every write opens its own ``lock.transaction``. SQLite: WAL journal, ``busy_
 ``synchronous = FULL``, foreign keys on, and a read-only opening that leaves no file behind.
 PostgreSQL: psycopg 3 (``postgresql+psycopg://``), one connection per opening; ``readonly``
 sets ``default_transaction_read_only``.
+
+Every opening runs the database's own storage check (``health.storage_problems``: SQLite's
+``quick_check``) before anything can be written: a damaged registry opened for writing (or
+needing a migration) is refused, nothing written into it; opened for reading, it is read and
+``warn`` says it is damaged.
 """
 
 from __future__ import annotations
@@ -12,7 +17,7 @@ from __future__ import annotations
 import os
 import sqlite3
 import time
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from pathlib import Path
 
@@ -20,6 +25,7 @@ import sqlalchemy as sa
 from sqlalchemy.pool import NullPool
 
 from batlab.registry.common import BUSY_TIMEOUT_S, is_url, shown
+from batlab.registry.health import damage_text, storage_problems
 from batlab.registry.migration import (
     SCHEMA_VERSION,
     migrate,
@@ -27,6 +33,9 @@ from batlab.registry.migration import (
     refuse_newer,
     schema_version,
 )
+
+_UNREADABLE = (sqlite3.DatabaseError, sa.exc.DBAPIError, UnicodeDecodeError)
+"""What reading a damaged file raises (a garbled schema's text is not UTF-8)."""
 
 
 def _wrap(raw: sqlite3.Connection) -> sa.Connection:
@@ -70,7 +79,7 @@ def _enable_wal(conn: sqlite3.Connection, deadline_s: float = BUSY_TIMEOUT_S) ->
 
 def connect(
     db: str | os.PathLike, target: int = SCHEMA_VERSION, create: bool = True,
-    readonly: bool = False,
+    readonly: bool = False, warn: Callable[[str], None] | None = None,
 ) -> sa.Connection:
     """Open the registry ``db`` (creating it if ``create``) and migrate it to ``target``.
 
@@ -86,6 +95,9 @@ def connect(
     readonly : bool
         Open it read-only: nothing is written (an older schema is migrated only when it can
         be written, else refused with a message saying what to do).
+    warn : callable or None
+        Receives the one-line warning when a registry opened for reading fails the storage
+        check (``health.storage_problems``); None: read without a word.
 
     Returns
     -------
@@ -95,11 +107,33 @@ def connect(
     Raises
     ------
     ValueError
-        One line naming the registry: missing, unreadable, not a registry, newer schema.
+        One line naming the registry: missing, unreadable, not a registry, newer schema,
+        damaged (when opened for writing, or to migrate).
     """
     if is_url(db):
-        return _connect_server(str(db), target, create, readonly)
-    return _connect_file(Path(db), target, create, readonly)
+        return _connect_server(str(db), target, create, readonly, warn)
+    return _connect_file(Path(db), target, create, readonly, warn)
+
+
+def _judge_storage(conn: sa.Connection, db: object, writing: bool,
+                   warn: Callable[[str], None] | None) -> None:
+    """Run the storage check on a fresh opening, before its first write.
+
+    Damaged and ``writing``: ValueError in one line naming the registry and ``batlab registry
+    check``, the connection closed. Damaged and read: ``warn`` gets one line (a read with no
+    ``warn`` is not checked).
+    """
+    if not writing and warn is None:
+        return
+    problems = storage_problems(conn)
+    if not problems:
+        return
+    text = damage_text(db, problems)
+    check = f"`batlab registry check --db {shown(db)}`"
+    if writing:
+        conn.close()
+        raise ValueError(f"{text}: refused, nothing written into it; {check} says where")
+    warn(f"warning: {text}: what is read from it may be wrong or missing; {check} says where")
 
 
 def _driver_url(url: str) -> str:
@@ -108,7 +142,8 @@ def _driver_url(url: str) -> str:
     return url if "+" in scheme else f"postgresql+psycopg://{rest}"
 
 
-def _connect_server(url: str, target: int, create: bool, readonly: bool) -> sa.Connection:
+def _connect_server(url: str, target: int, create: bool, readonly: bool,
+                    warn: Callable[[str], None] | None) -> sa.Connection:
     """Open a PostgreSQL registry; ValueError naming the URL (no password) on failure."""
     try:
         engine = sa.create_engine(_driver_url(url), poolclass=NullPool)
@@ -121,7 +156,9 @@ def _connect_server(url: str, target: int, create: bool, readonly: bool) -> sa.C
         if version == 0 and not create:
             raise ValueError(f"{shown(url)}: no registry there (register a bat first, or "
                              "give --db)")
-        if version < target or not readonly:
+        writing = version < target or not readonly
+        _judge_storage(conn, url, writing, warn)
+        if writing:
             migrate(conn, target, shown(url))
         refuse_newer(version, shown(url))
         if readonly:
@@ -132,7 +169,8 @@ def _connect_server(url: str, target: int, create: bool, readonly: bool) -> sa.C
     return conn
 
 
-def _connect_file(path: Path, target: int, create: bool, readonly: bool) -> sa.Connection:
+def _connect_file(path: Path, target: int, create: bool, readonly: bool,
+                  warn: Callable[[str], None] | None) -> sa.Connection:
     """Open a SQLite registry file; every failure is a ValueError naming the file."""
     if path.exists() and path.is_dir():
         raise ValueError(f"{path}: registry path is a directory")
@@ -145,6 +183,7 @@ def _connect_file(path: Path, target: int, create: bool, readonly: bool) -> sa.C
     if readonly or (path.exists() and not _writable(path)):
         conn = _connect_readonly(path, migratable=_writable(path))
         if conn is not None:
+            _judge_storage(conn, path, not readonly, warn)
             return conn
     try:
         path.parent.mkdir(parents=True, exist_ok=True)
@@ -155,12 +194,13 @@ def _connect_file(path: Path, target: int, create: bool, readonly: bool) -> sa.C
     try:
         raw = sqlite3.connect(path, timeout=BUSY_TIMEOUT_S, isolation_level=None)
         raw.execute(f"PRAGMA busy_timeout = {int(BUSY_TIMEOUT_S * 1000)}")
+        conn = _wrap(raw)
+        _judge_storage(conn, path, True, warn)  # before the first write (WAL, migration)
         _enable_wal(raw)
         raw.execute("PRAGMA synchronous = FULL")
         raw.execute("PRAGMA foreign_keys = ON")
-        conn = _wrap(raw)
         migrate(conn, target, path)
-    except (sqlite3.DatabaseError, sa.exc.DBAPIError) as exc:
+    except _UNREADABLE as exc:
         if conn is not None:
             conn.close()
         raise ValueError(f"{path}: not a usable batlab registry ({_reason(exc)})") from None
@@ -181,11 +221,11 @@ def _refuse_foreign_file(path: Path) -> None:
     try:
         probe = _wrap(sqlite3.connect(f"{path.resolve().as_uri()}?mode=ro&immutable=1",
                                       uri=True))
-    except (sqlite3.DatabaseError, sa.exc.DBAPIError):
+    except _UNREADABLE:
         return
     try:
         refuse_foreign(probe, path)
-    except (sqlite3.DatabaseError, sa.exc.DBAPIError):
+    except _UNREADABLE:
         return
     finally:
         probe.close()
@@ -227,7 +267,7 @@ def _connect_readonly(path: Path, migratable: bool = False) -> sa.Connection | N
         raw.created = tuple(p for p in (wal, shm) if p not in before)
         conn = _wrap(raw)
         version = schema_version(conn)
-    except (sqlite3.DatabaseError, sa.exc.DBAPIError) as exc:
+    except _UNREADABLE as exc:
         if live_log:
             raise ValueError(f"{path}: its write-ahead log {wal.name} cannot be read here "
                              f"without its index ({_reason(exc)}); open the registry once with "
@@ -247,6 +287,7 @@ def _connect_readonly(path: Path, migratable: bool = False) -> sa.Connection | N
 @contextmanager
 def open_registry(
     db: str | os.PathLike, create: bool = True, readonly: bool = False,
+    warn: Callable[[str], None] | None = None,
 ) -> Iterator[sa.Connection]:
     """Open the registry with ``connect`` for the block, and close it after.
 
@@ -254,7 +295,7 @@ def open_registry(
     SQLite file (``sqlite3.DatabaseError``: damage found after opening) and as a one-line
     ValueError naming the server for PostgreSQL.
     """
-    conn = connect(db, create=create, readonly=readonly)
+    conn = connect(db, create=create, readonly=readonly, warn=warn)
     try:
         yield conn
     except sa.exc.DBAPIError as exc:

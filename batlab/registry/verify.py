@@ -16,6 +16,7 @@ from batlab.registry.chain import (
     inspection_payload,
 )
 from batlab.registry.common import sha256_bytes
+from batlab.registry.health import storage_problems
 from batlab.registry.schema import bats, calibrations, files, inspections
 
 
@@ -45,13 +46,15 @@ def check(conn: sa.Connection, trusted: set[str] | None = None,
           head_seen: str | None = None) -> CheckResult:
     """Verify the registry.
 
-    SQLite's integrity and foreign keys (a PostgreSQL server keeps both itself), every stored
-    file against its SHA-256, every file an inspection or bat names is present, the custody
-    chain (each record's hash, link, content hash and signature by a trusted key: ``trusted``,
-    default the lab's own key), coverage (every bat, file, inspection and calibration row has its
-    one custody record, every record's row exists) and, with ``head_seen`` (``SEQ:SHA256`` noted
-    earlier), that the chain still holds that record. Names the first changed record; a
-    registry too damaged to read is one problem naming the database's complaint.
+    The database's integrity (``health.storage_problems``, thorough: SQLite's
+    ``integrity_check``) and, on SQLite, foreign keys (a PostgreSQL server enforces them),
+    every stored file against its SHA-256, every file an inspection or bat names is present,
+    the custody chain (each record's hash, link, content hash and signature by a trusted key:
+    ``trusted``, default the lab's own key), coverage (every bat, file, inspection and calibration
+    row has its one custody record, every record's row exists) and, with ``head_seen``
+    (``SEQ:SHA256`` noted earlier), that the chain still holds that record. Names the first
+    changed record; a registry too damaged to read is one problem naming the database's
+    complaint.
     """
     if trusted is None:
         trusted = signing.trusted_keys()
@@ -62,18 +65,11 @@ def check(conn: sa.Connection, trusted: set[str] | None = None,
     except (sa.exc.DBAPIError, sqlite3.DatabaseError) as exc:
         reason = " ".join(str(getattr(exc, "orig", None) or exc).split())
         try:
-            integrity = "; ".join(r[0] for r in _integrity(conn)[:3])
+            integrity = "; ".join(storage_problems(conn, thorough=True)[:3]) or "ok"
         except (sa.exc.DBAPIError, sqlite3.DatabaseError):
             integrity = "integrity check failed too"
         return CheckResult(0, 0, [f"registry damaged, unreadable ({reason}): {integrity}"], [],
                            None, None)
-
-
-def _integrity(conn: sa.Connection) -> list[tuple[str]]:
-    """Return SQLite's integrity check rows (``[("ok",)]`` on a server, which keeps its own)."""
-    if conn.dialect.name != "sqlite":
-        return [("ok",)]
-    return conn.exec_driver_sql("PRAGMA integrity_check").fetchall()
 
 
 def _check(conn: sa.Connection, trusted: set[str], head_seen: str | None) -> CheckResult:
@@ -97,9 +93,9 @@ def _check(conn: sa.Connection, trusted: set[str], head_seen: str | None) -> Che
 
 def _check_files(conn: sa.Connection, problems: list[str], notes: list[str]) -> dict:
     """Check the database's integrity and every stored file; return sha -> name."""
-    integrity = _integrity(conn)
-    if [r[0] for r in integrity] != ["ok"]:
-        problems.append("SQLite integrity check: " + "; ".join(r[0] for r in integrity[:3]))
+    integrity = storage_problems(conn, thorough=True)
+    if integrity:
+        problems.append("integrity check: " + "; ".join(integrity[:3]))
     if conn.dialect.name == "sqlite" and conn.exec_driver_sql("PRAGMA foreign_key_check"
                                                               ).fetchall():
         problems.append("foreign keys: rows refer to missing rows")

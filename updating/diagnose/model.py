@@ -42,6 +42,7 @@ sensor), 1000 sum n n^T (d/d bungee kN/m).
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, replace
 from functools import cached_property
 
@@ -54,6 +55,7 @@ from updating.model.assembly import (
     build_model,
     place,
     point_vector,
+    scale_sections,
 )
 from updating.model.mass_properties import mass_properties
 from updating.model.material import ISOTROPIC_E_OVER_G, Material
@@ -90,6 +92,10 @@ class Setup:
         (k,) or (2, k) per-mode frequency corrections c_r of the 1D beam measured against a 3D
         solid (updating.solid.compare; a row per bending plane), or None ('beam_theory' not
         tried).
+    density_factor : callable or None
+        ``density_factor(x_m)``: the wood's density along the bat relative to uniform, at the
+        same total mass (``build`` normalises it), or None: uniform. What a billet's
+        gradient would do to the model (``updating.diagnose.sensor``); no fit uses it.
     """
 
     profile: Profile
@@ -99,6 +105,7 @@ class Setup:
     sensor_x_m: float
     fine_element_m: float = FINE_ELEMENT_M
     solid_corrections: np.ndarray | None = None
+    density_factor: Callable[[np.ndarray], np.ndarray] | None = None
 
     @cached_property
     def unit_mass(self):
@@ -229,8 +236,16 @@ def build(setup: Setup, active: frozenset[str], state: State, plane: int = 0) ->
     """Build the FE model of the extensions ``active`` with parameter values ``state``."""
     ref = reference_of(setup, active, state, plane)
     fine = "geometry" in active
-    return ref.build(setup.profile, stations_m=setup.points_m if fine else (),
-                     element_length_m=setup.fine_element_m if fine else None)
+    model = ref.build(setup.profile, stations_m=setup.points_m if fine else (),
+                      element_length_m=setup.fine_element_m if fine else None)
+    if setup.density_factor is None:
+        return model
+    x = model.node_x_m
+    f = np.asarray(setup.density_factor((x[:-1] + x[1:]) / 2), dtype=float)
+    s = model.samples
+    m = np.bincount(s.elem, s.weight_m * s.props.rhoa, model.n_elements)
+    f = f * m.sum() / (m @ f)  # the same wood's mass: the scale weighs the bat
+    return scale_sections(model, rhoa=f, rhoi=f)
 
 
 @dataclass(frozen=True)

@@ -53,7 +53,12 @@ from updating.diagnose.plane_pairs import (
     SEEN_ONCE,
     plane_codes,
 )
-from updating.diagnose.sensor import SensorMass, estimate_sensor_mass, sensor_note
+from updating.diagnose.sensor import (
+    SensorMass,
+    billet_spread,
+    estimate_sensor_mass,
+    sensor_note,
+)
 from updating.model.lab_input import BatMeta
 from updating.model.profile import Profile
 from updating.model.reference import BatReference
@@ -440,9 +445,10 @@ def mass_line_limits(setup: Setup, obs: Observations, final: DiagnosisFit,
     """Say what the mass line establishes and what it cannot.
 
     Its fit at the driving point, and the accelerometer mass that a 1 % error of the FRFs'
-    calibration (sensitivity) would move, a systematic error the stated uncertainty does not
-    hold. Without one: why (``set_aside``, from ``checked_mass_line``, or that the test gave
-    none).
+    calibration (sensitivity) would move, a systematic error no stated uncertainty holds, and
+    what a billet's unknown density gradient moves (``sensor.billet_spread``: in the mass
+    line's estimate, ``sensor_mass_estimate``, not in the calibrated model's). Without one:
+    why (``set_aside``, from ``checked_mass_line``, or that the test gave none).
     """
     if obs.mass_line is None:
         return set_aside or [
@@ -460,9 +466,10 @@ def mass_line_limits(setup: Setup, obs: Observations, final: DiagnosisFit,
     return [f"mass line at the driving point: measured {obs.mass_line[d]:.4g} 1/kg, model "
             f"{final.mass_line[d]:.4g} 1/kg (+-{obs.sigma_ml:.2g} per point){sensor}. The "
             "mass line fixes the accelerometer's mass independently of E, but a 1 % error of "
-            f"the FRFs' calibration (sensitivity) moves it by about {per_pct:.1f} g, and so "
-            "does a mass distribution unlike the profile's at uniform density (neither is in "
-            "the stated uncertainty)"]
+            f"the FRFs' calibration (sensitivity) moves it by about {per_pct:.1f} g (in no "
+            "stated uncertainty); a density gradient along the billet, which the profile "
+            f"cannot show, moves it by about {1e3 * billet_spread(setup) / g[d]:.1f} g "
+            "(in the mass line's uncertainty below, not in the calibrated model's)"]
 
 
 def data_sheet_check(setup: Setup, obs: Observations, final: DiagnosisFit) -> list[str]:

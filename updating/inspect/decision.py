@@ -38,7 +38,8 @@ below its gate         significant, the best reading an alteration     None
 large change           not significant, but large and read as an      None
                        alteration: never acquitted
 drift beyond bounds    a nuisance the data want beyond its bound       None
-drift                  otherwise (with H0's grip substance, if any)    False
+drift                  otherwise (a grip substance H0 read on the      False
+                       handle is named in its reasons: legal)
 =====================  ==============================================  ============
 
 ``not_altered`` means no change beyond drift or a legal grip: a change whose best reading

@@ -4,7 +4,8 @@ Built once by ``updating.inspect.run.inspect_retest``; readers use attributes. F
 ``--json`` each type has one ``to_json_dict()`` (the keys and values the registry has always
 stored, so records written before these types existed read the same), and its inverse
 ``from_json_dict()`` for readers of stored records (the report, the history): a key an older
-record lacks takes its field's "not computed" value (None, empty, NaN), never an error.
+record lacks takes its field's "not computed" value (None, empty, NaN), never an error, and a
+key no longer written is ignored (older records hold an empty ``position_scan``).
 """
 
 from __future__ import annotations
@@ -63,41 +64,6 @@ class ModePair:
         kw.setdefault("baseline_hz", math.nan)
         kw.setdefault("retest_hz", math.nan)
         return cls(**kw)
-
-
-@dataclass(frozen=True)
-class PositionScan:
-    """The linearised scan that seeds the core fit (``updating.inspect.hypotheses.fit_core``).
-
-    Attributes
-    ----------
-    scan_norm
-        Weighted residual norm of each trial (plug, length).
-    starts_plug_length_in
-        The (plug, length) in inches refined by least squares.
-    start_rss
-        The RSS each start reached.
-    """
-
-    scan_norm: tuple[float, ...] = ()
-    starts_plug_length_in: tuple[tuple[float, float], ...] = ()
-    start_rss: tuple[float, ...] = ()
-
-    def to_json_dict(self) -> dict[str, Any]:
-        """Write the scan as a JSON dict ({} when empty)."""
-        if not (self.scan_norm or self.starts_plug_length_in or self.start_rss):
-            return {}
-        return {"scan_norm": list(self.scan_norm),
-                "starts_plug_length_in": [list(s) for s in self.starts_plug_length_in],
-                "start_rss": list(self.start_rss)}
-
-    @classmethod
-    def from_json_dict(cls, d: Mapping[str, Any] | None) -> PositionScan:
-        """Inverse of ``to_json_dict`` (an empty or missing scan: ``PositionScan()``)."""
-        d = d or {}
-        return cls(tuple(float(v) for v in d.get("scan_norm") or ()),
-                   tuple((float(a), float(b)) for a, b in d.get("starts_plug_length_in") or ()),
-                   tuple(float(v) for v in d.get("start_rss") or ()))
 
 
 @dataclass(frozen=True)
@@ -233,8 +199,6 @@ class FitEvidence:
         Accelerometer shift fitted beyond the stated re-mount.
     baseline_sensor_offset_m
         The baseline accelerometer's fitted offset.
-    position_scan
-        The scan that seeded H1.
     msso
         The element map.
     plug_m
@@ -276,7 +240,6 @@ class FitEvidence:
     core_fit_moisture: dict[str, float]
     sensor_shift_m: float
     baseline_sensor_offset_m: float
-    position_scan: PositionScan
     msso: ElementMap
     plug_m: float
     fill_modulus_ratio: float
@@ -343,7 +306,6 @@ class InspectionDetails:
             "core_fit_moisture": dict(f.core_fit_moisture),
             "sensor_shift_m": f.sensor_shift_m,
             "baseline_sensor_offset_m": f.baseline_sensor_offset_m,
-            "position_scan": f.position_scan.to_json_dict(),
             "msso": f.msso.to_json_dict(),
             "plug_m": f.plug_m, "fill_modulus_ratio": f.fill_modulus_ratio,
             "empty_m": f.empty_m, "local_change": dict(f.local_change),
@@ -385,7 +347,6 @@ class InspectionDetails:
             core_fit_moisture=dict(d.get("core_fit_moisture") or {}),
             sensor_shift_m=_num(d.get("sensor_shift_m")),
             baseline_sensor_offset_m=_num(d.get("baseline_sensor_offset_m")),
-            position_scan=PositionScan.from_json_dict(d.get("position_scan")),
             msso=ElementMap.from_json_dict(d.get("msso"), x0_m, x1_m),
             plug_m=_num(d.get("plug_m")), fill_modulus_ratio=_num(d.get("fill_modulus_ratio")),
             empty_m=_num(d.get("empty_m")),

@@ -46,7 +46,6 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from updating.inspect.details import PositionScan
 from updating.inspect.model import E_PER_POINT, MASS_PER_POINT, ChangeParams, ChangePredictor
 from updating.inspect.parallel import fork_map
 from updating.inspect.segments import Segment
@@ -664,16 +663,12 @@ def position_scan(
 def fit_core(
     predict, diff: Differences, space: ParamSpace, sigma_rel: SigmaRel, null: ChangeFit,
     n_starts: int = 2, x0: np.ndarray | None = None,
-) -> tuple[ChangeFit, PositionScan]:
-    """Fit H1.
-
-    The null model and a core; multi-start from the position scan (or from x0, with an
-    empty scan).
-    """
+) -> ChangeFit:
+    """Fit H1: the null model and a core, multi-start from the position scan (or from x0)."""
     fun = residual_function(predict, diff, space, sigma_rel)
     lo, hi = space.lower(), space.upper()
     if x0 is not None:
-        return fit_bounded(fun, x0, lo, hi, space, diff, MAX_NFEV_CORE), PositionScan()
+        return fit_bounded(fun, x0, lo, hi, space, diff, MAX_NFEV_CORE)
     norms, seeds = position_scan(predict, diff, space, sigma_rel, null)
     starts: list[np.ndarray] = []
     for i in np.argsort(norms):
@@ -685,11 +680,7 @@ def fit_core(
         if len(starts) == n_starts:
             break
     fits = fork_map(lambda s: fit_bounded(fun, s, lo, hi, space, diff, MAX_NFEV_START), starts)
-    best = min(fits, key=lambda f: f.rss)
-    scan = PositionScan(tuple(float(n) for n in norms),
-                        tuple((float(s[N_NULL]), float(s[N_NULL + 1])) for s in starts),
-                        tuple(float(f.rss) for f in fits))
-    return best, scan
+    return min(fits, key=lambda f: f.rss)
 
 
 MAX_EMPTY_FRACTION = 0.8

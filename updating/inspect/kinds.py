@@ -114,7 +114,7 @@ def fit_families(predict, diff: Differences, space: ParamSpace, sigma_rel: Sigma
 
     def fit_family(family: str) -> ChangeFit:
         if family == "core":
-            return fit_core(predict, diff, space, sigma_rel, null)[0]
+            return fit_core(predict, diff, space, sigma_rel, null)
         fspace = segment_space(space, family)
         starts = [start_from(generic, gspace, fspace, predict)]
         starts += distinct_best(segment_scan(predict, diff, fspace, sigma_rel, null), 1)

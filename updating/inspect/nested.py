@@ -1,4 +1,4 @@
-"""The nested test of H1 (drift and a core) against H0 (drift alone) and its evidence.
+"""The nested test of H1 (drift and a local change) against H0 (drift alone) and its evidence.
 
 H0 and H1 fitted with each mode's shape noise (``fit_hypotheses``), the F test
 (``nested_test``, module docstring of ``updating.inspect.run``, step 3), and the checks the
@@ -18,9 +18,6 @@ from updating.inspect.decision import (
     GRIP_MIN_G,
     Evidence,
     is_large,
-)
-from updating.inspect.details import (
-    PositionScan,
 )
 from updating.inspect.finding import RULES, Finding, describe
 from updating.inspect.hypotheses import (
@@ -60,8 +57,6 @@ class Hypotheses:
         and the kinds' families (``kinds``), each of at most ``N_SEGMENT`` parameters.
     sigma_rel : numpy.ndarray
         (m,) relative shape noise per paired mode (``hypotheses.shape_noise``).
-    scan : PositionScan
-        The core family's position scan (empty: not recorded).
     kinds : KindFits
         Every family fitted on the same null and noise (``kinds.classify``); ``full`` is
         the one with the lowest residual.
@@ -77,7 +72,6 @@ class Hypotheses:
     null: ChangeFit
     full: ChangeFit
     sigma_rel: np.ndarray
-    scan: PositionScan
     kinds: KindFits
     family: str
     null_h0: ChangeFit
@@ -124,7 +118,7 @@ def fit_hypotheses(predict: ChangePredictor, diff: Differences, space: ParamSpac
                     cov=covariance(fits[kinds.family], dof))
     full_h0 = fit_bounded(residual_function(predict, diff, fspace, sigma_h0), full.x, lo, hi,
                           fspace, diff, MAX_NFEV_CORE)
-    return Hypotheses(null, full, sigma, PositionScan(), kinds, best, null_h0, full_h0,
+    return Hypotheses(null, full, sigma, kinds, best, null_h0, full_h0,
                       sigma_h0)
 
 
@@ -155,7 +149,8 @@ class NestedTest:
         The statistic and P(F_{q, dof} > F) (``nested_f``) with the shape noise H0 leaves:
         the chance the verdict states.
     q, dof : int
-        Its degrees of freedom: the local change's parameters, the data less H1's.
+        Its degrees of freedom: the generic local change's parameters (``N_SEGMENT``), the
+        data less H1's parameters.
     n : int
         Number of data (frequencies, shapes, weight).
     rss_null, rss_core : float

@@ -228,7 +228,7 @@ def fit_evidence(diff: Differences, space: ParamSpace, hyp: Hypotheses, test: Ne
         core_fit_moisture={"stiffness_scale": float(full.params.stiffness_scale),
                            "density_scale": float(full.params.density_scale)},
         sensor_shift_m=float(reading.fit.params.sensor_shift_m - space.sensor_mount_m),
-        baseline_sensor_offset_m=offset_m, position_scan=hyp.scan, msso=msso,
+        baseline_sensor_offset_m=offset_m, msso=msso,
         plug_m=plug_m, fill_modulus_ratio=space.fill_modulus_ratio,
         empty_m=core.empty_m if altered and core is not None else 0.0,
         local_change=dict(zip(("start_in", "length_in", "mass_change_rel",

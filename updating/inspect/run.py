@@ -13,22 +13,28 @@ map (``reading``, ``msso_map``).
    H0 (what an unaltered bat does between tests, physically bounded): uniform moisture
    (density, with its coupled stiffness) and temperature (stiffness), end-grain moisture at
    either end, the accelerometer re-mounted and possibly replaced, the two bending planes
-   mixed in another proportion, 7 parameters;
-   H1: H0 plus a filled core from the barrel end or inside the bat (plug, length, diameter,
-   fill density ratio), 11 parameters.
+   mixed in another proportion, a grip substance on the handle (its mass, where it starts
+   and ends), 10 parameters (``hypotheses.N_NULL``);
+   H1: H0 plus a local change anywhere along the bat, the best of the generic change (start,
+   length, mass and stiffness factors, ``local_change.N_SEGMENT`` = 4 parameters) and the
+   kinds' families (a core from the barrel end or inside the bat: plug, length, diameter,
+   fill density ratio; added mass; a lost diameter; ``kinds``).
 3. Nested-model F test, residuals weighted by their estimated noise:
 
-       F = ((RSS_0 - RSS_1) / q) / max(RSS_1 / (N - p_1), 1),  q = 4, p_1 = 11,
+       F = ((RSS_0 - RSS_1) / q) / max(RSS_1 / (N - p_1), 1),  q = 4, p_1 = 14,
 
    p = P(F_{q, N-p_1} > F); significant when p < false_alarm; confidence = 1 - p.
-4. Decision: altered only when the change is significant, the core that explains it is a
-   practical one (``MIN_CORE_DIAMETER_IN``) and no nuisance is held at its physical bound,
-   or no drift three times beyond the bounds explains the change either
-   (``nested.weigh_evidence``); inconclusive when the drift itself is beyond physical bounds or
-   a nuisance at its bound and a core cannot be told apart; else not altered.
-5. Reading: the H1 core (region, diameter, fill ratio) with standard uncertainties from the
-   Jacobian, and the element factors it implies; a light fill re-read with part of its hole
-   possibly empty (``hypotheses.fit_partial``), its fill averaged over the hole.
+4. Decision (``decision.RULES``, first rule that holds): altered only when the change is
+   significant, the kind that explains it is large enough for its kind
+   (``decision.kind_supported``: a core's diameter, an insert's or a coat's mass, a lost
+   diameter) and no confusable nuisance is held at its physical bound, or no drift three
+   times beyond the bounds explains the change either (``nested.weigh_evidence``); a grip
+   substance on the handle is legal; inconclusive when another bat, drift beyond physical
+   bounds, a nuisance at its bound beside the alteration, a change no kind fits or a weight
+   change beyond moisture's explains it; else not altered.
+5. Reading: the finding of the kind that fits best, with standard uncertainties from the
+   Jacobian, and the element factors it implies; a light core fill re-read with part of its
+   hole possibly empty (``hypotheses.fit_partial``), its fill averaged over the hole.
 6. The MSSO element map (``msso_map``), independent of the core fit: the re-test against the
    baseline-updated reference with the accepted drift removed (``details.msso``).
 """

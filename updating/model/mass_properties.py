@@ -10,6 +10,7 @@ x_d and the acceleration at x of a free body, G(x, x_d) = 1/m + (x - x_cg)(x_d -
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -37,10 +38,18 @@ class MassProperties:
     i_cg_kg_m2: float
 
 
-def mass_properties(model: BatModel, with_attachments: bool = False) -> MassProperties:
-    """Mass, centre of mass and transverse moments of inertia (rotary inertia always counted)."""
+def mass_properties(model: BatModel, with_attachments: bool = False,
+                    density_factor: Callable[[np.ndarray], np.ndarray] | None = None,
+                    ) -> MassProperties:
+    """Mass, centre of mass and transverse moments of inertia (rotary inertia always counted).
+
+    ``density_factor(x_m)`` multiplies the model's density along the bat (a billet's
+    gradient), at the quadrature samples; None: the model's own.
+    """
     s = model.samples
     w, x = s.weight_m, s.x_m
+    if density_factor is not None:
+        w = w * density_factor(x)
     m = float(np.sum(w * s.props.rhoa))
     mx = float(np.sum(w * s.props.rhoa * x))
     i0 = float(np.sum(w * (s.props.rhoa * x**2 + s.props.rhoi)))

@@ -5,7 +5,7 @@ with a substance such as paraffin, wax"; Rule 3.02(c) lets the handle, up to 18 
 knob, be covered with anything that improves the grip. Cores (filled, hollowed) are
 ``updating.simulate.alterations``; this module draws the rest as ``LocalChange`` objects
 (``updating.model.local_change``) that the virtual rig applies last to its truth model.
-Sizes (../shared/BAT_PHYSICS.md, "What each change does to a bat"; x from the knob):
+Sizes (docs/bat_physics.md, "What each change does to a bat"; x from the knob):
 
 kind: what (finding kind, rule words): sizes
 
@@ -60,7 +60,7 @@ FINDING = {
     **{k: ("handle_substance", "grip substance (3.02(c))")
        for k in ("pine_tar", "grip_tape", "spray", "tar_past_18")},
 }
-"""Each kind's finding kind and rule words (../shared/CONTRACT.md, ``finding``)."""
+"""Each kind's finding kind and rule words (docs/contract.md, ``finding``)."""
 
 
 @dataclass(frozen=True)

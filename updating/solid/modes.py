@@ -18,6 +18,7 @@ Each mode is classified by the motion of the nodes on the axis: bending in y or 
 from __future__ import annotations
 
 import sys
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -99,8 +100,13 @@ def strain_matrix(grad: np.ndarray) -> np.ndarray:
     return B.reshape(e, q, 6, 3 * n)
 
 
-def assemble_solid(mesh: MeshHex2, wood: OrthotropicWood, orientation: str = "planar"):
-    """(K, M) sparse CSR and the scalar basis (for node positions)."""
+def assemble_solid(mesh: MeshHex2, wood: OrthotropicWood, orientation: str = "planar",
+                   density_factor: Callable[[np.ndarray], np.ndarray] | None = None):
+    """(K, M) sparse CSR and the scalar basis (for node positions).
+
+    ``density_factor(x_m)``: the density along the bat relative to ``wood``'s (a billet's
+    gradient), at the Gauss points' x; None: uniform.
+    """
     basis = CellBasis(mesh, ElementHex2(), intorder=4)
     n = len(basis.basis)
     grad = np.stack([basis.basis[a][0].grad for a in range(n)])  # (n, 3, e, q)
@@ -113,7 +119,8 @@ def assemble_solid(mesh: MeshHex2, wood: OrthotropicWood, orientation: str = "pl
     DB = np.einsum("eqij,eqjk->eqik", D * dx[..., None, None], B)
     e = B.shape[0]
     Ke = np.matmul(B.reshape(e, -1, 3 * n).transpose(0, 2, 1), DB.reshape(e, -1, 3 * n))
-    Me_s = wood.rho_kg_m3 * np.einsum("eqa,eqb,eq->eab", val, val, dx)
+    rho = wood.rho_kg_m3 * (1.0 if density_factor is None else density_factor(pts[0]))
+    Me_s = np.einsum("eqa,eqb,eq->eab", val, val, rho * dx)
     Me = np.einsum("eab,ij->eaibj", Me_s, np.eye(3)).reshape(e, 3 * n, 3 * n)
     dofs = (3 * basis.element_dofs.T[:, :, None] + np.arange(3)[None, None, :]).reshape(e, -1)
     rows = np.broadcast_to(dofs[:, :, None], Ke.shape).ravel()
@@ -156,18 +163,19 @@ def rigid_body(M, doflocs: np.ndarray) -> tuple[float, float, float]:
 def solid_modes(
     mesh: MeshHex2, wood: OrthotropicWood, n_modes: int = 30, orientation: str = "planar",
     progress: bool = False, point_masses: tuple[tuple[float, float], ...] = (),
+    density_factor: Callable[[np.ndarray], np.ndarray] | None = None,
 ) -> SolidModes:
     """Lowest elastic modes of the free-free solid (rigid-body modes dropped).
 
     ``point_masses``: (x_m, kg) lumped on the axis node nearest x (an accelerometer), in all
-    three directions.
+    three directions. ``density_factor``: as ``assemble_solid``'s.
     """
     def say(msg):
         if progress:
             print(f"solid: {msg}", file=sys.stderr, flush=True)
 
     say(f"{mesh.nelements} quadratic hexahedra, assembling ...")
-    K, M, basis = assemble_solid(mesh, wood, orientation)
+    K, M, basis = assemble_solid(mesh, wood, orientation, density_factor)
     loc = basis.doflocs
     r = np.hypot(loc[1], loc[2])
     on_axis = np.flatnonzero(r < 1e-9 * max(np.ptp(loc[0]), 1e-12))
