@@ -177,7 +177,7 @@ def _scan(st: Stations, registered: Profile, false_alarm: float):
         if not runs or (~found == use).all() or (~found).sum() < 10:
             break
         use = ~found
-    return null, terms, patterns, _merged(runs, terms), z_max, z_crit
+    return null, terms, _merged(runs, terms), z_max, z_crit
 
 
 def hidden_flat_depth_m(orientations_deg, radius_m: float, sigma_m: float) -> float:
@@ -271,7 +271,7 @@ def compare_profiles(registered: Profile, survey: CaliperSurvey, rho_kg_m3: floa
     st = station_table(survey, registered)
     if st.n < 2:
         raise ValueError("the caliper survey has fewer than two stations to compare")
-    null, terms, patterns, runs, z_max, z_crit = _scan(st, registered, false_alarm)
+    null, terms, runs, z_max, z_crit = _scan(st, registered, false_alarm)
     def read(run: Run) -> CaliperChange:
         return read_run(st, null, terms, run, rho_kg_m3, registered.length_m)
 
