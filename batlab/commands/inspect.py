@@ -2,13 +2,15 @@
 
 Two forms, the same verdict:
     batlab inspect --profile P --meta M --baseline B.uff --retest R.uff
-                   [--retest-meta retest.json] [--json]                        (stateless)
-    batlab inspect --serial S R.uff [--retest-meta retest.json] [--db PATH] [--json]
+                   [--retest-meta retest.json] [--retest-profile retest_profile.csv]
+                   [--json]                                                    (stateless)
+    batlab inspect --serial S R.uff [--retest-meta retest.json]
+                   [--retest-profile retest_profile.csv] [--db PATH] [--json]
                    [--again]                                   (registered bat; stored)
 
 A registered bat's re-test file already inspected (same SHA-256, baseline and false-alarm
-rate, no --retest-meta) is not inspected or stored again: its stored verdict is printed;
-``--again`` re-runs and stores it anew.
+rate, no --retest-meta, no --retest-profile) is not inspected or stored again: its stored
+verdict is printed; ``--again`` re-runs and stores it anew.
 """
 
 from __future__ import annotations
@@ -34,6 +36,9 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--retest-meta", default=None, metavar="RETEST_JSON",
                    help="retest.json: the re-test's weight_lb, accelerometer_mass_g, "
                         "temperature_c, tested_on (every key optional)")
+    p.add_argument("--retest-profile", default=None, metavar="RETEST_PROFILE_CSV",
+                   help="retest_profile.csv: the caliper profile measured again at the "
+                        "re-test (x_in,diameter_in,angle_deg)")
     p.add_argument("--false-alarm", type=float, default=0.01,
                    help="false-alarm rate of the decision (default 0.01)")
     add_out_argument(p, "write the HTML report to DIR/index.html (created if needed; "
@@ -90,7 +95,7 @@ def run(args: argparse.Namespace) -> int:
             raise ValueError("--serial takes the bat from the registry: drop --profile, --meta "
                              "and --baseline")
         with open_registry(db_path(args), create=False) as conn:
-            done = None if args.again or args.retest_meta else \
+            done = None if args.again or args.retest_meta or args.retest_profile else \
                 pipeline.already_inspected(conn, args.serial, retest, args.false_alarm)
             if done is not None:
                 return _print_stored(args, conn, done, retest, progress, readable)
@@ -98,7 +103,8 @@ def run(args: argparse.Namespace) -> int:
             result = pipeline.inspect_registered(conn, args.serial, retest, args.false_alarm,
                                                  refit_baseline=drawn, progress=progress,
                                                  retest_meta_path=args.retest_meta,
-                                                 with_map=drawn)
+                                                 with_map=drawn,
+                                                 retest_profile_path=args.retest_profile)
             stored = pipeline.store_inspection(conn, result, retest, args.false_alarm,
                                                retest_meta=bool(args.retest_meta))
             progress(f"stored as inspection #{stored.id} of {result.serial} (custody record "
@@ -122,7 +128,8 @@ def run(args: argparse.Namespace) -> int:
             raise ValueError("give --serial S, or all of --profile, --meta and --baseline")
         result = pipeline.inspect_files(args.profile, args.meta, args.baseline, retest,
                                         args.false_alarm, progress, args.retest_meta,
-                                        with_map=bool(args.out or args.plots))
+                                        with_map=bool(args.out or args.plots),
+                                        retest_profile_path=args.retest_profile)
         _print(args, pipeline.contract_dict(result.serial, result.verdict), readable)
         if args.out or args.plots:
             prov = pipeline.provenance(baseline_sha256=pipeline.file_sha256(args.baseline),

@@ -17,7 +17,14 @@ from pathlib import Path
 
 import numpy as np
 
-from batlab.pipeline.files import Progress, quiet, read_bat_files, read_conditions, read_frf
+from batlab.pipeline.files import (
+    Progress,
+    quiet,
+    read_bat_files,
+    read_conditions,
+    read_frf,
+    read_retest_profile,
+)
 from batlab.pipeline.records import FittedTest
 from ema.io.frf_data import FrfTest
 from updating.correlate import fitted
@@ -27,6 +34,7 @@ from updating.diagnose.run import Diagnosis
 from updating.inspect.retest_meta import RetestConditions, conditions_from_dict
 from updating.inspect.run import inspect
 from updating.inspect.verdict import Verdict
+from updating.model.calipers import CaliperSurvey
 from updating.model.lab_input import BatMeta
 from updating.model.profile import Profile
 from updating.model.reference import BatReference
@@ -54,6 +62,8 @@ class InspectionCase:
         The registration (custody record) a registered inspection is judged against.
     retest_content : bytes or None
         The re-test file's bytes as read (the registry keeps exactly the file judged).
+    survey : CaliperSurvey or None
+        The re-test's caliper profile (retest_profile.csv), None without one.
     """
 
     serial: str
@@ -65,6 +75,7 @@ class InspectionCase:
     weight_kg: float | None
     reference_seq: int | None = None
     retest_content: bytes | None = None
+    survey: CaliperSurvey | None = None
 
 
 @dataclass(frozen=True)
@@ -87,6 +98,8 @@ class InspectionResult:
     conditions : RetestConditions or None
         The retest.json's conditions it was judged with (stored, so that a report can judge
         the stored tests again for the element map).
+    survey : CaliperSurvey or None
+        The re-test's caliper profile it was judged with (stored likewise).
     """
 
     serial: str
@@ -99,6 +112,7 @@ class InspectionResult:
     weight_kg: float | None = None
     retest_content: bytes | None = None
     conditions: RetestConditions | None = None
+    survey: CaliperSurvey | None = None
 
 
 def fit_file(name: str, test: FrfTest, weight_kg: float | None,
@@ -182,14 +196,15 @@ def judge(case: InspectionCase, false_alarm: float,
         The case with its verdict.
     """
     verdict = inspect(case.profile, case.reference, case.baseline.modes, case.retest.modes,
-                      false_alarm, conditions, case.registered, with_map=with_map)
+                      false_alarm, conditions, case.registered, with_map=with_map,
+                      retest_profile=case.survey)
     return InspectionResult(case.serial, case.profile, case.reference, case.baseline,
                             case.retest, verdict, case.reference_seq, case.weight_kg,
-                            case.retest_content, conditions)
+                            case.retest_content, conditions, case.survey)
 
 
 def stateless_case(profile_path, meta_path, baseline_path, retest_path,
-                   progress: Progress = quiet) -> InspectionCase:
+                   progress: Progress = quiet, retest_profile_path=None) -> InspectionCase:
     """Read a bat's files, fit both tests and calibrate the reference to the baseline.
 
     Parameters
@@ -198,6 +213,8 @@ def stateless_case(profile_path, meta_path, baseline_path, retest_path,
         profile.csv, meta.json and the two test files.
     progress : Progress
         Receives one-line messages.
+    retest_profile_path : str or os.PathLike or None
+        The optional retest_profile.csv (checked against profile.csv before any fit).
 
     Returns
     -------
@@ -205,6 +222,7 @@ def stateless_case(profile_path, meta_path, baseline_path, retest_path,
         The case (no registration).
     """
     profile, meta = read_bat_files(profile_path, meta_path)
+    survey = read_retest_profile(retest_profile_path, profile)
     base_test, re_test = read_frf(baseline_path), read_frf(retest_path)
     order = match_points(point_positions_m(base_test), point_positions_m(re_test),
                          str(retest_path))
@@ -213,12 +231,14 @@ def stateless_case(profile_path, meta_path, baseline_path, retest_path,
     reference = calibrate_baseline(profile, meta, baseline).reference
     retest = fit_file(Path(retest_path).name, re_test, meta.weight_kg, order, progress)
     return InspectionCase(meta.serial, profile, reference, baseline, retest,
-                          conditions_from_dict(meta.extra, meta_path), meta.weight_kg)
+                          conditions_from_dict(meta.extra, meta_path), meta.weight_kg,
+                          survey=survey)
 
 
 def inspect_files(
     profile_path, meta_path, baseline_path, retest_path, false_alarm: float = 0.01,
     progress: Progress = quiet, retest_meta_path=None, with_map: bool = True,
+    retest_profile_path=None,
 ) -> InspectionResult:
     """Inspect a re-test statelessly: the steps of `register`, then the re-test against it.
 
@@ -234,6 +254,8 @@ def inspect_files(
         The optional retest.json.
     with_map : bool
         Compute the MSSO element map (what a report draws; ``judge``).
+    retest_profile_path : str or os.PathLike or None
+        The optional retest_profile.csv (the re-test's caliper profile).
 
     Returns
     -------
@@ -241,6 +263,7 @@ def inspect_files(
         The verdict and what it was judged on.
     """
     conditions = read_conditions(retest_meta_path)
-    case = stateless_case(profile_path, meta_path, baseline_path, retest_path, progress)
+    case = stateless_case(profile_path, meta_path, baseline_path, retest_path, progress,
+                          retest_profile_path)
     progress("inspecting the re-test against the reference")
     return judge(case, false_alarm, conditions, with_map)

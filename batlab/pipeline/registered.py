@@ -19,6 +19,7 @@ from batlab.pipeline.files import (
     read_bat_files,
     read_conditions,
     read_frf,
+    read_retest_profile,
 )
 from batlab.pipeline.inspection import (
     InspectionCase,
@@ -200,7 +201,7 @@ def store_registration(conn: sa.Connection, done: Registration, baseline_path,
 
 def registered_case(
     conn: sa.Connection, serial: str, retest_path, refit_baseline: bool = False,
-    progress: Progress = quiet, baseline_fit=None,
+    progress: Progress = quiet, baseline_fit=None, retest_profile_path=None,
 ) -> InspectionCase:
     """Read a registered bat and a re-test file into the method's inputs.
 
@@ -222,6 +223,9 @@ def registered_case(
         Receives one-line messages.
     baseline_fit : ModalFit or None
         A fit of that same baseline file already at hand (saves the refit).
+    retest_profile_path : str or os.PathLike or None
+        The optional retest_profile.csv (checked against the registered profile before any
+        fit).
 
     Returns
     -------
@@ -237,6 +241,7 @@ def registered_case(
     base_modes = reg.decode_modes(bat.modes)
     order = match_points(base_modes.x_m, point_positions_m(re_test), str(retest_path))
     profile = make_profile(bat.profile_x_m, bat.profile_diameter_m, f"registry bat {serial}")
+    survey = read_retest_profile(retest_profile_path, profile)
     weight_kg = registered_weight_kg(bat)
     fit = baseline_fit
     if refit_baseline and fit is None:
@@ -245,13 +250,13 @@ def registered_case(
     retest = fit_file(Path(retest_path).name, re_test, weight_kg, order, progress)
     return InspectionCase(serial, profile, BatReference.from_dict(bat.reference), baseline,
                           retest, registration_conditions(bat.meta, serial), weight_kg,
-                          bat.reference_seq, retest_content)
+                          bat.reference_seq, retest_content, survey)
 
 
 def inspect_registered(
     conn: sa.Connection, serial: str, retest_path, false_alarm: float = 0.01,
     refit_baseline: bool = False, progress: Progress = quiet, baseline_fit=None,
-    retest_meta_path=None, with_map: bool = True,
+    retest_meta_path=None, with_map: bool = True, retest_profile_path=None,
 ) -> InspectionResult:
     """Inspect a re-test of a registered bat against its stored reference and baseline modes.
 
@@ -276,6 +281,8 @@ def inspect_registered(
     with_map : bool
         Compute the MSSO element map (what a report draws; without it a later report
         computes it, ``stored.with_element_map``).
+    retest_profile_path : str or os.PathLike or None
+        The optional retest_profile.csv (the re-test's caliper profile).
 
     Returns
     -------
@@ -283,6 +290,7 @@ def inspect_registered(
         The verdict and what it was judged on (nothing stored: ``store_inspection``).
     """
     conditions = read_conditions(retest_meta_path)
-    case = registered_case(conn, serial, retest_path, refit_baseline, progress, baseline_fit)
+    case = registered_case(conn, serial, retest_path, refit_baseline, progress, baseline_fit,
+                           retest_profile_path)
     progress("inspecting the re-test against the registered reference")
     return judge(case, false_alarm, conditions, with_map)

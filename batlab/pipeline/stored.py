@@ -22,6 +22,7 @@ from batlab.pipeline.records import FittedTest, ReportInputs, same_judgement, ve
 from batlab.pipeline.registered import registered_weight_kg, registration_conditions
 from updating.correlate.points import match_points, point_positions_m
 from updating.inspect.retest_meta import RetestConditions
+from updating.model.calipers import CaliperSurvey, make_survey
 from updating.model.profile import make_profile
 from updating.model.reference import BatReference
 
@@ -32,6 +33,18 @@ EXPORT_COLUMNS = [
     "baseline_sha256", "registration_record", "verdict_record", "verdict_record_sha256",
     "report_path"]
 """The columns of `batlab export`, in order."""
+
+
+def survey_dict(survey: CaliperSurvey) -> dict:
+    """Return a re-test profile as stored with its inspection (SI lists)."""
+    return {"x_m": survey.x_m.tolist(), "angle_deg": survey.angle_deg.tolist(),
+            "diameter_m": survey.diameter_m.tolist(), "angles_given": survey.angles_given}
+
+
+def survey_from_dict(d: dict) -> CaliperSurvey:
+    """Return a stored re-test profile (``survey_dict``'s inverse)."""
+    return make_survey(d["x_m"], d["angle_deg"], d["diameter_m"], "stored re-test profile",
+                       bool(d.get("angles_given", True)))
 
 
 def store_inspection(
@@ -55,7 +68,8 @@ def store_inspection(
         The decision's false-alarm rate.
     retest_meta : bool
         Whether a retest.json gave the re-test's conditions (kept in the inputs, with the
-        conditions themselves, SI, so that a report can judge the tests again).
+        conditions themselves, SI, so that a report can judge the tests again). A re-test
+        profile judged with it (``result.survey``) is kept in them likewise.
 
     Returns
     -------
@@ -69,6 +83,8 @@ def store_inspection(
               "retest_meta": bool(retest_meta)}
     if retest_meta and result.conditions is not None:
         inputs["retest_conditions"] = asdict(result.conditions)
+    if result.survey is not None:
+        inputs["retest_profile"] = survey_dict(result.survey)
     return reg.add_inspection(
         conn, result.serial, verdict_record(result.serial, result.verdict), path.name,
         content, reference_seq=result.reference_seq, inputs=inputs)
@@ -80,7 +96,8 @@ def already_inspected(
     """Find the bat's latest stored inspection of this very re-test file, if any.
 
     The same file (SHA-256) against the bat's current baseline at the same false-alarm rate,
-    inspected without a retest.json (whose conditions are not stored to compare).
+    inspected without a retest.json (whose conditions are not stored to compare) and without
+    a re-test profile.
 
     Parameters
     ----------
@@ -103,7 +120,8 @@ def already_inspected(
     same = [i for i in reg.history(conn, serial)
             if i.retest_sha256 == sha and i.baseline_sha256 == bat.baseline_sha256
             and (i.inputs or {}).get("false_alarm", 0.01) == float(false_alarm)
-            and not (i.inputs or {}).get("retest_meta", False)]
+            and not (i.inputs or {}).get("retest_meta", False)
+            and "retest_profile" not in (i.inputs or {})]
     return same[-1] if same else None
 
 
@@ -281,9 +299,11 @@ def with_element_map(inputs: ReportInputs, stored_inputs: dict, weight_kg: float
         conditions = None if cond is None else RetestConditions(**cond)
         progress("judging the stored tests again for the element map (an inspection without "
                  "a report does not compute it)")
+        survey = stored_inputs.get("retest_profile")
         case = InspectionCase(inputs.serial, inputs.profile, inputs.reference, inputs.baseline,
                               inputs.retest, registration_conditions(inputs.meta, inputs.serial),
-                              weight_kg)
+                              weight_kg, survey=None if survey is None else survey_from_dict(
+                                  survey))
         again = verdict_record(inputs.serial, judge(
             case, float(stored_inputs.get("false_alarm", 0.01)), conditions).verdict)
         if same_judgement(v["status"], v.get("statistic"), again["status"],
