@@ -170,6 +170,17 @@ def test_retest_profile_in_both_forms_gives_the_same_measured_flat(lab, capsys):
     code, out, err = run_cli(serial, capsys)  # without it: judged again, not the stored one
     assert code == 0 and "already inspected" not in err
     assert json.loads(out)["status"] == "not_altered"
+    from batlab.pipeline.stored import survey_from_dict
+    from batlab.registry import history, open_registry
+    from updating.model.calipers import read_survey_csv
+
+    with open_registry(lab / "reg.sqlite") as conn:  # kept with its inspection, to judge again
+        first, second = history(conn, "HX-2001")
+    kept = survey_from_dict(first.inputs["retest_profile"])
+    read = read_survey_csv(lab / "retest_profile.csv")
+    np.testing.assert_array_equal(kept.diameter_m, read.diameter_m)
+    np.testing.assert_array_equal(kept.angle_deg, read.angle_deg)
+    assert "retest_profile" not in second.inputs
 
 
 def test_a_retest_profile_slip_is_refused_before_any_fit_and_nothing_stored(lab, capsys):
