@@ -50,9 +50,18 @@ def fake_calibrate(profile, meta, baseline_modes, suspension_hz=None):
 
 
 def fake_inspect(profile, reference, baseline, retest, false_alarm, conditions=None,
-                 registered=None, with_map=True):
+                 registered=None, with_map=True, retest_profile=None):
     """Altered when the modes shift unevenly (beyond a uniform drift); 1 in elements; the
-    'core' sits in the last 10 in, its size from the largest uneven shift."""
+    'core' sits in the last 10 in, its size from the largest uneven shift. A re-test profile
+    is joined as the real inspection joins it (``caliper_verdict.with_calipers``: pure
+    numpy, fast)."""
+    from updating.inspect.caliper_verdict import with_calipers
+
+    return with_calipers(_fake_modal(profile, baseline, retest, false_alarm), profile,
+                         retest_profile, reference.rho_kg_m3)
+
+
+def _fake_modal(profile, baseline, retest, false_alarm):
     n = min(baseline.freq_hz.size, retest.freq_hz.size)
     ratio = retest.freq_hz[:n] / baseline.freq_hz[:n]
     uneven = float(np.max(np.abs(ratio / np.median(ratio) - 1)))

@@ -95,9 +95,10 @@ def _recording(monkeypatch):
     seen = []
 
     def rec(profile, reference, baseline, retest, false_alarm, conditions=None,
-            registered=None, with_map=True):
+            registered=None, with_map=True, retest_profile=None):
         seen.append((conditions, registered))
-        return fake_inspect(profile, reference, baseline, retest, false_alarm)
+        return fake_inspect(profile, reference, baseline, retest, false_alarm,
+                            retest_profile=retest_profile)
 
     monkeypatch.setattr(pipeline.inspection, "inspect", rec)
     return seen

@@ -4,8 +4,9 @@
     batlab fleet calibrate --profile P --meta M --n N [--seed S] [--scheduler ...] [--json]
                            [-o rows.jsonl [--resume]] [--store [--db DB] [--model NAME]]
 
-``inspect`` judges every ``SERIAL.uff`` of DIR (``SERIAL.json``: its retest.json) against
-the registry as ``batlab inspect --serial`` does and stores each verdict; ``--json`` prints
+``inspect`` judges every ``SERIAL.uff`` of DIR (``SERIAL.json``: its retest.json;
+``SERIAL.profile.csv``: its re-test caliper profile) against the registry as ``batlab
+inspect --serial`` does and stores each verdict; ``--json`` prints
 the list of the objects ``batlab inspect --json`` prints (a refused re-test:
 ``{"serial", "retest", "error"}``, and exit 1). ``calibrate`` inspects N simulated clean
 re-tests of one bat (every nuisance and legal grip) and bounds its false-alarm rate;
@@ -37,7 +38,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    help="inspect: every SERIAL.uff of DIR against the registry, stored; "
                         "calibrate: the false-alarm rate on N clean re-tests of one bat")
     p.add_argument("folder", nargs="?", default=None, metavar="DIR",
-                   help="inspect: the folder of SERIAL.uff re-tests (SERIAL.json beside)")
+                   help="inspect: the folder of SERIAL.uff re-tests (SERIAL.json and "
+                        "SERIAL.profile.csv beside)")
     p.add_argument("--scheduler", default=None, metavar="ADDRESS",
                    help="a running Dask scheduler (tcp://HOST:PORT); default: a local "
                         "cluster, one worker process per core")

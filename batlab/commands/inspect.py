@@ -2,16 +2,18 @@
 
 Two forms, the same verdict:
     batlab inspect --profile P --meta M --baseline B.uff --retest R.uff
-                   [--retest-meta retest.json] [--json]                        (stateless)
-    batlab inspect --serial S R.uff [--retest-meta retest.json] [--db PATH] [--json]
+                   [--retest-meta retest.json] [--retest-profile retest_profile.csv]
+                   [--json]                                                    (stateless)
+    batlab inspect --serial S R.uff [--retest-meta retest.json]
+                   [--retest-profile retest_profile.csv] [--db PATH] [--json]
                    [--again]                                   (registered bat; stored)
 
 A registered bat's re-test file already inspected (same SHA-256, baseline and false-alarm
-rate, no --retest-meta) is not inspected or stored again: its stored verdict is printed;
-``--again`` re-runs and stores it anew. The chance an unaltered bat differs this much is
-stated from the registry's latest calibration of the bat's model (``fleet calibrate
---store``), else said unmeasured; the stateless form reads calibrations from ``--db``, else
-``$BATLAB_DB`` when set, and stores nothing.
+rate, no --retest-meta, no --retest-profile) is not inspected or stored again: its stored
+verdict is printed; ``--again`` re-runs and stores it anew. The chance an unaltered bat
+differs this much is stated from the registry's latest calibration of the bat's model
+(``fleet calibrate --store``), else said unmeasured; the stateless form reads calibrations
+from ``--db``, else ``$BATLAB_DB`` when set, and stores nothing.
 """
 
 from __future__ import annotations
@@ -46,6 +48,9 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--retest-meta", default=None, metavar="RETEST_JSON",
                    help="retest.json: the re-test's weight_lb, accelerometer_mass_g, "
                         "temperature_c, tested_on (every key optional)")
+    p.add_argument("--retest-profile", default=None, metavar="RETEST_PROFILE_CSV",
+                   help="retest_profile.csv: the caliper profile measured again at the "
+                        "re-test (x_in,diameter_in,angle_deg)")
     p.add_argument("--false-alarm", type=float, default=0.01,
                    help="false-alarm rate of the decision (default 0.01)")
     add_out_argument(p, "write the HTML report to DIR/index.html (created if needed; "
@@ -103,7 +108,7 @@ def run(args: argparse.Namespace) -> int:
                    registry=db)  # before any work: nothing is made or fitted for bad input
     if args.serial:
         with open_registry(db, create=False) as conn:
-            done = None if args.again or args.retest_meta else \
+            done = None if args.again or args.retest_meta or args.retest_profile else \
                 pipeline.already_inspected(conn, args.serial, retest, args.false_alarm)
             if done is not None:
                 return _print_stored(args, conn, done, retest, progress, readable)
@@ -111,7 +116,8 @@ def run(args: argparse.Namespace) -> int:
             result = pipeline.inspect_registered(conn, args.serial, retest, args.false_alarm,
                                                  refit_baseline=drawn, progress=progress,
                                                  retest_meta_path=args.retest_meta,
-                                                 with_map=drawn)
+                                                 with_map=drawn,
+                                                 retest_profile_path=args.retest_profile)
             stored = pipeline.store_inspection(conn, result, retest, args.false_alarm,
                                                retest_meta=bool(args.retest_meta))
             progress(f"stored as inspection #{stored.id} of {result.serial} (custody record "
@@ -134,7 +140,8 @@ def run(args: argparse.Namespace) -> int:
         with _calibrations(args) as (conn, why):
             result = pipeline.inspect_files(args.profile, args.meta, args.baseline, retest,
                                             args.false_alarm, progress, args.retest_meta,
-                                            with_map=bool(args.out or args.plots))
+                                            with_map=bool(args.out or args.plots),
+                                            retest_profile_path=args.retest_profile)
             result = pipeline.with_statement(result, conn, why)
         _print(args, pipeline.result_dict(result), readable)
         if args.out or args.plots:

@@ -26,7 +26,11 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                         "--seed (--case DIR: deprecated, use --case -o DIR)")
     p.add_argument("--kind", default="none",
                    help="--case: alteration of the re-test: none, cork, deep, empty, end_plug, "
-                        "partial, small, neutral")
+                        "partial, small, neutral, or the rulebook's nails, shaved, flattened, "
+                        "grooved, wax, pine_tar, grip_tape, spray, tar_past_18")
+    p.add_argument("--calipers", type=int, default=0, metavar="N",
+                   help="--case: also the re-test's caliper profile read at N orientations "
+                        "(retest_profile.csv; 4: 0, 45, 90, 135 deg)")
     p.add_argument("--nuisances", default="all",
                    help="--case: all, none, or a comma-separated list (moisture, uniform_drift, "
                         "temperature, billet, planes, cup, noise, points, model_points, band, "
@@ -76,7 +80,7 @@ def run_case(args, folder: str) -> int:
         nuisances = tuple(n.strip() for n in args.nuisances.split(",") if n.strip())
     paths, expected = pipeline.simulate_field_case(
         args.seed, args.kind, nuisances, args.integrity, folder,
-        progress=progress_printer("simulate"))
+        progress=progress_printer("simulate"), calipers=args.calipers)
     summary = {k: str(v) for k, v in paths.items() if v is not None}
     summary["expected"] = expected
     if args.json:

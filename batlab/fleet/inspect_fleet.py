@@ -1,13 +1,14 @@
 """`batlab fleet inspect`'s work: a folder of re-tests inspected on the cluster, stored here.
 
 Every ``SERIAL.uff`` of a folder is a re-test of registered bat SERIAL (``SERIAL.json``, when
-present, its retest.json). A worker opens the registry, reads the bat and judges the re-test
-as ``batlab inspect --serial`` does (``pipeline.inspect_registered``) and sends back the
-verdict with the re-test's bytes as judged; the client stores each one as it comes back
+present, its retest.json; ``SERIAL.profile.csv``, when present, its retest_profile.csv). A
+worker opens the registry, reads the bat and judges the re-test as ``batlab inspect
+--serial`` does (``pipeline.inspect_registered``) and sends back the verdict with the
+re-test's bytes as judged; the client stores each one as it comes back
 (``pipeline.store_inspection``), so the registry has one writer, the custody chain is
 extended by one process, and workers need read access only. A re-test file already
-inspected (no retest.json) is not inspected again: its stored verdict is given, as
-``inspect --serial`` gives it.
+inspected (no retest.json, no re-test profile) is not inspected again: its stored verdict
+is given, as ``inspect --serial`` gives it.
 """
 
 from __future__ import annotations
@@ -33,11 +34,14 @@ class RetestJob:
         SERIAL.uff.
     retest_meta_path : str or None
         SERIAL.json when present.
+    retest_profile_path : str or None
+        SERIAL.profile.csv when present (the re-test's caliper profile).
     """
 
     serial: str
     retest_path: str
     retest_meta_path: str | None
+    retest_profile_path: str | None = None
 
 
 def retest_jobs(folder) -> list[RetestJob]:
@@ -51,7 +55,7 @@ def retest_jobs(folder) -> list[RetestJob]:
     Returns
     -------
     list of RetestJob
-        One per ``.uff`` file, sorted by name.
+        One per ``.uff`` file, sorted by name, with its SERIAL.json and SERIAL.profile.csv.
     """
     folder = Path(folder)
     if not folder.is_dir():
@@ -59,8 +63,12 @@ def retest_jobs(folder) -> list[RetestJob]:
     files = sorted(folder.glob("*.uff"))
     if not files:
         raise ValueError(f"{folder}: no SERIAL.uff re-test in it")
-    return [RetestJob(p.stem, str(p), str(p.with_suffix(".json"))
-                      if p.with_suffix(".json").is_file() else None) for p in files]
+    def beside(p: Path, suffix: str) -> str | None:
+        q = p.with_suffix(suffix)
+        return str(q) if q.is_file() else None
+
+    return [RetestJob(p.stem, str(p), beside(p, ".json"), beside(p, ".profile.csv"))
+            for p in files]
 
 
 def inspect_job(db: str, false_alarm: float, job: RetestJob):
@@ -76,7 +84,8 @@ def inspect_job(db: str, false_alarm: float, job: RetestJob):
         with open_registry(db, create=False) as conn:
             result = pipeline.inspect_registered(conn, job.serial, job.retest_path, false_alarm,
                                                  retest_meta_path=job.retest_meta_path,
-                                                 with_map=False)
+                                                 with_map=False,
+                                                 retest_profile_path=job.retest_profile_path)
     except (ValueError, OSError) as exc:
         return f"{job.retest_path}: {exc}"
     return replace(result, baseline=None, retest=None, profile=None, reference=None)
@@ -84,7 +93,7 @@ def inspect_job(db: str, false_alarm: float, job: RetestJob):
 
 def _stored_before(conn, job: RetestJob, false_alarm: float) -> dict | None:
     """Return the stored verdict of a re-test file already inspected (None: not yet)."""
-    if job.retest_meta_path is not None:
+    if job.retest_meta_path is not None or job.retest_profile_path is not None:
         return None
     try:
         done = pipeline.already_inspected(conn, job.serial, job.retest_path, false_alarm)

@@ -194,21 +194,23 @@ def nuisance_names() -> tuple[str, ...]:
 
 def simulate_field_case(
     seed: int | None, kind: FieldKind, nuisances: tuple[str, ...], integrity: Integrity | None,
-    folder, progress: Progress = _quiet,
+    folder, progress: Progress = _quiet, calipers: int = 0,
 ) -> tuple[dict, str]:
     """Draw one random bat of the nuisance-rich fleet and write its files.
 
     One random bat of the nuisance-rich fleet written as a lab hands it over (profile.csv,
     meta.json, baseline.uff, retest.uff, retest.json, truth.json in ``folder``;
-    ``updating.simulate.field_fleet``). Returns (paths by name, the expected verdict);
-    ``progress`` is told before the files are simulated.
+    ``updating.simulate.field_fleet``; with ``calipers`` N > 0 also retest_profile.csv read
+    at N orientations). Returns (paths by name, the expected verdict); ``progress`` is told
+    before the files are simulated.
     """
     from updating.simulate.field_fleet import draw_case, write_case
 
     rng = np.random.default_rng(seed)
     case = draw_case(rng, kind, nuisances, integrity)
     progress(f"simulating a {kind} bat with {', '.join(nuisances) or 'no nuisance'} ...")
-    paths = write_case(case, folder, seed=int(rng.integers(2**31)), truth=True)
+    paths = write_case(case, folder, seed=int(rng.integers(2**31)), truth=True,
+                       retest_profile=calipers)
     return paths, case.expected
 
 

@@ -1,7 +1,8 @@
 """The lab's files in and out: FRF tests, profile.csv, meta.json, retest.json, CSV.
 
 Every reader turns a bad file into a one-line ``ValueError`` naming it. ``Progress``
-callables receive one-line messages (the commands print them on stderr).
+callables receive one-line messages (the commands print them on stderr). The re-test's
+caliper profile (retest_profile.csv) is checked against the registered profile here.
 """
 
 from __future__ import annotations
@@ -21,6 +22,7 @@ from ema.io.frf_data import FrfTest
 from updating.correlate.points import POINT_TOL_M
 from updating.inspect.retest_meta import RetestConditions, read_retest_meta
 from updating.model import plausible
+from updating.model.calipers import CaliperSurvey, read_survey_csv
 from updating.model.json_input import read_json_object
 from updating.model.lab_input import BatMeta, read_meta
 from updating.model.profile import Profile, read_profile_csv
@@ -238,6 +240,40 @@ def read_conditions(path) -> RetestConditions | None:
         The conditions, None without a file.
     """
     return None if path is None else read_retest_meta(path)
+
+
+def read_retest_profile(path, registered: Profile) -> CaliperSurvey | None:
+    """Read the optional retest_profile.csv and check it against the registered profile.
+
+    Parameters
+    ----------
+    path : str or os.PathLike or None
+        The re-test's caliper profile (``x_in,diameter_in,angle_deg``), or None.
+    registered : Profile
+        The bat's registered profile.
+
+    Returns
+    -------
+    CaliperSurvey or None
+        The readings, None without a file.
+
+    Raises
+    ------
+    ValueError
+        One line naming the file: unreadable, a unit slip, another bat's profile, knob and
+        barrel swapped (``updating.model.plausible.check_survey``).
+    """
+    if path is None:
+        return None
+    if not Path(path).is_file():
+        raise ValueError(f"{path}: no such file")
+    survey = read_survey_csv(path)
+    means = survey.mean_profile(str(path))
+    message = plausible.check_survey(means.x_m, means.diameter_m, registered.x_m,
+                                     registered.diameter_m, str(path))
+    if message:
+        raise ValueError(message)
+    return survey
 
 
 def read_meta_dict(path) -> dict:

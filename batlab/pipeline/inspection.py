@@ -25,6 +25,7 @@ from batlab.pipeline.files import (
     read_bat_files,
     read_conditions,
     read_frf,
+    read_retest_profile,
 )
 from batlab.pipeline.records import FittedTest
 from ema.io.frf_data import FrfTest
@@ -35,6 +36,7 @@ from updating.diagnose.run import Diagnosis
 from updating.inspect.retest_meta import RetestConditions, conditions_from_dict
 from updating.inspect.run import inspect
 from updating.inspect.verdict import Verdict
+from updating.model.calipers import CaliperSurvey
 from updating.model.lab_input import BatMeta
 from updating.model.profile import Profile
 from updating.model.reference import BatReference
@@ -70,6 +72,8 @@ class InspectionCase:
     model : str or None
         The bat's model (``batlab.pipeline.chance.model_name``): whose calibration states
         its chance.
+    survey : CaliperSurvey or None
+        The re-test's caliper profile (retest_profile.csv), None without one.
     """
 
     serial: str
@@ -82,6 +86,7 @@ class InspectionCase:
     reference_seq: int | None = None
     retest_content: bytes | None = None
     model: str | None = None
+    survey: CaliperSurvey | None = None
 
 
 @dataclass(frozen=True)
@@ -109,6 +114,8 @@ class InspectionResult:
     stated : dict or None
         The verdict's chance and false-alarm rate (``batlab.pipeline.chance.statement``,
         by ``with_statement``); None: nominal, no calibration looked up.
+    survey : CaliperSurvey or None
+        The re-test's caliper profile it was judged with (stored likewise).
     """
 
     serial: str
@@ -123,6 +130,7 @@ class InspectionResult:
     conditions: RetestConditions | None = None
     model: str | None = None
     stated: dict | None = None
+    survey: CaliperSurvey | None = None
 
 
 def fit_file(name: str, test: FrfTest, weight_kg: float | None,
@@ -207,14 +215,16 @@ def judge(case: InspectionCase, false_alarm: float,
         The case with its verdict.
     """
     verdict = inspect(case.profile, case.reference, case.baseline.modes, case.retest.modes,
-                      false_alarm, conditions, case.registered, with_map=with_map)
+                      false_alarm, conditions, case.registered, with_map=with_map,
+                      retest_profile=case.survey)
     return InspectionResult(case.serial, case.profile, case.reference, case.baseline,
                             case.retest, verdict, case.reference_seq, case.weight_kg,
-                            case.retest_content, conditions, case.model)
+                            case.retest_content, conditions, case.model,
+                            survey=case.survey)
 
 
 def stateless_case(profile_path, meta_path, baseline_path, retest_path,
-                   progress: Progress = quiet) -> InspectionCase:
+                   progress: Progress = quiet, retest_profile_path=None) -> InspectionCase:
     """Read a bat's files, fit both tests and calibrate the reference to the baseline.
 
     Parameters
@@ -223,6 +233,8 @@ def stateless_case(profile_path, meta_path, baseline_path, retest_path,
         profile.csv, meta.json and the two test files.
     progress : Progress
         Receives one-line messages.
+    retest_profile_path : str or os.PathLike or None
+        The optional retest_profile.csv (checked against profile.csv before any fit).
 
     Returns
     -------
@@ -230,6 +242,7 @@ def stateless_case(profile_path, meta_path, baseline_path, retest_path,
         The case (no registration).
     """
     profile, meta = read_bat_files(profile_path, meta_path)
+    survey = read_retest_profile(retest_profile_path, profile)
     base_test, re_test = read_frf(baseline_path), read_frf(retest_path)
     order = match_points(point_positions_m(base_test), point_positions_m(re_test),
                          str(retest_path))
@@ -239,12 +252,14 @@ def stateless_case(profile_path, meta_path, baseline_path, retest_path,
     retest = fit_file(Path(retest_path).name, re_test, meta.weight_kg, order, progress)
     return InspectionCase(meta.serial, profile, reference, baseline, retest,
                           conditions_from_dict(meta.extra, meta_path), meta.weight_kg,
-                          model=model_name(profile, meta.species, meta.extra))
+                          model=model_name(profile, meta.species, meta.extra),
+                          survey=survey)
 
 
 def inspect_files(
     profile_path, meta_path, baseline_path, retest_path, false_alarm: float = 0.01,
     progress: Progress = quiet, retest_meta_path=None, with_map: bool = True,
+    retest_profile_path=None,
 ) -> InspectionResult:
     """Inspect a re-test statelessly: the steps of `register`, then the re-test against it.
 
@@ -260,6 +275,8 @@ def inspect_files(
         The optional retest.json.
     with_map : bool
         Compute the MSSO element map (what a report draws; ``judge``).
+    retest_profile_path : str or os.PathLike or None
+        The optional retest_profile.csv (the re-test's caliper profile).
 
     Returns
     -------
@@ -267,6 +284,7 @@ def inspect_files(
         The verdict and what it was judged on.
     """
     conditions = read_conditions(retest_meta_path)
-    case = stateless_case(profile_path, meta_path, baseline_path, retest_path, progress)
+    case = stateless_case(profile_path, meta_path, baseline_path, retest_path, progress,
+                          retest_profile_path)
     progress("inspecting the re-test against the reference")
     return judge(case, false_alarm, conditions, with_map)

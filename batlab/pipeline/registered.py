@@ -20,6 +20,7 @@ from batlab.pipeline.files import (
     read_bat_files,
     read_conditions,
     read_frf,
+    read_retest_profile,
 )
 from batlab.pipeline.inspection import (
     InspectionCase,
@@ -209,7 +210,7 @@ def store_registration(conn: sa.Connection, done: Registration, baseline_path,
 def registration_case(
     bat: reg.BatRecord, serial: str, baseline: tuple[str, bytes], retest: tuple[str, bytes],
     retest_label: str | None = None, refit_baseline: bool = False,
-    progress: Progress = quiet, baseline_fit=None,
+    progress: Progress = quiet, baseline_fit=None, retest_profile_path=None,
 ) -> InspectionCase:
     """Read a registration and the bytes of its two tests into the method's inputs.
 
@@ -236,6 +237,8 @@ def registration_case(
         Receives one-line messages.
     baseline_fit : ModalFit or None
         A fit of that same baseline file already at hand (saves the refit).
+    retest_profile_path : path or None
+        The re-test's caliper profile (retest_profile.csv), read before any fit.
 
     Returns
     -------
@@ -248,6 +251,7 @@ def registration_case(
     base_modes = reg.decode_modes(bat.modes)
     order = match_points(base_modes.x_m, point_positions_m(re_test), retest_label or re_name)
     profile = make_profile(bat.profile_x_m, bat.profile_diameter_m, f"registry bat {serial}")
+    survey = read_retest_profile(retest_profile_path, profile)
     weight_kg = registered_weight_kg(bat)
     fit = baseline_fit
     if refit_baseline and fit is None:
@@ -257,12 +261,12 @@ def registration_case(
     return InspectionCase(serial, profile, BatReference.from_dict(bat.reference), fitted,
                           re_fit, registration_conditions(bat.meta, serial), weight_kg,
                           bat.reference_seq, re_bytes,
-                          model_name(profile, bat.species, bat.meta))
+                          model_name(profile, bat.species, bat.meta), survey)
 
 
 def registered_case(
     conn: sa.Connection, serial: str, retest_path, refit_baseline: bool = False,
-    progress: Progress = quiet, baseline_fit=None,
+    progress: Progress = quiet, baseline_fit=None, retest_profile_path=None,
 ) -> InspectionCase:
     """Read a registered bat and a re-test file into the method's inputs.
 
@@ -284,6 +288,9 @@ def registered_case(
         Receives one-line messages.
     baseline_fit : ModalFit or None
         A fit of that same baseline file already at hand (saves the refit).
+    retest_profile_path : str or os.PathLike or None
+        The optional retest_profile.csv (checked against the registered profile before any
+        fit).
 
     Returns
     -------
@@ -296,13 +303,13 @@ def registered_case(
         raise ValueError(f"{retest_path}: no such file")
     retest = (Path(retest_path).name, Path(retest_path).read_bytes())
     return registration_case(bat, serial, baseline, retest, str(retest_path), refit_baseline,
-                             progress, baseline_fit)
+                             progress, baseline_fit, retest_profile_path)
 
 
 def inspect_registered(
     conn: sa.Connection, serial: str, retest_path, false_alarm: float = 0.01,
     refit_baseline: bool = False, progress: Progress = quiet, baseline_fit=None,
-    retest_meta_path=None, with_map: bool = True,
+    retest_meta_path=None, with_map: bool = True, retest_profile_path=None,
 ) -> InspectionResult:
     """Inspect a re-test of a registered bat against its stored reference and baseline modes.
 
@@ -327,6 +334,8 @@ def inspect_registered(
     with_map : bool
         Compute the MSSO element map (what a report draws; without it a later report
         computes it, ``stored.with_element_map``).
+    retest_profile_path : str or os.PathLike or None
+        The optional retest_profile.csv (the re-test's caliper profile).
 
     Returns
     -------
@@ -336,6 +345,7 @@ def inspect_registered(
         ``store_inspection``).
     """
     conditions = read_conditions(retest_meta_path)
-    case = registered_case(conn, serial, retest_path, refit_baseline, progress, baseline_fit)
+    case = registered_case(conn, serial, retest_path, refit_baseline, progress, baseline_fit,
+                           retest_profile_path)
     progress("inspecting the re-test against the registered reference")
     return with_statement(judge(case, false_alarm, conditions, with_map), conn)

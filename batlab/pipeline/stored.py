@@ -21,6 +21,7 @@ from batlab.pipeline.records import ReportInputs, same_judgement, verdict_record
 from batlab.pipeline.registered import registration_case
 from batlab.version import code_version
 from updating.inspect.retest_meta import RetestConditions
+from updating.model.calipers import CaliperSurvey, make_survey
 
 __all__ = [
     "already_inspected", "history_table", "note_report", "provenance", "report_inputs",
@@ -36,6 +37,18 @@ EXPORT_COLUMNS = [
     "baseline_sha256", "registration_record", "verdict_record", "verdict_record_sha256",
     "report_path", "code"]
 """The columns of `batlab export`, in order."""
+
+
+def survey_dict(survey: CaliperSurvey) -> dict:
+    """Return a re-test profile as stored with its inspection (SI lists)."""
+    return {"x_m": survey.x_m.tolist(), "angle_deg": survey.angle_deg.tolist(),
+            "diameter_m": survey.diameter_m.tolist(), "angles_given": survey.angles_given}
+
+
+def survey_from_dict(d: dict) -> CaliperSurvey:
+    """Return a stored re-test profile (``survey_dict``'s inverse)."""
+    return make_survey(d["x_m"], d["angle_deg"], d["diameter_m"], "stored re-test profile",
+                       bool(d.get("angles_given", True)))
 
 
 def store_inspection(
@@ -59,7 +72,8 @@ def store_inspection(
         The decision's false-alarm rate.
     retest_meta : bool
         Whether a retest.json gave the re-test's conditions (kept in the inputs, with the
-        conditions themselves, SI, so that a report can judge the tests again).
+        conditions themselves, SI, so that a report can judge the tests again). A re-test
+        profile judged with it (``result.survey``) is kept in them likewise.
 
     Returns
     -------
@@ -74,6 +88,8 @@ def store_inspection(
               "retest_meta": bool(retest_meta)}
     if retest_meta and result.conditions is not None:
         inputs["retest_conditions"] = asdict(result.conditions)
+    if result.survey is not None:
+        inputs["retest_profile"] = survey_dict(result.survey)
     return reg.add_inspection(conn, result.serial, record, path.name, content,
                               reference_seq=result.reference_seq, inputs=inputs)
 
@@ -84,7 +100,8 @@ def already_inspected(
     """Find the bat's latest stored inspection of this very re-test file, if any.
 
     The same file (SHA-256) against the bat's current baseline at the same false-alarm rate,
-    inspected without a retest.json (whose conditions are not stored to compare).
+    inspected without a retest.json (whose conditions are not stored to compare) and without
+    a re-test profile.
 
     Parameters
     ----------
@@ -107,7 +124,8 @@ def already_inspected(
     same = [i for i in reg.history(conn, serial)
             if i.retest_sha256 == sha and i.baseline_sha256 == bat.baseline_sha256
             and (i.inputs or {}).get("false_alarm", 0.01) == float(false_alarm)
-            and not (i.inputs or {}).get("retest_meta", False)]
+            and not (i.inputs or {}).get("retest_meta", False)
+            and "retest_profile" not in (i.inputs or {})]
     return same[-1] if same else None
 
 
@@ -243,6 +261,9 @@ def stored_case(
     case = registration_case(bat, serial, (bat.baseline_name or base_name, base_bytes),
                              (stored.retest_name or re_name, re_bytes),
                              refit_baseline=True, progress=progress)
+    survey = (stored.inputs or {}).get("retest_profile")
+    if survey is not None:  # judged with the re-test's caliper profile: judged again with it
+        case = replace(case, survey=survey_from_dict(survey))
     return stored, bat, case
 
 

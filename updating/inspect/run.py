@@ -47,6 +47,7 @@ from dataclasses import replace
 import numpy as np
 
 from updating.correlate.measured import MeasuredModes
+from updating.inspect.caliper_verdict import with_calipers
 from updating.inspect.changes import (
     ELASTIC_MIN_HZ,
     RetestPairs,
@@ -72,6 +73,7 @@ from updating.inspect.retest_meta import RetestConditions
 from updating.inspect.robustness import Robustness, leave_one_out
 from updating.inspect.segments import element_factors
 from updating.inspect.verdict import Verdict
+from updating.model.calipers import CaliperSurvey
 from updating.model.profile import Profile
 from updating.model.reference import BatReference
 from updating.model.units import IN_TO_M
@@ -292,7 +294,8 @@ def reported_finding(evidence: Evidence, altered: bool | None, reading: Reading,
 def inspect(profile: Profile, reference: BatReference, baseline: MeasuredModes,
             retest: MeasuredModes, false_alarm: float = 0.01,
             conditions: RetestConditions | None = None,
-            registered: RetestConditions | None = None, with_map: bool = True) -> Verdict:
+            registered: RetestConditions | None = None, with_map: bool = True,
+            retest_profile: CaliperSurvey | None = None) -> Verdict:
     """Judge a re-test against the bat's reference: the method's one entry.
 
     Parameters
@@ -313,14 +316,17 @@ def inspect(profile: Profile, reference: BatReference, baseline: MeasuredModes,
         baseline's accelerometer mass and temperature when the lab recorded them).
     with_map : bool
         Compute the MSSO element map for the evidence (``inspect_retest``).
+    retest_profile : CaliperSurvey or None
+        The re-test's caliper profile, joined with the verdict (``caliper_verdict``).
 
     Returns
     -------
     Verdict
-        The verdict (``inspect_retest``).
+        The verdict (``inspect_retest``), with the calipers' reading when given.
     """
     reg = registered or RetestConditions()
-    return inspect_retest(profile, reference, baseline, retest, false_alarm=false_alarm,
-                          conditions=conditions, registered_weight_kg=reg.weight_kg,
-                          baseline_temperature_c=reg.temperature_c,
-                          baseline_sensor_mass_kg=reg.sensor_mass_kg, with_map=with_map)
+    verdict = inspect_retest(profile, reference, baseline, retest, false_alarm=false_alarm,
+                             conditions=conditions, registered_weight_kg=reg.weight_kg,
+                             baseline_temperature_c=reg.temperature_c,
+                             baseline_sensor_mass_kg=reg.sensor_mass_kg, with_map=with_map)
+    return with_calipers(verdict, profile, retest_profile, reference.rho_kg_m3)

@@ -4,11 +4,15 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from enum import Enum
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from updating.inspect.details import InspectionDetails, ModePair
 from updating.inspect.finding import Finding
+
+if TYPE_CHECKING:
+    from updating.inspect.calipers import CaliperResult
 
 
 class Status(str, Enum):
@@ -53,6 +57,11 @@ class Verdict:
         the position scan, the MSSO map, timings), None when not recorded.
     reasons
         One line each: why altered, why not, or why no verdict is possible.
+    finding
+        What changed, in the rulebook's words, or None.
+    calipers
+        The re-test's caliper profile against the registration's
+        (``updating.inspect.calipers.CaliperResult``), None without one.
     """
 
     altered: bool | None
@@ -72,6 +81,7 @@ class Verdict:
     details: InspectionDetails | None = None
     reasons: tuple[str, ...] = ()
     finding: Finding | None = None
+    calipers: CaliperResult | None = None
 
     @property
     def status(self) -> Status:

@@ -96,12 +96,103 @@ def check_profile(x_m: np.ndarray, diameter_m: np.ndarray, label: str) -> str | 
         slip = next((n for n, k in _LENGTH_SLIPS if lo <= length_in / k <= hi), None)
         cause = f": {slip}?" if slip else f", not {lo:g}-{hi:g} in"
         return f"{label}: the bat is {length_in:.4g} in long{cause}"
+    return check_diameters(diameter_m, label)
+
+
+def check_diameters(diameter_m: np.ndarray, label: str) -> str | None:
+    """Check a profile's diameters against a wooden bat's, naming a unit slip (mm, cm).
+
+    Parameters
+    ----------
+    diameter_m : ndarray
+        The outer diameters read, m.
+    label : str
+        The file, for the message.
+
+    Returns
+    -------
+    str or None
+        The message, None when plausible.
+    """
     d_in = np.asarray(diameter_m, dtype=float) / IN_TO_M
     lo, hi = DIAMETER_IN
     if d_in.min() < lo or d_in.max() > hi:
         bad = d_in.max() if d_in.max() > hi else d_in.min()
-        return f"{label}: diameter {bad:.4g} in is outside {lo:g}-{hi:g} in for a wooden bat"
+        slip = next((n for n, k in _LENGTH_SLIPS if lo <= d_in.min() / k
+                     and d_in.max() / k <= hi), None)
+        cause = f": {slip}?" if slip else " for a wooden bat"
+        return f"{label}: diameter {bad:.4g} in is outside {lo:g}-{hi:g} in{cause}"
     return None
+
+
+SURVEY_END_TOL_IN = 0.25
+"""How far a re-test survey's stations may lie outside the registered bat (a caliper's jaws
+on the knob's or the barrel end's edge)."""
+SURVEY_LOSS_MAX_IN = 0.25
+"""Largest diameter a re-test may have lost at a station and still be this bat: shaving takes
+at most 0.1 in and a groove's ring 0.12 in (docs/inspection.md); twice that."""
+SURVEY_GAIN_MAX_IN = 0.15
+"""Largest diameter a re-test may have gained: grip tape wound over itself, a coat (0.02-0.06
+in); more is another bat, or the profile read from the other end."""
+SURVEY_ODD_SHARE = 0.1
+"""Share of stations beyond those limits that makes a survey another bat's (or swapped)."""
+
+
+def _odd_share(x_m: np.ndarray, d_m: np.ndarray, reg_x_m: np.ndarray,
+               reg_d_m: np.ndarray) -> float:
+    """Share of stations whose diameter differs from the registered one beyond shaving sizes."""
+    delta_in = (d_m - np.interp(x_m, reg_x_m, reg_d_m)) / IN_TO_M
+    return float(np.mean((delta_in < -SURVEY_LOSS_MAX_IN) | (delta_in > SURVEY_GAIN_MAX_IN)))
+
+
+def check_survey(x_m: np.ndarray, diameter_m: np.ndarray, reg_x_m: np.ndarray,
+                 reg_diameter_m: np.ndarray, label: str) -> str | None:
+    """Check a re-test's caliper survey against the registered profile: units, the same bat.
+
+    Diameters in mm or cm, stations past the registered bat's ends (mm, cm named), a
+    survey read from the barrel end (it matches the registered profile reversed), or
+    diameters that differ beyond what shaving, grooves and a grip can make at more than
+    ``SURVEY_ODD_SHARE`` of the stations (another bat).
+
+    Parameters
+    ----------
+    x_m, diameter_m : ndarray
+        The survey's stations and their mean readings, m.
+    reg_x_m, reg_diameter_m : ndarray
+        The registered profile's stations and diameters, m.
+    label : str
+        The file, for the message.
+
+    Returns
+    -------
+    str or None
+        The message, None when plausible.
+    """
+    message = check_diameters(diameter_m, label)
+    if message:
+        return message
+    length_in = float(reg_x_m[-1] - reg_x_m[0]) / IN_TO_M
+    x_in = (np.asarray(x_m, dtype=float) - reg_x_m[0]) / IN_TO_M
+    tol = SURVEY_END_TOL_IN
+    if x_in.min() < -tol or x_in.max() > length_in + tol:
+        slip = next((n for n, k in _LENGTH_SLIPS  # the slip that ends it at the barrel end
+                     if x_in.min() / k >= -tol and abs(x_in.max() / k - length_in) <= 1.0),
+                    None)
+        cause = f": {slip}?" if slip else ": another bat's profile?"
+        return (f"{label}: stations run from {x_in.min():.4g} to {x_in.max():.4g} in, "
+                f"outside the registered bat (0-{length_in:.4g} in){cause}")
+    odd = _odd_share(x_m, diameter_m, reg_x_m, reg_diameter_m)
+    if odd <= SURVEY_ODD_SHARE:
+        return None
+    flipped = reg_x_m[0] + reg_x_m[-1] - np.asarray(x_m, dtype=float)
+    order = np.argsort(flipped, kind="stable")
+    if _odd_share(flipped[order], np.asarray(diameter_m)[order], reg_x_m,
+                  reg_diameter_m) <= SURVEY_ODD_SHARE:
+        return (f"{label}: it matches the registered profile read from the barrel end: knob "
+                "and barrel swapped (x must run from the knob end)?")
+    return (f"{label}: {100 * odd:.0f} % of its stations differ from the registered profile "
+            f"by more than shaving ({SURVEY_LOSS_MAX_IN:g} in) or a grip "
+            f"({SURVEY_GAIN_MAX_IN:g} in) can: another bat's profile?")
 
 
 def check_meta(meta: dict, label: str) -> str | None:

@@ -2,7 +2,11 @@
 
 `profile.csv` has the header ``x_in,diameter_in`` with x from the knob end, non-decreasing;
 a step in diameter is two rows at the same x (docs/contract.md). Between stations the
-diameter varies linearly.
+diameter varies linearly. With a third column ``angle_deg`` (the caliper's orientation, as
+``retest_profile.csv`` has it) the rows at one x are that station's readings at several
+orientations: the profile is their mean (a turned bat's ovality, ``cos 2(theta - theta0)``,
+cancels in the mean of orientations spread evenly over 180 deg); an orientation read again
+at the same x starts the step's barrel side (``orientation_groups``).
 """
 
 from __future__ import annotations
@@ -74,7 +78,11 @@ def make_profile(x_m, diameter_m, source: str = "profile") -> Profile:
 
 
 PROFILE_COLUMNS = ("x_in", "diameter_in")
-"""The columns profile.csv must have; others are ignored (``unused_columns``)."""
+"""The columns a caliper CSV must have."""
+
+OPTIONAL_COLUMNS = ("angle_deg",)
+"""The columns read when present (a station's orientations); others are ignored
+(``unused_columns``)."""
 
 
 def _read_table(path: Path) -> tuple[list[str], list[list[str]]]:
@@ -102,7 +110,7 @@ def _read_table(path: Path) -> tuple[list[str], list[list[str]]]:
 def unused_columns(path: str | Path) -> list[str]:
     """Return the columns of profile.csv that batlab does not read (ignored), in file order."""
     header, _ = _read_table(Path(path))
-    return [h for h in header if h not in PROFILE_COLUMNS]
+    return [h for h in header if h not in PROFILE_COLUMNS + OPTIONAL_COLUMNS]
 
 
 def _swapped(path: Path, x: list[float], d: list[float]) -> str | None:
@@ -115,33 +123,103 @@ def _swapped(path: Path, x: list[float], d: list[float]) -> str | None:
     return None
 
 
-def read_profile_csv(path: str | Path) -> Profile:
-    """Read a caliper profile CSV (``x_in,diameter_in``, inches) into SI.
+def read_caliper_rows(path: str | Path) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
+    """Read a caliper CSV's rows: x and diameter (in), and the orientation (deg) if given.
 
-    A spreadsheet's byte-order mark, Windows line ends and blank lines are accepted; other
-    columns are ignored. Errors are one line naming the file (and the row and column).
+    The header names the columns ``x_in``, ``diameter_in`` and optionally ``angle_deg``, in
+    any order; other columns are ignored. A spreadsheet's byte-order mark, Windows line ends
+    and blank lines are accepted. Every value must be a finite number (ranges are the
+    callers' to check: a unit slip is named by ``plausible``).
+
+    Parameters
+    ----------
+    path : str or Path
+        The CSV file.
+
+    Returns
+    -------
+    x_in, diameter_in : ndarray
+        The rows' stations and readings, in the file's order, in.
+    angle_deg : ndarray or None
+        The rows' orientations, deg, None without an ``angle_deg`` column.
+
+    Raises
+    ------
+    ValueError
+        One line naming the file: empty, not text, a missing column, a row that is not
+        numbers.
     """
     path = Path(path)
     header, rows = _read_table(path)
     for col in PROFILE_COLUMNS:
         if col not in header:
-            raise ValueError(f"{path}: missing column {col!r} (header must be x_in,diameter_in)")
-    ix, idia = header.index("x_in"), header.index("diameter_in")
-    x, d = [], []
+            raise ValueError(f"{path}: missing column {col!r} (header must be x_in,diameter_in"
+                             "[,angle_deg])")
+    names = [c for c in PROFILE_COLUMNS + OPTIONAL_COLUMNS if c in header]
+    cols = [header.index(c) for c in names]
+    values = []
     for n, r in enumerate(rows, 2):
         try:
-            x.append(float(r[ix]))
-            d.append(float(r[idia]))
+            values.append([float(r[i]) for i in cols])
         except (ValueError, IndexError):
-            raise ValueError(f"{path}: row {n} is not two numbers x_in,diameter_in "
+            raise ValueError(f"{path}: row {n} is not {len(cols)} numbers {','.join(names)} "
                              f"({','.join(r)[:40]!r})") from None
-    swapped = _swapped(path, x, d)
+    values = np.array(values, dtype=float).reshape(-1, len(cols))
+    swapped = _swapped(path, list(values[:, 0]), list(values[:, 1]))
     if swapped:
         raise ValueError(swapped)
+    for n, row in enumerate(values, 2):
+        for name, v in zip(names, row, strict=True):
+            finite_number(v, f"{path}: row {n} {name}")
+    angle = values[:, 2] if len(cols) == 3 else None
+    return values[:, 0], values[:, 1], angle
+
+
+def orientation_groups(x_in: np.ndarray, angle_deg: np.ndarray) -> list[np.ndarray]:
+    """Group caliper rows into stations: consecutive rows at one x, each orientation once.
+
+    Orientations are taken modulo 180 deg (the jaws across at theta and theta + 180 read the
+    same width). An orientation read again at the same x starts a new station there: the
+    barrel side of a step, as two rows at one x are in a profile without orientations.
+
+    Parameters
+    ----------
+    x_in, angle_deg : ndarray
+        The rows' stations (in, to 1e-4 in) and orientations (deg), in the file's order.
+
+    Returns
+    -------
+    list of ndarray
+        The row indices of each station, in order.
+    """
+    key_x = np.round(np.asarray(x_in, dtype=float), 4)
+    key_a = np.round(np.mod(np.asarray(angle_deg, dtype=float), 180.0), 3) % 180.0
+    groups: list[list[int]] = []
+    for i in range(key_x.size):
+        g = groups[-1] if groups else None
+        if g is not None and key_x[g[0]] == key_x[i] and key_a[i] not in key_a[g]:
+            g.append(i)
+        else:
+            groups.append([i])
+    return [np.array(g) for g in groups]
+
+
+def read_profile_csv(path: str | Path) -> Profile:
+    """Read a caliper profile CSV (``x_in,diameter_in``, inches) into SI.
+
+    With an ``angle_deg`` column each station's diameter is the mean of its orientations
+    (module docstring). A spreadsheet's byte-order mark, Windows line ends and blank lines
+    are accepted.
+    """
+    x, d, angle = read_caliper_rows(path)
     for n, (xi, di) in enumerate(zip(x, d, strict=True), 2):
         finite_number(xi, f"{path}: row {n} x_in", -100.0, 200.0)
         finite_number(di, f"{path}: row {n} diameter_in", -np.inf, 20.0)
-    return make_profile(np.array(x) * IN_TO_M, np.array(d) * IN_TO_M, str(path))
+    if angle is not None and x.size:
+        groups = orientation_groups(x, angle)
+        x = np.array([x[g[0]] for g in groups])
+        d = np.array([d[g].mean() for g in groups])
+    return make_profile(x * IN_TO_M, d * IN_TO_M, str(path))
 
 
 def write_profile_csv(path: str | Path, profile: Profile) -> None:

@@ -8,9 +8,11 @@ barrel end, two bungees of 100-400 N/m; then every nuisance asked for
 (``updating.simulate.alterations``) or none, and optionally a data-integrity slip
 (``updating.simulate.integrity``). ``write_case`` writes the contract's files: profile.csv,
 meta.json, baseline.uff, retest.uff and retest.json (weight_lb, accelerometer_mass_g,
-temperature_c, tested_on). ``FieldCase.truth`` is the JSON-able hidden truth, with the answer
-expected of the inspection: "altered" for an altered bat, "not_altered" for a clean one,
-"inconclusive" for a data-integrity case (never "altered").
+temperature_c, tested_on), and on request the re-test's caliper profile, retest_profile.csv
+(``updating.simulate.calipers``; ``write_fleet_retest`` writes a fleet folder's
+SERIAL.uff, SERIAL.json and SERIAL.profile.csv). ``FieldCase.truth`` is the JSON-able hidden
+truth, with the answer expected of the inspection: "altered" for an altered bat,
+"not_altered" for a clean one, "inconclusive" for a data-integrity case (never "altered").
 
 A scale reads a bat's weight to 0.002 lb (1 sigma) and a balance point to 0.03 in; the truth
 records both readings at registration and at the re-test, for the lab's own methods.
@@ -26,12 +28,14 @@ from typing import Literal
 import numpy as np
 
 from ema.io.frf_io import write_test
+from updating.model.calipers import write_survey_csv
 from updating.model.mass_properties import mass_properties
 from updating.model.material import Material, material_from_imperial
 from updating.model.profile import Profile, write_profile_csv
 from updating.model.units import IN_TO_M, LB_TO_KG
 from updating.simulate import nuisances as nz
 from updating.simulate.alterations import KINDS, Alteration, AlterationKind, draw_alteration
+from updating.simulate.calipers import retest_survey
 from updating.simulate.fleet import SPECIES, pro_profile, random_wood
 from updating.simulate.integrity import INTEGRITY, Integrity, corrupt
 from updating.simulate.rulebook import RULEBOOK_KINDS, RulebookKind, draw_change
@@ -523,9 +527,21 @@ def write_retest(
     return Path(json_path)
 
 
+def write_retest_profile(case: FieldCase, path, seed: int, orientations: int = 4) -> dict:
+    """Write the re-test's caliper profile (``calipers.retest_survey``) and return its truth.
+
+    Drawn from its own generator (``seed``, 38), so the case's other files are those
+    written without it.
+    """
+    survey, truth = retest_survey(np.random.default_rng([seed, 38]), case.retest, orientations,
+                                  mark_deg=case.baseline.theta_deg)
+    write_survey_csv(path, survey)
+    return truth
+
+
 def write_case(
     case: FieldCase, folder, seed: int, retest_meta_keys=None, truth: bool = False,
-    registration: bool = False,
+    registration: bool = False, retest_profile: int = 0,
 ) -> dict:
     """Write a case's lab files into ``folder``.
 
@@ -533,7 +549,9 @@ def write_case(
     ``retest_meta_keys`` given, default all; none: no retest.json) and, with ``truth``,
     truth.json. With ``registration`` meta.json also holds
     ``FieldCase.registration_conditions`` (the baseline's temperature and accelerometer mass,
-    as a lab records them at registration).
+    as a lab records them at registration). With ``retest_profile`` N > 0, the re-test's
+    caliper profile at N orientations, retest_profile.csv (its truth under
+    ``retest_profile`` in truth.json).
 
     Returns
     -------
@@ -551,7 +569,30 @@ def write_case(
     write_test(paths["baseline"], simulate_test(case.baseline, case.freq_hz, seed=seed))
     paths["retest_meta"] = write_retest(case, paths["retest"], paths["retest_meta"], seed + 1,
                                         retest_meta_keys)
+    hidden = dict(case.truth)
+    if retest_profile:
+        paths["retest_profile"] = folder / "retest_profile.csv"
+        hidden["retest_profile"] = write_retest_profile(case, paths["retest_profile"], seed,
+                                                        retest_profile)
     if truth:
         paths["truth"] = folder / "truth.json"
-        paths["truth"].write_text(json.dumps(case.truth, indent=1, default=float))
+        paths["truth"].write_text(json.dumps(hidden, indent=1, default=float))
+    return paths
+
+
+def write_fleet_retest(case: FieldCase, folder, seed: int, orientations: int = 4) -> dict:
+    """Write a case's re-test into a fleet folder: SERIAL.uff, SERIAL.json, SERIAL.profile.csv.
+
+    ``batlab fleet inspect DIR`` reads them (docs/contract.md); with ``orientations`` 0 no
+    caliper profile. Returns the paths by name.
+    """
+    folder = Path(folder)
+    folder.mkdir(parents=True, exist_ok=True)
+    serial = case.meta["serial"]
+    paths = {"retest": folder / f"{serial}.uff"}
+    paths["retest_meta"] = write_retest(case, paths["retest"], folder / f"{serial}.json",
+                                        seed + 1)
+    if orientations:
+        paths["retest_profile"] = folder / f"{serial}.profile.csv"
+        write_retest_profile(case, paths["retest_profile"], seed, orientations)
     return paths
