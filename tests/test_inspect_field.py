@@ -63,7 +63,8 @@ def test_each_alteration_among_all_nuisances_is_found(tmp_path, k, kind):
     lo, hi = (x * 0.0254 for x in case.truth["region_in"])
     assert v.region_m[0] < hi and lo < v.region_m[1]
     kinds = ("core", "inserted_mass") if kind == "end_plug" else ("core",)
-    assert len(v.reasons) == 2 and v.finding.kind in kinds, (v.finding, v.reasons)
+    said = [r for r in v.reasons if r not in v.details.fit.modes_left_out]  # modes' notes apart
+    assert len(said) == 2 and v.finding.kind in kinds, (v.finding, v.reasons)
 
 
 @pytest.mark.parametrize("k,slip", list(enumerate(

@@ -63,7 +63,7 @@ def test_the_leave_one_out_check_names_the_one_mode_a_core_rests_on(seed):
     space = ParamSpace(case.profile, NullBounds.physical())
     sigma = 0.02 * blur
     null = fit_null(predict, diff, space, sigma)
-    fit = fit_core(predict, diff, space, sigma, null)[0]
+    fit = fit_core(predict, diff, space, sigma, null)
     cov = covariance(fit, diff.n_data - N_PARAMS["core"] - 10)
     finding = read_finding("core", fit, space, cov, predict)
     assert kind_supported(finding) and null.rss > 20 * fit.rss  # found, on all the data

@@ -205,7 +205,7 @@ def contract_dict(serial: str, verdict: Verdict, stated: dict | None = None) -> 
 
 def _spread(verdict: Verdict) -> dict | None:
     """Return the leave-one-out spread of an altered verdict's finding, SI, or None."""
-    fit = verdict.details.fit
+    fit = None if verdict.details is None else verdict.details.fit
     if verdict.altered is not True or fit is None or not fit.leave_one_out:
         return None
     return fit.leave_one_out.get("spread") or None

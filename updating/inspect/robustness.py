@@ -118,7 +118,9 @@ class Robustness:
         return out
 
     def to_json_dict(self) -> dict:
-        """Return the leave-outs and the spread as JSON types (SI)."""
+        """Return the leave-outs and the spread as JSON types (SI); {} without any."""
+        if not self.cases:
+            return {}
         return {"cases": [c.to_json_dict() for c in self.cases],
                 "spread": {k: [float(a), float(b)] for k, (a, b) in self.spread().items()}}
 

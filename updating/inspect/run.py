@@ -168,8 +168,7 @@ def inspect_retest(
     baseline_temperature_c : float or None
         The lab's temperature at the baseline, deg C, if known.
     baseline_sensor_mass_kg : float or None
-        The baseline's accelerometer mass, kg, if known (with the re-test's from
-        ``conditions`` it fixes the change of accelerometer mass).
+        The baseline's accelerometer mass, kg, if known (fixes its change with ``conditions``).
     fill_modulus_ratio : float
         Assumed fill stiffness of a core (fill/wood modulus).
     n_starts : int
@@ -177,9 +176,8 @@ def inspect_retest(
     min_mac : float
         Minimum MAC to pair two modes.
     with_map : bool
-        Compute the MSSO element map for the evidence (``details.msso``, what a report
-        draws). Nothing else reads it: without it (a calibration) the verdict is the same,
-        in a fifth less time.
+        Compute the MSSO element map a report draws (``details.msso``); without it the
+        verdict is the same, sooner.
 
     Returns
     -------
@@ -209,13 +207,8 @@ def inspect_retest(
     hyp = fit_hypotheses(predict, diff, space, n_starts)
     test = nested_test(diff, hyp)
     evidence, kinds = weigh_evidence(predict, diff, space, hyp, test, false_alarm, dlnw)
-    robust = Robustness()
-    if evidence.would_alter:
-        robust = leave_one_out(predict, diff, space, hyp.sigma_rel, hyp.null, kinds.fit,
-                               kinds.family, evidence.finding, false_alarm,
-                               _mode_labels(predict, baseline, pairs), baseline.x_m)
-        evidence = replace(evidence, rests_on=tuple(
-            f"{c.label} (F {c.F:.1f} without it)" for c in robust.failing))
+    evidence, robust = _robustness(predict, diff, space, hyp, kinds, evidence, false_alarm,
+                                   _mode_labels(predict, baseline, pairs), baseline.x_m)
     altered, reasons = decide(evidence)
     reading = read_fit(predict, diff, space, hyp, test, altered, kinds)
     if reading.reason is not None:
@@ -223,8 +216,7 @@ def inspect_retest(
     finding = reported_finding(evidence, altered, reading, profile.length_m)
     core = reading.core_fit.params.core if altered and finding.kind == "core" else None
     factors = element_factors(predict.system().model, _finding_change(reading, finding, altered))
-    # 6. the MSSO map, with the accepted model's drift (when there is a core, the null fit's
-    # uniform scales absorb part of it and the map would show that as a change of the bat)
+    # 6. the MSSO map, with the accepted model's drift (the null's scales would absorb a core)
     ps = reading.fit.params
     region = finding.region_m if altered else None
     msso = ElementMap()
@@ -232,9 +224,8 @@ def inspect_retest(
         msso = element_map(profile, reference, baseline, retest, pairs, ps, offset,
                            hyp.sigma_rel, diff.sigma_lnf, region)
     record = replace(fit_evidence(diff, space, hyp, test, evidence, reading, kinds, altered,
-                                  factors.beta_shear, offset, msso),
-                     leave_one_out=robust.to_json_dict() if robust.cases else {},
-                     modes_left_out=identity.notes, F_fit=float(test.F_fit))
+                                  factors.beta_shear, offset, msso), F_fit=float(test.F_fit),
+                     leave_one_out=robust.to_json_dict(), modes_left_out=identity.notes)
     return Verdict(
         altered=altered, confidence=1.0 - test.p_value, false_alarm_rate=false_alarm,
         statistic=float(test.F),
@@ -249,6 +240,22 @@ def inspect_retest(
         modes=mode_pairs(predict, diff, pairs, baseline, retest, hyp.null, reading.core_fit),
         details=InspectionDetails(pairs.n, time.perf_counter() - t0, record),
         reasons=tuple(reasons) + identity.notes, finding=finding if finding.kind else None)
+
+
+def _robustness(predict: ChangePredictor, diff, space: ParamSpace, hyp, kinds,
+                evidence: Evidence, false_alarm: float, labels: list[str],
+                point_x_m: np.ndarray) -> tuple[Evidence, Robustness]:
+    """Leave each mode and point out of a finding that would alter (``robustness``).
+
+    Returns the evidence with what the finding rests on alone (``Evidence.rests_on``) and
+    every leave-out; an empty ``Robustness`` when the finding would not alter.
+    """
+    if not evidence.would_alter:
+        return evidence, Robustness()
+    robust = leave_one_out(predict, diff, space, hyp.sigma_rel, hyp.null, kinds.fit,
+                           kinds.family, evidence.finding, false_alarm, labels, point_x_m)
+    return replace(evidence, rests_on=tuple(
+        f"{c.label} (F {c.F:.1f} without it)" for c in robust.failing)), robust
 
 
 def _mode_labels(predict: ChangePredictor, baseline: MeasuredModes,
