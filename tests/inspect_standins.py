@@ -152,3 +152,19 @@ def lab_worker(db: str, folder: str, n_inspections: int) -> None:
     for _ in range(n_inspections):
         assert main(["inspect", "--serial", serial, str(sample / "retest_corked.uff"),
                      "--db", db, "--json", "--again"]) == 0  # the same file: stored anew
+
+
+def judged(out: dict) -> dict:
+    """A verdict's JSON apart from where its chance was looked up.
+
+    The registry form and the stateless form judge the same re-test the same way, but each
+    says why its chance is unmeasured in its own words (no registry given, no calibration
+    of the model stored): the chance's value is kept, its wording and source's reason not.
+    """
+    from batlab.formatting import chance_words
+
+    said = chance_words(out.get("chance"))
+    rest = {k: v for k, v in out.items() if k not in ("chance", "false_alarm_rate")}
+    rest["reasons"] = [r.replace(said, "<chance>") if said else r for r in out["reasons"]]
+    rest["chance_value"] = (out.get("chance") or {}).get("value")
+    return rest

@@ -177,10 +177,11 @@ def test_tests_at_different_points_are_refused():
 def test_a_core_is_told_apart_from_a_drift_at_its_bound(seed, kind, shift_in, at_bound):
     """The accelerometer re-mounted 0.4-0.6 in off, beyond the 0.3 in the drift model allows:
     a cork core, which holds the fitted shift at its bound, is still called altered when no
-    drift three times as large explains the change (``_core_beyond_drift``); the same shift
-    on an unaltered bat is never called altered. At 0.6 in the core fit may find an optimum
-    off the bound (the analytic Jacobian reaches F 61 where finite differences stopped at 52):
-    the verdict and region must hold either way."""
+    drift three times as large (bounds and priors) explains the change at the stated chance
+    (``_core_beyond_drift``); the same shift on an unaltered bat is never called altered. At
+    0.6 in, twice the bound, such drift (with the barrel end's moisture) may explain it:
+    altered with the region right, or inconclusive saying the two cannot be told apart, never
+    cleared."""
     rng = np.random.default_rng(seed)
     case = random_case(rng, kind)
     moved = case.baseline.sensor_offset_m + shift_in * IN_TO_M
@@ -191,7 +192,11 @@ def test_a_core_is_told_apart_from_a_drift_at_its_bound(seed, kind, shift_in, at
         assert v.altered is not True, v.reasons
         return
     if at_bound:
-        assert v.details.fit.core_fit_at_bound == ("sensor_shift_in",)
-    assert v.altered is True, v.reasons
+        assert "sensor_shift_in" in v.details.fit.core_fit_at_bound
+        assert v.altered is True, v.reasons
+    assert v.altered is not False, v.reasons  # never cleared
+    if v.altered is None:  # twice the bound: drift three times as far may explain it
+        assert "cannot be told apart" in v.reasons[0]
+        return
     core, L = case.core, case.profile.length_m
     assert v.region_m[0] == pytest.approx(L - core.depth_m, abs=1.5 * IN_TO_M)

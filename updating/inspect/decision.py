@@ -29,7 +29,10 @@ alteration             beyond, a kind of alteration large enough for   True
 one mode or point      the same, but resting on one mode or one        None
                        point (``robustness``)
 alteration or drift    beyond and large enough, a confusable           None
-                       nuisance at its bound
+                       nuisance at its bound in H0 or beside the
+                       finding, and drift three times as far (bounds
+                       and priors) explains the change at the stated
+                       chance, or leaves it small
 unexplained change     significant, local, but no kind fits it         None
 weight                 significant, weight changed beyond moisture     None
 below its gate         significant, the best reading an alteration     None
@@ -170,8 +173,8 @@ class Evidence:
     finding_text : str
         The finding in words (where, how much).
     held_null, held_core : tuple of str
-        Nuisances H0 holds at their physical bounds; the ``CONFUSABLE`` ones the finding's
-        fit holds there.
+        Nuisances H0 holds at their physical bounds; the ``CONFUSABLE`` ones H0 or the
+        finding's fit holds there (the finding may be that drift, beyond its bound).
     dlnw : float or None
         ln(W_retest / W_registered), None when either weight is unknown.
     grip : Finding or None

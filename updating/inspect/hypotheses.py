@@ -201,16 +201,19 @@ class NullBounds:
         lo[:2], hi[:2] = (-40.0, -30.0), (40.0, 30.0)
         return NullBounds(lo, hi, self.prior_center, self.prior_sigma)
 
-    def relaxed(self, factor: float = 3.0) -> NullBounds:
+    def relaxed(self, factor: float = 3.0, priors: bool = False) -> NullBounds:
         """Return the bounds widened about their middles.
 
         Every range ``factor`` times as wide about its middle: to ask whether the data
-        really want a nuisance beyond its physical bound.
+        really want a nuisance beyond its physical bound. With ``priors`` every prior is as
+        wide too: to ask whether such drift explains a change (a prior kept at its width
+        would still hold the nuisance near its old range).
         """
         mid, half = 0.5 * (self.lower + self.upper), 0.5 * (self.upper - self.lower)
         lo, hi = mid - factor * half, mid + factor * half
         lo[7:], hi[7:] = self.lower[7:], self.upper[7:]  # a grip substance stays one
-        return NullBounds(lo, hi, self.prior_center, self.prior_sigma)
+        sigma = factor * self.prior_sigma if priors else self.prior_sigma
+        return NullBounds(lo, hi, self.prior_center, sigma)
 
     def prior_residual(self, x: np.ndarray) -> np.ndarray:
         """Return the priors' weighted residuals at ``x``."""

@@ -235,17 +235,20 @@ def _core_beyond_drift(predict, diff, space, hyp: Hypotheses, q: int, dof: int,
                        false_alarm: float, factor: float = 3.0) -> float | None:
     """Ask whether the core beats drift beyond the bounds.
 
-    F of the core against the null with every nuisance range ``factor`` times as wide
-    (``NullBounds.relaxed``, priors kept) when the core is still large there
-    (``decision.is_large``), else None: a core fit that holds a nuisance
-    at its bound is told apart from that drift when no drift three times as large explains
-    the change.
+    The null refitted with every nuisance range and prior ``factor`` times as wide
+    (``NullBounds.relaxed``), under both noises (``fit_hypotheses``): F of the core against
+    it when the change is still beyond that drift at the stated chance (H0's noise: p below
+    ``decision.CLEAR_LEVEL``) and still large (H1's noise: ``decision.is_large``), else
+    None. A core fit beside a nuisance held at its bound is told apart from that drift only
+    when no drift three times as large explains the change.
     """
-    wide = fit_null(predict, diff, replace(space, bounds=space.bounds.relaxed(factor)),
-                    hyp.sigma_rel, x0=hyp.null.x)
-    rss1 = min(hyp.full.rss, hyp.null.rss)
-    F, p = nested_f(wide.rss, rss1, q, dof)
-    return F if is_large(F, p, false_alarm) else None
+    relaxed = replace(space, bounds=space.bounds.relaxed(factor, priors=True))
+    wide = fit_null(predict, diff, relaxed, hyp.sigma_rel, x0=hyp.null.x)
+    F, p = nested_f(wide.rss, min(hyp.full.rss, hyp.null.rss), q, dof)
+    wide_h0 = fit_null(predict, diff, relaxed, hyp.sigma_h0, x0=hyp.null_h0.x)
+    _, p_h0 = nested_f(wide_h0.rss, min(hyp.full_h0.rss, hyp.null_h0.rss), q, dof)
+    beyond = p_h0 < min(CLEAR_LEVEL, false_alarm)
+    return F if beyond and is_large(F, p, false_alarm) else None
 
 
 def _grip_in_null(null: ChangeFit, n: int) -> Finding | None:
@@ -338,7 +341,9 @@ def weigh_evidence(predict: ChangePredictor, diff: Differences, space: ParamSpac
     if significant or large:
         kinds = hyp.kinds
         finding = _as_grip(kinds.finding, hyp.null, grip)
-        held_core = tuple(h for h in NullBounds.held(kinds.fit) if h in CONFUSABLE)
+        held_core = tuple(h for h in dict.fromkeys(NullBounds.held(kinds.fit)
+                                                   + NullBounds.held(hyp.null))
+                          if h in CONFUSABLE)  # at its bound in either: the core may be it
     evidence = Evidence(
         F=test.F, p_value=test.p_value, significant=significant,
         beyond=significant and large, large=large, F_fit=test.F_fit, finding=finding,

@@ -162,7 +162,8 @@ def read_caliper_rows(path: str | Path) -> tuple[np.ndarray, np.ndarray, np.ndar
         try:
             values.append([float(r[i]) for i in cols])
         except (ValueError, IndexError):
-            raise ValueError(f"{path}: row {n} is not {len(cols)} numbers {','.join(names)} "
+            raise ValueError(f"{path}: row {n} is not {('two', 'three')[len(cols) - 2]} numbers "
+                             f"{','.join(names)} "
                              f"({','.join(r)[:40]!r})") from None
     values = np.array(values, dtype=float).reshape(-1, len(cols))
     swapped = _swapped(path, list(values[:, 0]), list(values[:, 1]))
