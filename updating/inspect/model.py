@@ -105,9 +105,13 @@ class WoodSystem:
 
 def wood_system(
     profile: Profile, reference: BatReference, points_m: np.ndarray, core: Core | None,
-    like: WoodSystem | None = None,
+    like: WoodSystem | None = None, end_decay_m: float = END_DECAY_M,
 ) -> WoodSystem:
-    """Model of the bat (wood only) with nodes at the test points, and its bungees."""
+    """Model of the bat (wood only) with nodes at the test points, and its bungees.
+
+    The end-grain moisture excess decays over ``end_decay_m`` from each end (module
+    docstring).
+    """
     model = replace(reference, sensor_mass_kg=0.0).build(profile, points_m, core=core)
     K, M = assemble(model, with_attachments=False)
     Kb, _ = attachment_matrices(model)
@@ -122,7 +126,7 @@ def wood_system(
     parts = model.parts
     K_ends, M_ends = [], []
     for dist in (mid - model.node_x_m[0], model.node_x_m[-1] - mid):
-        w = np.exp(-dist / END_DECAY_M)
+        w = np.exp(-dist / end_decay_m)
         K_ends.append(place(model, parts.k_bend, w) + place(model, parts.k_shear, w))
         M_ends.append(place(model, parts.m_trans, w) + place(model, parts.m_rot, w))
     return WoodSystem(model, K, M, Kb, 2 * idx, tuple(K_ends), tuple(M_ends), t)
@@ -175,8 +179,9 @@ class ChangePredictor:
     """
 
     def __init__(self, profile: Profile, reference: BatReference, points_m: np.ndarray,
-                 sensor_x_m: float, n_solve: int):
+                 sensor_x_m: float, n_solve: int, end_decay_m: float = END_DECAY_M):
         self.profile, self.reference = profile, reference
+        self.end_decay_m = float(end_decay_m)
         self.points_m = np.asarray(points_m, dtype=float)
         self.sensor_x_m, self.n_solve = float(sensor_x_m), int(n_solve)
         self.drive = int(np.argmin(np.abs(self.points_m - self.sensor_x_m)))
@@ -192,7 +197,7 @@ class ChangePredictor:
         wood systems already built are shared).
         """
         out = ChangePredictor(self.profile, self.reference, self.points_m, sensor_x_m,
-                              self.n_solve)
+                              self.n_solve, self.end_decay_m)
         out._cache = self._cache
         out._local = self._local
         out._points = self._points
@@ -202,7 +207,15 @@ class ChangePredictor:
     def with_reference(self, reference: BatReference) -> ChangePredictor:
         """Return the same points and sensor with another reference (no wood systems shared)."""
         return ChangePredictor(self.profile, reference, self.points_m, self.sensor_x_m,
-                               self.n_solve)
+                               self.n_solve, self.end_decay_m)
+
+    def with_end_decay(self, end_decay_m: float) -> ChangePredictor:
+        """Return the same bat whose end-grain moisture reaches ``end_decay_m`` from each end.
+
+        No wood systems are shared (their end-grain matrices differ).
+        """
+        return ChangePredictor(self.profile, self.reference, self.points_m, self.sensor_x_m,
+                               self.n_solve, end_decay_m)
 
     def system(self, core: Core | None = None) -> WoodSystem:
         """Return the wood's system, with ``core`` if given."""
@@ -216,7 +229,7 @@ class ChangePredictor:
                 self._points.clear()
             like = None if core is None else self.system(None)
             self._cache[core] = wood_system(self.profile, self.reference, self.points_m, core,
-                                            like)
+                                            like, self.end_decay_m)
         return self._cache[core]
 
     def local(self, ws: WoodSystem, segments: tuple[Segment, ...]):

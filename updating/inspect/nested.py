@@ -236,16 +236,19 @@ def _core_beyond_drift(predict, diff, space, hyp: Hypotheses, q: int, dof: int,
     """Ask whether the core beats drift beyond the bounds.
 
     The null refitted with every nuisance range and prior ``factor`` times as wide
-    (``NullBounds.relaxed``), under both noises (``fit_hypotheses``): F of the core against
-    it when the change is still beyond that drift at the stated chance (H0's noise: p below
-    ``decision.CLEAR_LEVEL``) and still large (H1's noise: ``decision.is_large``), else
-    None. A core fit beside a nuisance held at its bound is told apart from that drift only
-    when no drift three times as large explains the change.
+    (``NullBounds.relaxed``) and the end grain's moisture reaching ``factor`` times as far
+    from each end (``ChangePredictor.with_end_decay``: a front 6 in deep, not 2), under both
+    noises (``fit_hypotheses``): F of the core against it when the change is still beyond
+    that drift at the stated chance (H0's noise: p below ``decision.CLEAR_LEVEL``) and still
+    large (H1's noise: ``decision.is_large``), else None. A core fit beside a nuisance held
+    at its bound is told apart from that drift only when no drift three times as large
+    explains the change.
     """
     relaxed = replace(space, bounds=space.bounds.relaxed(factor, priors=True))
-    wide = fit_null(predict, diff, relaxed, hyp.sigma_rel, x0=hyp.null.x)
+    deep = predict.with_end_decay(factor * predict.end_decay_m)
+    wide = fit_null(deep, diff, relaxed, hyp.sigma_rel, x0=hyp.null.x)
     F, p = nested_f(wide.rss, min(hyp.full.rss, hyp.null.rss), q, dof)
-    wide_h0 = fit_null(predict, diff, relaxed, hyp.sigma_h0, x0=hyp.null_h0.x)
+    wide_h0 = fit_null(deep, diff, relaxed, hyp.sigma_h0, x0=hyp.null_h0.x)
     _, p_h0 = nested_f(wide_h0.rss, min(hyp.full_h0.rss, hyp.null_h0.rss), q, dof)
     beyond = p_h0 < min(CLEAR_LEVEL, false_alarm)
     return F if beyond and is_large(F, p, false_alarm) else None

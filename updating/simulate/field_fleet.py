@@ -381,47 +381,6 @@ def draw_case(
     return FieldCase(profile, meta, retest_meta, base, retest, freq, integrity, truth)
 
 
-BAND_EDGE_NUISANCES = ("moisture", "temperature", "billet", "noise", "accelerometer", "bungees",
-                       "cup", "points")
-"""What a band-edge case draws besides its planes and its band (``band_edge_case``)."""
-
-
-def band_edge_case(rng: np.random.Generator, kind: FieldKind | RulebookKind = "pine_tar",
-                   theta_deg: tuple[float, float] = (17.0, 20.0),
-                   e_over_g: tuple[float, float] = (10.0, 15.0), serial: str = "SIM-0001",
-                   ) -> FieldCase:
-    """Draw a case whose band's top cuts a pair of bending planes (issue 36's accusation).
-
-    A ``draw_case`` of ``kind`` with ``BAND_EDGE_NUISANCES``, then two bending planes of
-    E/G ``e_over_g`` (first plane, second plane: the second, less stiff in shear, has the
-    lower member of each pair), tapped ``theta_deg`` (baseline, re-test) off the first, and
-    both tests' band ending between the two members of the highest mode whose lower member
-    is below 3.2 kHz (a third of the way down from the upper one, on the 0.5 Hz grid): the
-    band's last mode is then the weaker plane's member alone. ``truth["drawn"]["band_edge"]``
-    records the mode (1-based bending order), both members and the band's top, Hz.
-    """
-    from updating.model.modes import model_modes
-
-    case = draw_case(rng, kind, BAND_EDGE_NUISANCES, serial=serial)
-    planes = dict(e_over_g_t=e_over_g[1])
-    base = replace(case.baseline, material=replace(case.baseline.material,
-                                                   e_over_g=e_over_g[0]),
-                   theta_deg=theta_deg[0], **planes)
-    retest = replace(case.retest, material=replace(case.retest.material, e_over_g=e_over_g[0]),
-                     theta_deg=theta_deg[1], **planes)
-    upper, lower = (f[f >= 20.0] for f in (
-        model_modes(base.truth_model(p), n_modes=14).elastic().freq_hz
-        for p in ("radial", "tangential")))  # bending modes (not the bungees' bounce)
-    k = int(np.flatnonzero(lower < 3200.0)[-1])
-    top = float(np.floor(2 * (upper[k] - (upper[k] - lower[k]) / 3)) / 2)
-    edge = {"mode": k + 1, "lower_member_hz": float(lower[k]),
-            "upper_member_hz": float(upper[k]), "band_top_hz": top,
-            "theta_deg": list(theta_deg), "e_over_g": list(e_over_g)}
-    truth = dict(case.truth, drawn=dict(case.truth["drawn"], band_edge=edge, fmax_hz=top))
-    return replace(case, baseline=base, retest=retest, truth=truth,
-                   freq_hz=np.arange(0.0, top + 0.25, 0.5))
-
-
 def alter_case(
     case: FieldCase, alteration: Alteration, rng: np.random.Generator,
     serial: str | None = None,
