@@ -177,11 +177,10 @@ def test_tests_at_different_points_are_refused():
 def test_a_core_is_told_apart_from_a_drift_at_its_bound(seed, kind, shift_in, at_bound):
     """The accelerometer re-mounted 0.4-0.6 in off, beyond the 0.3 in the drift model allows:
     a cork core, which holds the fitted shift at its bound, is still called altered when no
-    drift three times as large (bounds and priors) explains the change at the stated chance
+    drift three times as large explains the change at the stated chance
     (``_core_beyond_drift``); the same shift on an unaltered bat is never called altered. At
-    0.6 in, twice the bound, such drift (with the barrel end's moisture) may explain it:
-    altered with the region right, or inconclusive saying the two cannot be told apart, never
-    cleared."""
+    0.6 in, twice the bound: altered with the region right, or inconclusive saying the two
+    cannot be told apart, never cleared."""
     rng = np.random.default_rng(seed)
     case = random_case(rng, kind)
     moved = case.baseline.sensor_offset_m + shift_in * IN_TO_M

@@ -119,8 +119,8 @@ def test_the_wet_barrel_the_search_found_is_not_called_altered():
     further round. H0 held the barrel end's moisture at its bound and a filled core 0.8 in
     across at the barrel end took the rest (F 13, altered). A nuisance H0 holds at its
     bound where a core acts makes the finding 'an alteration or that drift' unless the
-    change beats drift three times as large at the stated chance: inconclusive, naming
-    the barrel end's moisture."""
+    change beats that drift three times as large, its front three times as deep, at the
+    stated chance: inconclusive, naming the barrel end's moisture."""
     case = json.loads((Path(__file__).parent / "data" / "worst_case_wet_barrel.json").read_text())
     F, status, row = evaluate_settings(case["seed"], case["settings"])
     assert status == "inconclusive", row["reasons"]

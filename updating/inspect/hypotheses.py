@@ -63,6 +63,8 @@ NULL_NAMES = ("stiffness_beyond_moisture_pct", "density_pct", "sensor_shift_in",
               "knob_end_moisture_pt", "barrel_end_moisture_pt", "sensor_mass_change_g",
               "plane_mix", "handle_substance_g", "handle_substance_to_in",
               "handle_substance_from_in")
+END_MOISTURE_NAMES = ("knob_end_moisture_pt", "barrel_end_moisture_pt")
+"""The end grain's moisture excess (``NULL_NAMES``)."""
 HANDLE_MAX_G = 40.0
 """Most grip substance considered on the handle between tests, g: tape 5-25 g, pine tar and
 spray 1-8 g (Rule 3.02(c) allows any amount within 18 in of the knob)."""
@@ -201,19 +203,20 @@ class NullBounds:
         lo[:2], hi[:2] = (-40.0, -30.0), (40.0, 30.0)
         return NullBounds(lo, hi, self.prior_center, self.prior_sigma)
 
-    def relaxed(self, factor: float = 3.0, priors: bool = False) -> NullBounds:
+    def relaxed(self, factor: float = 3.0, only: tuple[str, ...] | None = None) -> NullBounds:
         """Return the bounds widened about their middles.
 
-        Every range ``factor`` times as wide about its middle: to ask whether the data
-        really want a nuisance beyond its physical bound. With ``priors`` every prior is as
-        wide too: to ask whether such drift explains a change (a prior kept at its width
-        would still hold the nuisance near its old range).
+        Every range ``factor`` times as wide about its middle (priors kept): to ask whether
+        the data really want a nuisance beyond its physical bound. With ``only`` (names of
+        ``NULL_NAMES``) just those ranges, the others held where physics holds them.
         """
         mid, half = 0.5 * (self.lower + self.upper), 0.5 * (self.upper - self.lower)
         lo, hi = mid - factor * half, mid + factor * half
+        if only is not None:
+            free = np.isin(np.array(NULL_NAMES), only)
+            lo, hi = np.where(free, lo, self.lower), np.where(free, hi, self.upper)
         lo[7:], hi[7:] = self.lower[7:], self.upper[7:]  # a grip substance stays one
-        sigma = factor * self.prior_sigma if priors else self.prior_sigma
-        return NullBounds(lo, hi, self.prior_center, sigma)
+        return NullBounds(lo, hi, self.prior_center, self.prior_sigma)
 
     def prior_residual(self, x: np.ndarray) -> np.ndarray:
         """Return the priors' weighted residuals at ``x``."""

@@ -21,6 +21,7 @@ from updating.inspect.decision import (
 )
 from updating.inspect.finding import RULES, Finding, describe
 from updating.inspect.hypotheses import (
+    END_MOISTURE_NAMES,
     HANDLE_MAX_IN,
     MAX_NFEV_CORE,
     N_NULL,
@@ -232,20 +233,23 @@ def _bounds_matter(predict, diff, space, hyp: Hypotheses, n: int,
 
 
 def _core_beyond_drift(predict, diff, space, hyp: Hypotheses, q: int, dof: int,
-                       false_alarm: float, factor: float = 3.0) -> float | None:
+                       false_alarm: float, held: tuple[str, ...],
+                       factor: float = 3.0) -> float | None:
     """Ask whether the core beats drift beyond the bounds.
 
-    The null refitted with every nuisance range and prior ``factor`` times as wide
-    (``NullBounds.relaxed``) and the end grain's moisture reaching ``factor`` times as far
-    from each end (``ChangePredictor.with_end_decay``: a front 6 in deep, not 2), under both
+    The null refitted with each ``held`` nuisance's range ``factor`` times as wide (priors
+    kept; ``NullBounds.relaxed``; the others where physics holds them) and, when an end's
+    moisture is held, the end grain's moisture reaching ``factor`` times as far from each
+    end (``ChangePredictor.with_end_decay``: a front 6 in deep, not 2), under both
     noises (``fit_hypotheses``): F of the core against it when the change is still beyond
     that drift at the stated chance (H0's noise: p below ``decision.CLEAR_LEVEL``) and still
     large (H1's noise: ``decision.is_large``), else None. A core fit beside a nuisance held
     at its bound is told apart from that drift only when no drift three times as large
     explains the change.
     """
-    relaxed = replace(space, bounds=space.bounds.relaxed(factor, priors=True))
-    deep = predict.with_end_decay(factor * predict.end_decay_m)
+    relaxed = replace(space, bounds=space.bounds.relaxed(factor, only=held))
+    ends = any(h in END_MOISTURE_NAMES for h in held)
+    deep = predict.with_end_decay(factor * predict.end_decay_m) if ends else predict
     wide = fit_null(deep, diff, relaxed, hyp.sigma_rel, x0=hyp.null.x)
     F, p = nested_f(wide.rss, min(hyp.full.rss, hyp.null.rss), q, dof)
     wide_h0 = fit_null(deep, diff, relaxed, hyp.sigma_h0, x0=hyp.null_h0.x)
@@ -359,7 +363,7 @@ def weigh_evidence(predict: ChangePredictor, diff: Differences, space: ParamSpac
         evidence = replace(evidence, uniform=uniform)
         if evidence.supported and evidence.held_core and uniform is None:
             evidence = replace(evidence, F_wide=_core_beyond_drift(
-                predict, diff, space, hyp, test.q, test.dof, false_alarm))
+                predict, diff, space, hyp, test.q, test.dof, false_alarm, held_core))
     elif evidence.held_null:
         evidence = replace(evidence, drift_beyond_bounds=_bounds_matter(
             predict, diff, space, hyp, test.n))
