@@ -73,7 +73,9 @@ def test_the_width_across_a_flat_is_the_flattened_sections_caliper_width(depth_i
     pts = np.column_stack([R * np.cos(t), R * np.sin(t)])
     pts[:, 0] = np.minimum(pts[:, 0], R - h)  # the flat: its normal along +x
     u = np.array([np.cos(np.radians(psi_deg)), np.sin(np.radians(psi_deg))])
-    width = (pts @ u).max() - (pts @ u).min()
+    c = np.sqrt(R**2 - (R - h) ** 2)  # the flat's two corners, exactly (the jaws may rest there)
+    hull = np.vstack([pts, [[R - h, c], [R - h, -c]]])
+    width = (hull @ u).max() - (hull @ u).min()
     assert 2 * R - width == pytest.approx(float(width_loss_m(R, h, psi_deg)), abs=2e-8)
     area = 0.5 * abs(np.sum(pts[:-1, 0] * pts[1:, 1] - pts[1:, 0] * pts[:-1, 1]))
     assert np.pi * R**2 - area == pytest.approx(float(flat_area_m2(R, h)), rel=1e-4)

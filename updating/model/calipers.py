@@ -30,7 +30,13 @@ import numpy as np
 
 from ema.io.atomic_write import atomic_write
 from updating.model.local_change import flat_section
-from updating.model.profile import Profile, make_profile, orientation_groups, read_caliper_rows
+from updating.model.profile import (
+    Profile,
+    check_readings,
+    make_profile,
+    orientation_groups,
+    read_caliper_rows,
+)
 from updating.model.units import IN_TO_M
 
 
@@ -101,17 +107,7 @@ def make_survey(x_m, angle_deg, diameter_m, source: str = "caliper survey",
     x = np.asarray(x_m, dtype=float).reshape(-1)
     a = np.mod(np.asarray(angle_deg, dtype=float).reshape(-1), 180.0)
     d = np.asarray(diameter_m, dtype=float).reshape(-1)
-    if not x.size == a.size == d.size:
-        raise ValueError(f"{source}: the columns differ in length")
-    if x.size < 2:
-        raise ValueError(f"{source}: at least two readings are needed, found {x.size}")
-    if not (np.isfinite(x).all() and np.isfinite(a).all() and np.isfinite(d).all()):
-        raise ValueError(f"{source}: non-numeric or missing values")
-    bad = np.flatnonzero(np.diff(x) < 0)
-    if bad.size:
-        raise ValueError(f"{source}: x decreases at row {bad[0] + 3} (x must be non-decreasing)")
-    if np.any(d <= 0):
-        raise ValueError(f"{source}: diameter must be positive (row {np.argmax(d <= 0) + 2})")
+    check_readings(source, x, d, a, noun="readings")
     survey = CaliperSurvey(x, a, d, angles_given)
     groups = survey.stations()
     xs = np.array([x[g[0]] for g in groups])

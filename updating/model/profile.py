@@ -55,21 +55,31 @@ class Profile:
         return seg[i, 2] + t * (seg[i, 3] - seg[i, 2])
 
 
-def make_profile(x_m, diameter_m, source: str = "profile") -> Profile:
-    """Validate stations and diameters; raise ValueError naming ``source`` on bad input."""
-    x = np.asarray(x_m, dtype=float)
-    d = np.asarray(diameter_m, dtype=float)
-    if x.ndim != 1 or x.shape != d.shape:
-        raise ValueError(f"{source}: x and diameter columns differ in length")
+def check_readings(source: str, x: np.ndarray, d: np.ndarray, *others: np.ndarray,
+                   noun: str = "stations") -> None:
+    """Check a caliper file's columns, raising ValueError naming ``source`` and the row.
+
+    One length, two rows or more, every value finite, x not decreasing, the diameters ``d``
+    positive.
+    """
+    if x.ndim != 1 or any(v.shape != x.shape for v in (d, *others)):
+        raise ValueError(f"{source}: the columns differ in length")
     if x.size < 2:
-        raise ValueError(f"{source}: at least two stations are needed, found {x.size}")
-    if not (np.all(np.isfinite(x)) and np.all(np.isfinite(d))):
+        raise ValueError(f"{source}: at least two {noun} are needed, found {x.size}")
+    if not all(np.all(np.isfinite(v)) for v in (x, d, *others)):
         raise ValueError(f"{source}: non-numeric or missing values")
     bad = np.flatnonzero(np.diff(x) < 0)
     if bad.size:
         raise ValueError(f"{source}: x decreases at row {bad[0] + 3} (x must be non-decreasing)")
     if np.any(d <= 0):
         raise ValueError(f"{source}: diameter must be positive (row {np.argmax(d <= 0) + 2})")
+
+
+def make_profile(x_m, diameter_m, source: str = "profile") -> Profile:
+    """Validate stations and diameters; raise ValueError naming ``source`` on bad input."""
+    x = np.asarray(x_m, dtype=float)
+    d = np.asarray(diameter_m, dtype=float)
+    check_readings(source, x, d)
     if x[-1] <= x[0]:
         raise ValueError(f"{source}: profile has zero length")
     if np.any((np.diff(x[:-1]) == 0) & (np.diff(x[1:]) == 0)):
