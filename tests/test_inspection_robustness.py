@@ -73,7 +73,7 @@ def test_the_leave_one_out_check_names_the_one_mode_a_core_rests_on(seed):
     assert len(rob.cases) == diff.n_freq + base.x_m.size
     assert [c.index for c in rob.failing] == [kk]
     assert rob.failing[0].what == "mode"
-    evidence = Evidence(F=20.0, p_value=1e-6, significant=True, beyond=True, large=True,
+    evidence = Evidence(F=20.0, p_value=1e-6, significant=True, large=True,
                         finding=finding, finding_text="a core", held_null=(), held_core=(),
                         dlnw=None, rests_on=tuple(c.label for c in rob.failing))
     altered, reasons = decide(evidence)

@@ -30,9 +30,10 @@ one mode or point      the same, but resting on one mode or one        None
                        point (``robustness``)
 alteration or drift    beyond and large enough, a confusable           None
                        nuisance at its bound in H0 or beside the
-                       finding, and drift three times as far (bounds
-                       and priors) explains the change at the stated
-                       chance, or leaves it small
+                       finding, and that drift three times as far
+                       (and the end grain's three times as deep)
+                       explains the change at the stated chance, or
+                       leaves it small
 unexplained change     significant, local, but no kind fits it         None
 weight                 significant, weight changed beyond moisture     None
 below its gate         significant, the best reading an alteration     None
@@ -105,6 +106,24 @@ GRIP_MIN_G = 1.0
 """A grip substance read by H0 (less two standard uncertainties) that is reported."""
 
 
+def is_significant(p_value: float, false_alarm: float) -> bool:
+    """Tell whether a change is beyond drift: its chance below ``CLEAR_LEVEL`` and the level.
+
+    Parameters
+    ----------
+    p_value : float
+        The nested test's chance with the noise H0 leaves (``NestedTest.p_value``).
+    false_alarm : float
+        The significance level (``batlab inspect --false-alarm``).
+
+    Returns
+    -------
+    bool
+        ``p_value < min(CLEAR_LEVEL, false_alarm)``.
+    """
+    return p_value < min(CLEAR_LEVEL, false_alarm)
+
+
 def is_large(F_fit: float, p_fit: float, false_alarm: float) -> bool:
     """Tell whether a change is large against the noise the best local change leaves.
 
@@ -161,10 +180,7 @@ class Evidence:
     F, p_value : float
         The nested test (H1 against H0).
     significant : bool
-        The change is beyond drift: p below ``CLEAR_LEVEL`` (and the level asked for).
-    beyond : bool
-        Significant and large against the noise the best local change leaves
-        (``is_large``).
+        The change is beyond drift (``is_significant``).
     large : bool
         Large against the noise the best local change leaves (``is_large``), significant
         or not.
@@ -199,7 +215,6 @@ class Evidence:
     F: float
     p_value: float
     significant: bool
-    beyond: bool
     large: bool
     finding: Finding | None
     finding_text: str
@@ -212,6 +227,11 @@ class Evidence:
     drift_beyond_bounds: bool = False
     F_fit: float = float("nan")
     rests_on: tuple[str, ...] = ()
+
+    @property
+    def beyond(self) -> bool:
+        """Significant and large against the noise the best local change leaves."""
+        return self.significant and self.large
 
     @property
     def would_alter(self) -> bool:

@@ -13,11 +13,11 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from updating.inspect.decision import (
-    CLEAR_LEVEL,
     CONFUSABLE,
     GRIP_MIN_G,
     Evidence,
     is_large,
+    is_significant,
 )
 from updating.inspect.finding import RULES, Finding, describe
 from updating.inspect.hypotheses import (
@@ -242,7 +242,7 @@ def _core_beyond_drift(predict, diff, space, hyp: Hypotheses, q: int, dof: int,
     moisture is held, the end grain's moisture reaching ``factor`` times as far from each
     end (``ChangePredictor.with_end_decay``: a front 6 in deep, not 2), under both
     noises (``fit_hypotheses``): F of the core against it when the change is still beyond
-    that drift at the stated chance (H0's noise: p below ``decision.CLEAR_LEVEL``) and still
+    that drift at the stated chance (H0's noise: ``decision.is_significant``) and still
     large (H1's noise: ``decision.is_large``), else None. A core fit beside a nuisance held
     at its bound is told apart from that drift only when no drift three times as large
     explains the change.
@@ -254,8 +254,7 @@ def _core_beyond_drift(predict, diff, space, hyp: Hypotheses, q: int, dof: int,
     F, p = nested_f(wide.rss, min(hyp.full.rss, hyp.null.rss), q, dof)
     wide_h0 = fit_null(deep, diff, relaxed, hyp.sigma_h0, x0=hyp.null_h0.x)
     _, p_h0 = nested_f(wide_h0.rss, min(hyp.full_h0.rss, hyp.null_h0.rss), q, dof)
-    beyond = p_h0 < min(CLEAR_LEVEL, false_alarm)
-    return F if beyond and is_large(F, p, false_alarm) else None
+    return F if is_significant(p_h0, false_alarm) and is_large(F, p, false_alarm) else None
 
 
 def _grip_in_null(null: ChangeFit, n: int) -> Finding | None:
@@ -340,7 +339,7 @@ def weigh_evidence(predict: ChangePredictor, diff: Differences, space: ParamSpac
     kinds : KindFits or None
         Every kind's fit and the finding, when the change is significant.
     """
-    significant = test.p_value < min(CLEAR_LEVEL, false_alarm)
+    significant = is_significant(test.p_value, false_alarm)
     large = is_large(test.F_fit, test.p_fit, false_alarm)
     grip = _grip_in_null(hyp.null, test.n)
     kinds = finding = None
@@ -353,7 +352,7 @@ def weigh_evidence(predict: ChangePredictor, diff: Differences, space: ParamSpac
                           if h in CONFUSABLE)  # at its bound in either: the core may be it
     evidence = Evidence(
         F=test.F, p_value=test.p_value, significant=significant,
-        beyond=significant and large, large=large, F_fit=test.F_fit, finding=finding,
+        large=large, F_fit=test.F_fit, finding=finding,
         finding_text="" if finding is None else describe(finding),
         held_null=tuple(NullBounds.held(hyp.null)), held_core=held_core, dlnw=dlnw,
         grip=grip)

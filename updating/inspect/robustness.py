@@ -24,7 +24,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from updating.inspect.decision import CLEAR_LEVEL, kind_supported
+from updating.inspect.decision import is_significant, kind_supported
 from updating.inspect.finding import Finding
 from updating.inspect.hypotheses import (
     MAX_NFEV_CORE,
@@ -146,7 +146,7 @@ def _judge_without(predict, diff: Differences, space: ParamSpace, family: str,
     cov = covariance(fit, max(n - N_NULL - N_PARAMS[family], 1))
     again = read_finding(family, fit, space, cov, predict)
     (a, b), (c, d) = finding.region_m, again.region_m
-    survives = (p < min(CLEAR_LEVEL, false_alarm) and again.kind == finding.kind
+    survives = (is_significant(p, false_alarm) and again.kind == finding.kind
                 and kind_supported(again) and a < d and c < b)
     return F, p, survives, again
 
