@@ -61,6 +61,8 @@ class ModeIdentity:
         (m,) bool: the modes the verdict is judged on.
     notes : tuple of str
         One line per mode left out, saying why (for the verdict's reasons).
+    labels : tuple of str
+        Each mode the verdict is judged on in the lab's words (``mode_label``).
     """
 
     amplitude_baseline: np.ndarray
@@ -68,6 +70,12 @@ class ModeIdentity:
     band_cut: np.ndarray
     usable: np.ndarray
     notes: tuple[str, ...] = ()
+    labels: tuple[str, ...] = ()
+
+
+def mode_label(order: int, freq_hz: float) -> str:
+    """Name a mode as the lab does: "mode 3 (1120 Hz)" (1-based elastic order, its frequency)."""
+    return f"mode {int(order) + 1} ({freq_hz:.0f} Hz)"
 
 
 def relative_amplitude(shapes: np.ndarray, model_shapes: np.ndarray) -> np.ndarray:
@@ -148,7 +156,7 @@ def mode_identity(freq_hz: np.ndarray, order: np.ndarray, shapes_b: np.ndarray,
     ModeIdentity
         Amplitudes, the band's cuts and the modes kept (module docstring).
     """
-    f = np.asarray(freq_hz, dtype=float)
+    f, order = np.asarray(freq_hz, dtype=float), np.asarray(order, dtype=int)
     rho_b = relative_amplitude(shapes_b, model_shapes)
     rho_r = relative_amplitude(shapes_r, model_shapes)
     cut = band_cut(f, order, members_b, band_top_b_hz) | \
@@ -158,10 +166,12 @@ def mode_identity(freq_hz: np.ndarray, order: np.ndarray, shapes_b: np.ndarray,
     untold = ~minor & (low < DOMINANT_MIN)
     notes = []
     for k in np.flatnonzero(minor | untold):
-        name = f"mode {int(order[k]) + 1} ({f[k]:.0f} Hz)"
+        name = mode_label(order[k], f[k])
         what = "the weaker one" if minor[k] else "and which plane it is cannot be told"
         beyond = ", its partner perhaps above the band's top" if cut[k] else ""
         notes.append(f"{name} left out of the verdict: only one bending plane's member was "
                      f"seen, {what} (amplitude {low[k]:.2f} of the model's{beyond}); the "
                      "model of the merged planes cannot pair it")
-    return ModeIdentity(rho_b, rho_r, cut, ~(minor | untold), tuple(notes))
+    usable = ~(minor | untold)
+    labels = tuple(mode_label(o, fk) for o, fk in zip(order[usable], f[usable], strict=True))
+    return ModeIdentity(rho_b, rho_r, cut, usable, tuple(notes), labels)

@@ -49,8 +49,6 @@ import numpy as np
 from updating.correlate.measured import MeasuredModes
 from updating.inspect.caliper_verdict import with_calipers
 from updating.inspect.changes import (
-    ELASTIC_MIN_HZ,
-    RetestPairs,
     comparability_reasons,
     differences,
     identify_pairs,
@@ -208,7 +206,7 @@ def inspect_retest(
     test = nested_test(diff, hyp)
     evidence, kinds = weigh_evidence(predict, diff, space, hyp, test, false_alarm, dlnw)
     evidence, robust = _robustness(predict, diff, space, hyp, kinds, evidence, false_alarm,
-                                   _mode_labels(predict, baseline, pairs), baseline.x_m)
+                                   list(identity.labels), baseline.x_m)
     altered, reasons = decide(evidence)
     reading = read_fit(predict, diff, space, hyp, test, altered, kinds)
     if reading.reason is not None:
@@ -256,15 +254,6 @@ def _robustness(predict: ChangePredictor, diff, space: ParamSpace, hyp, kinds,
                            kinds.family, evidence.finding, false_alarm, labels, point_x_m)
     return replace(evidence, rests_on=tuple(
         f"{c.label} (F {c.F:.1f} without it)" for c in robust.failing)), robust
-
-
-def _mode_labels(predict: ChangePredictor, baseline: MeasuredModes,
-                 pairs: RetestPairs) -> list[str]:
-    """Each paired mode in the lab's words: "mode 3 (1120 Hz)" (baseline frequency)."""
-    f_mod, _ = predict(ChangeParams())
-    order = np.searchsorted(np.flatnonzero(f_mod >= ELASTIC_MIN_HZ), pairs.model_index)
-    return [f"mode {k + 1} ({baseline.freq_hz[i]:.0f} Hz)"
-            for k, i in zip(order, pairs.baseline_index, strict=True)]
 
 
 def _finding_change(reading: Reading, finding: Finding, altered: bool | None):
