@@ -29,6 +29,7 @@ from updating.inspect.finding import (
     prefer_added_mass,
 )
 from updating.inspect.hypotheses import (
+    MAX_NFEV_CORE,
     N_CORE,
     N_NULL,
     ChangeFit,
@@ -36,7 +37,9 @@ from updating.inspect.hypotheses import (
     ParamSpace,
     SigmaRel,
     covariance,
+    fit_bounded,
     fit_core,
+    residual_function,
 )
 from updating.inspect.local_change import (
     N_SEGMENT,
@@ -86,6 +89,19 @@ class KindFits:
 def segment_space(space: ParamSpace, family: str) -> SegmentSpace:
     """Return the segment family ``family`` on the null of a core's parameter space."""
     return SegmentSpace(space.profile, space.bounds, family, space.sensor_mount_m)
+
+
+def refit_family(predict, diff: Differences, space: ParamSpace, family: str,
+                 sigma_rel: SigmaRel, x0: np.ndarray) -> ChangeFit:
+    """Refit one family (``core`` or a segment family) from ``x0`` with the noise given.
+
+    The refits of a fitted family: with another noise estimate, or on fewer data (a mode or
+    a point left out); ``x0`` is clipped into the family's bounds.
+    """
+    fspace = space if family == "core" else segment_space(space, family)
+    lo, hi = fspace.lower(), fspace.upper()
+    return fit_bounded(residual_function(predict, diff, fspace, sigma_rel), np.clip(x0, lo, hi),
+                       lo, hi, fspace, diff, MAX_NFEV_CORE)
 
 
 def fit_families(predict, diff: Differences, space: ParamSpace, sigma_rel: SigmaRel,

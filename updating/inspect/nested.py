@@ -23,7 +23,6 @@ from updating.inspect.finding import RULES, Finding, describe
 from updating.inspect.hypotheses import (
     END_MOISTURE_NAMES,
     HANDLE_MAX_IN,
-    MAX_NFEV_CORE,
     N_NULL,
     ChangeFit,
     Differences,
@@ -31,12 +30,10 @@ from updating.inspect.hypotheses import (
     ParamSpace,
     SigmaRel,
     covariance,
-    fit_bounded,
     fit_null,
-    residual_function,
     shape_noise,
 )
-from updating.inspect.kinds import N_PARAMS, KindFits, classify, segment_space
+from updating.inspect.kinds import N_PARAMS, KindFits, classify, refit_family, segment_space
 from updating.inspect.local_change import N_SEGMENT, fit_segment
 from updating.inspect.model import ChangePredictor
 from updating.model.units import IN_TO_M
@@ -109,18 +106,13 @@ def fit_hypotheses(predict: ChangePredictor, diff: Differences, space: ParamSpac
     best = min(kinds.fits, key=lambda k: kinds.fits[k].rss)
     sigma = shape_noise(kinds.fits[best], diff, sigma, N_NULL + N_PARAMS[best])
     null = fit_null(predict, diff, space, sigma, x0=null.x)
-    fspace = space if best == "core" else segment_space(space, best)
-    lo, hi = fspace.lower(), fspace.upper()
-    full = fit_bounded(residual_function(predict, diff, fspace, sigma), kinds.fits[best].x,
-                       lo, hi, fspace, diff, MAX_NFEV_CORE)
+    full = refit_family(predict, diff, space, best, sigma, kinds.fits[best].x)
     fits = dict(kinds.fits, **{best: full})
     dof = max(diff.n_data - N_NULL - N_PARAMS[kinds.family], 1)
     kinds = replace(kinds, fits=fits, fit=fits[kinds.family],
                     cov=covariance(fits[kinds.family], dof))
-    full_h0 = fit_bounded(residual_function(predict, diff, fspace, sigma_h0), full.x, lo, hi,
-                          fspace, diff, MAX_NFEV_CORE)
-    return Hypotheses(null, full, sigma, kinds, best, null_h0, full_h0,
-                      sigma_h0)
+    full_h0 = refit_family(predict, diff, space, best, sigma_h0, full.x)
+    return Hypotheses(null, full, sigma, kinds, best, null_h0, full_h0, sigma_h0)
 
 
 NOISE_PASSES = 3

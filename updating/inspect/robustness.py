@@ -27,17 +27,14 @@ import numpy as np
 from updating.inspect.decision import is_significant, kind_supported
 from updating.inspect.finding import Finding
 from updating.inspect.hypotheses import (
-    MAX_NFEV_CORE,
     N_NULL,
     ChangeFit,
     Differences,
     ParamSpace,
     covariance,
-    fit_bounded,
     fit_null,
-    residual_function,
 )
-from updating.inspect.kinds import N_PARAMS, read_finding, segment_space
+from updating.inspect.kinds import N_PARAMS, read_finding, refit_family
 from updating.inspect.local_change import N_SEGMENT
 from updating.inspect.nested import nested_f
 from updating.inspect.parallel import fork_map
@@ -125,21 +122,12 @@ class Robustness:
                 "spread": {k: [float(a), float(b)] for k, (a, b) in self.spread().items()}}
 
 
-def _refit_family(predict, diff: Differences, space: ParamSpace, family: str,
-                  sigma: np.ndarray, x0: np.ndarray) -> ChangeFit:
-    """Refit one family from ``x0`` on the reduced changes."""
-    fspace = space if family == "core" else segment_space(space, family)
-    fun = residual_function(predict, diff, fspace, sigma)
-    lo, hi = fspace.lower(), fspace.upper()
-    return fit_bounded(fun, np.clip(x0, lo, hi), lo, hi, fspace, diff, MAX_NFEV_CORE)
-
-
 def _judge_without(predict, diff: Differences, space: ParamSpace, family: str,
                    sigma: np.ndarray, null_x: np.ndarray, fit_x: np.ndarray,
                    finding: Finding, false_alarm: float) -> tuple[float, float, bool, Finding]:
     """(F, p, survives, finding) of the reduced changes."""
     null = fit_null(predict, diff, space, sigma, x0=null_x)
-    fit = _refit_family(predict, diff, space, family, sigma, fit_x)
+    fit = refit_family(predict, diff, space, family, sigma, fit_x)
     n = diff.n_data
     dof = max(n - (N_NULL + N_SEGMENT), 1)
     F, p = nested_f(null.rss, min(fit.rss, null.rss), N_SEGMENT, dof)
