@@ -63,6 +63,8 @@ NULL_NAMES = ("stiffness_beyond_moisture_pct", "density_pct", "sensor_shift_in",
               "knob_end_moisture_pt", "barrel_end_moisture_pt", "sensor_mass_change_g",
               "plane_mix", "handle_substance_g", "handle_substance_to_in",
               "handle_substance_from_in")
+NULL_INDEX = {name: i for i, name in enumerate(NULL_NAMES)}
+"""Where each null parameter sits in x (``NULL_NAMES``): H0's parameters by name."""
 END_MOISTURE_NAMES = ("knob_end_moisture_pt", "barrel_end_moisture_pt")
 """The end grain's moisture excess (``NULL_NAMES``)."""
 HANDLE_MAX_G = 40.0
@@ -71,8 +73,13 @@ spray 1-8 g (Rule 3.02(c) allows any amount within 18 in of the knob)."""
 HANDLE_MAX_IN, HANDLE_MIN_IN = 18.0, 4.0
 """Reach of a legal grip substance from the knob end (Rule 3.02(c)), and the shortest reach
 fitted (a substance covers at least a hand's width)."""
-GRIP_PLACE = (8, 9)
-"""Indices of the grip substance's reach and start in x (``NullBounds.held`` skips them)."""
+GRIP_G, GRIP_TO, GRIP_FROM = (NULL_INDEX[n] for n in ("handle_substance_g",
+                                                      "handle_substance_to_in",
+                                                      "handle_substance_from_in"))
+"""Where the grip substance's mass (g), reach and start (in from the knob end) sit in x."""
+GRIP = [GRIP_G, GRIP_TO, GRIP_FROM]
+GRIP_PLACE = (GRIP_TO, GRIP_FROM)
+"""The grip substance's reach and start (``NullBounds.held`` skips them)."""
 HANDLE_FROM_MAX_IN = 3.0
 """Furthest from the knob end a grip substance is taken to start (tape and pine tar start
 0.5-2 in from the end, past the knob)."""
@@ -179,18 +186,25 @@ class NullBounds:
         else:
             m0 = 1e3 * sensor_change_kg
             m_lo, m_hi, m_sig = m0 - 0.3, m0 + 0.3, 0.1
-        if MOISTURE_COUPLING:  # x[0]: stiffness beyond the moisture's coupled share
+        if MOISTURE_COUPLING:  # stiffness beyond the moisture's coupled share
             s_lo, s_hi = t_lo - COUPLING_SLACK_PCT, t_hi + COUPLING_SLACK_PCT
         else:
             s_lo, s_hi = -5.5 + t_lo, 5.5 + t_hi
-        lo = np.array([s_lo, -3.0, -0.3, -2.5, -2.5, m_lo, -PLANE_MIX_MAX, 0.0,
-                       HANDLE_MIN_IN, 0.0])
-        hi = np.array([s_hi, 3.0, 0.3, 2.5, 2.5, m_hi, PLANE_MIX_MAX, HANDLE_MAX_G,
-                       HANDLE_MAX_IN, HANDLE_FROM_MAX_IN])
-        center = np.array([0.0, 0.0, 0.0, 0.0, 0.0, m0, 0.0, 0.0, 10.0, 1.0])
-        sigma = np.array([np.inf, np.inf, PRIOR_SHIFT_IN, PRIOR_END_MOISTURE_PT,
-                          PRIOR_END_MOISTURE_PT, m_sig, PRIOR_PLANE_MIX, np.inf, np.inf,
-                          np.inf])
+        inf = np.inf
+        by_name = {  # name: lower, upper, prior centre, prior sd
+            "stiffness_beyond_moisture_pct": (s_lo, s_hi, 0.0, inf),
+            "density_pct": (-3.0, 3.0, 0.0, inf),
+            "sensor_shift_in": (-0.3, 0.3, 0.0, PRIOR_SHIFT_IN),
+            "knob_end_moisture_pt": (-2.5, 2.5, 0.0, PRIOR_END_MOISTURE_PT),
+            "barrel_end_moisture_pt": (-2.5, 2.5, 0.0, PRIOR_END_MOISTURE_PT),
+            "sensor_mass_change_g": (m_lo, m_hi, m0, m_sig),
+            "plane_mix": (-PLANE_MIX_MAX, PLANE_MIX_MAX, 0.0, PRIOR_PLANE_MIX),
+            "handle_substance_g": (0.0, HANDLE_MAX_G, 0.0, inf),
+            "handle_substance_to_in": (HANDLE_MIN_IN, HANDLE_MAX_IN, 10.0, inf),
+            "handle_substance_from_in": (0.0, HANDLE_FROM_MAX_IN, 1.0, inf),
+        }
+        lo, hi, center, sigma = (np.array(c, dtype=float)
+                                 for c in zip(*(by_name[n] for n in NULL_NAMES), strict=True))
         return NullBounds(lo, hi, center, sigma)
 
     def widened(self) -> NullBounds:
@@ -200,7 +214,8 @@ class NullBounds:
         another bat of the same profile, or a drift far beyond physics, would need.
         """
         lo, hi = self.lower.copy(), self.upper.copy()
-        lo[:2], hi[:2] = (-40.0, -30.0), (40.0, 30.0)
+        uniform = [NULL_INDEX["stiffness_beyond_moisture_pct"], NULL_INDEX["density_pct"]]
+        lo[uniform], hi[uniform] = (-40.0, -30.0), (40.0, 30.0)
         return NullBounds(lo, hi, self.prior_center, self.prior_sigma)
 
     def relaxed(self, factor: float = 3.0, only: tuple[str, ...] | None = None) -> NullBounds:
@@ -215,7 +230,7 @@ class NullBounds:
         if only is not None:
             free = np.isin(np.array(NULL_NAMES), only)
             lo, hi = np.where(free, lo, self.lower), np.where(free, hi, self.upper)
-        lo[7:], hi[7:] = self.lower[7:], self.upper[7:]  # a grip substance stays one
+        lo[GRIP], hi[GRIP] = self.lower[GRIP], self.upper[GRIP]  # a grip substance stays one
         return NullBounds(lo, hi, self.prior_center, self.prior_sigma)
 
     def prior_residual(self, x: np.ndarray) -> np.ndarray:
@@ -441,7 +456,7 @@ def handle_segment(x: np.ndarray) -> Segment | None:
 
     A surface layer from its start near the knob end to its reach.
     """
-    mass_g, reach_in, from_in = float(x[7]), float(x[8]), float(x[9])
+    mass_g, reach_in, from_in = float(x[GRIP_G]), float(x[GRIP_TO]), float(x[GRIP_FROM])
     if mass_g <= 0.0:
         return None
     return Segment(from_in * IN_TO_M, reach_in * IN_TO_M, added_mass_kg=mass_g * 1e-3,
@@ -465,29 +480,32 @@ def null_params(x: np.ndarray, sensor_mount_m: float, core: Core | None = None,
     """
     handle = handle_segment(x)
     segs = ((handle,) if handle is not None else ()) + tuple(segments)
-    return ChangeParams(1 + (x[0] + MOISTURE_COUPLING * x[1]) / 100, 1 + x[1] / 100,
-                        sensor_mount_m + x[2] * IN_TO_M, core,
-                        (float(x[3]), float(x[4])), float(x[5]) * 1e-3, segs)
+    v = dict(zip(NULL_NAMES, x[:N_NULL], strict=True))
+    return ChangeParams(
+        1 + (v["stiffness_beyond_moisture_pct"] + MOISTURE_COUPLING * v["density_pct"]) / 100,
+        1 + v["density_pct"] / 100, sensor_mount_m + v["sensor_shift_in"] * IN_TO_M, core,
+        (float(v["knob_end_moisture_pt"]), float(v["barrel_end_moisture_pt"])),
+        float(v["sensor_mass_change_g"]) * 1e-3, segs)
 
 
 def plane_shift(diff: Differences, x: np.ndarray) -> np.ndarray:
-    """(m,) ln f change of each pair from the two-plane mix c = x[6]: S_r c."""
+    """(m,) ln f change of each pair from the two-plane mix c (``plane_mix``): S_r c."""
     if diff.plane_sens is None:
         return np.zeros(diff.n_freq)
-    return diff.plane_sens * float(x[6])
+    return diff.plane_sens * float(x[NULL_INDEX["plane_mix"]])
 
 
 def plane_shape_shift(diff: Differences, x: np.ndarray) -> np.ndarray | float:
     """Return the shape change of the two-plane mix.
 
-    (n_points, m) shape change of each pair from the two-plane mix c = x[6]:
+    (n_points, m) shape change of each pair from the two-plane mix c (``plane_mix``):
     dphi / d ln(E/G) c. The merged pair's shape is cos^2 phi_R + sin^2 phi_T
     (``updating.correlate.planes.merge_plane_pairs``), so tapping at another angle moves it by
     Delta(sin^2 theta) (phi_T - phi_R) = c dphi / d ln(E/G) to first order.
     """
     if diff.plane_shape_sens is None:
         return 0.0
-    return diff.plane_shape_sens * float(x[6])
+    return diff.plane_shape_sens * float(x[NULL_INDEX["plane_mix"]])
 
 
 @dataclass(frozen=True)
@@ -618,10 +636,10 @@ def fit_null(predict, diff: Differences, space: ParamSpace, sigma_rel: SigmaRel,
     start = np.clip(np.where(np.isfinite(b.prior_center), b.prior_center, 0.0), b.lower,
                     b.upper)
     best = fit_bounded(fun, start, b.lower, b.upper, space, diff)
-    if best.x[7] >= HANDLE_RESTART_G:
+    if best.x[GRIP_G] >= HANDLE_RESTART_G:
         for reach in HANDLE_REACH_STARTS_IN:
             x = best.x.copy()
-            x[8] = reach
+            x[GRIP_TO] = reach
             fit = fit_bounded(fun, x, b.lower, b.upper, space, diff)
             best = fit if fit.rss < best.rss else best
     return best
