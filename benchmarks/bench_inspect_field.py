@@ -26,7 +26,7 @@ import numpy as np  # noqa: E402
 
 from batlab.fleet.cache import field_row as one  # noqa: E402
 from batlab.fleet.cache import score_verdict  # noqa: E402, F401
-from updating.inspect import decision  # noqa: E402
+from updating.inspect import decision, kind_table  # noqa: E402
 from updating.model.units import IN_TO_M  # noqa: E402
 from updating.simulate.alterations import KINDS  # noqa: E402
 from updating.simulate.integrity import INTEGRITY  # noqa: E402
@@ -46,7 +46,7 @@ def clean_margin(clean: list[dict]) -> str:
     """How close the clean bats came to "altered": the largest F among those whose candidate
     core was practical, and the largest lower diameter bound among those whose F passed the
     floor (each gate alone would have let that bat through)."""
-    F_FLOOR, MIN_CORE_DIAMETER_IN = decision.F_FLOOR, decision.MIN_CORE_DIAMETER_IN
+    F_FLOOR, MIN_CORE_DIAMETER_IN = decision.F_FLOOR, kind_table.MIN_CORE_DIAMETER_IN
     prac = [r["F"] for r in clean if (d_low_in(r) or 0.0) >= MIN_CORE_DIAMETER_IN
             and r.get("F") is not None]
     over = [d_low_in(r) or 0.0 for r in clean if (r.get("F") or 0.0) >= F_FLOOR]

@@ -47,7 +47,7 @@ import numpy as np
 
 from updating.inspect.caliper_null import OVALITY_DEFAULT_IN, CaliperNull, Stations, mean_variance
 from updating.inspect.caliper_scan import UNIFORM, Run, Terms, window_stats
-from updating.inspect.finding import GROOVE_MAX_IN
+from updating.inspect.kind_table import GROOVE_MAX_IN
 from updating.model.calipers import flat_area_m2, width_loss_m
 from updating.model.units import IN_TO_M
 

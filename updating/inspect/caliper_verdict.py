@@ -26,7 +26,8 @@ from dataclasses import replace
 
 from updating.inspect.caliper_reading import CaliperChange
 from updating.inspect.calipers import CaliperResult, compare_profiles
-from updating.inspect.finding import HANDLE_SLACK_IN, RULE_MAX_HANDLE_IN, RULES, Finding
+from updating.inspect.finding import Finding, found
+from updating.inspect.kind_table import HANDLE_SLACK_IN, RULE_MAX_HANDLE_IN, kind
 from updating.inspect.verdict import Verdict
 from updating.model.calipers import CaliperSurvey
 from updating.model.profile import Profile
@@ -66,7 +67,6 @@ def caliper_finding(c: CaliperChange) -> Finding:
     uncertainty (1 sigma) SI: ``diameter_lost_m``, ``removed_mass_kg``, a flat's
     ``flat_angle_deg``, rings' ``n_grooves`` and ``groove_depth_m``, ``region_start_m``.
     """
-    rule = RULES["grooved"] if c.kind == "grooves" else RULES["flat-surfaced"]
     reading = {"diameter_lost_m": c.diameter_lost_m, "removed_mass_kg": c.removed_mass_kg}
     unc = {"diameter_lost_m": c.diameter_lost_sd_m, "removed_mass_kg": c.removed_mass_sd_kg,
            "region_start_m": c.region_start_sd_m}
@@ -76,7 +76,8 @@ def caliper_finding(c: CaliperChange) -> Finding:
     if c.kind == "grooves":
         reading.update(n_grooves=len(c.groove_x_m), groove_depth_m=c.diameter_lost_m / 2)
         unc["groove_depth_m"] = c.diameter_lost_sd_m / 2
-    return Finding("material_removed", False, c.region_m, rule, reading, unc, "calipers")
+    return found(kind("grooved" if c.kind == "grooves" else "flat-surfaced"), c.region_m,
+                 reading, unc, "calipers")
 
 
 def _on_handle(c: CaliperChange) -> bool:

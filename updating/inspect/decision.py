@@ -58,8 +58,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from updating.inspect.finding import Finding, describe
+from updating.inspect.kind_table import UNEXPLAINED, Kind, kind_of
 from updating.inspect.words import chance, what_to_check
-from updating.model.units import IN_TO_M
 
 CLEAR_LEVEL = 1e-3
 """The smallest chance of the nested test (with the noise H0 leaves, which on unaltered bats
@@ -74,16 +74,6 @@ alteration: its size beside the test's own noise, the second key beside the chan
 gripped bat whose reading passed its kind's gate, 7.0 on 288 inspections). That F's
 distribution on clean bats is heavier than F(q, N - p_1) (its noise is fitted to the
 alternative), so it states no chance: the chance comes from the test with H0's noise."""
-MIN_CORE_DIAMETER_IN = 0.30
-"""Physical floor: the fitted core's diameter, less two standard uncertainties, must reach
-this for "altered" (reported holes are 0.75-1.25 in, the smallest considered 0.5 in); a
-significant change that only a thinner or undetermined core explains is model error or
-drift, not a core. Calibrated with the two-plane shapes and the per-point shape noise
-(sixth round, docs/inspection.md) on 320 nuisance-rich clean bats (seeds 600-639,
-3000-3039, 7000-7119, 8000-8119; validated on 9000-9119): clean bats whose F passed the
-floor reached 0.18 in; altered bats' candidates 0.33 in and more. Under issue 24's H1 the
-288 clean and gripped inspections reached 0.24 in, and 0.43 in on one grip-tape bat at F 7.0,
-below the F floor of 9 then in use."""
 WEIGHT_DRIFT_MAX = 0.04
 """|ln(W_retest / W_registered)| beyond which moisture (+-2.5 points, 1 %/point, plus the
 scale) cannot explain a weight change."""
@@ -93,15 +83,6 @@ at its physical bound cannot be told from that drift. (A uniform scale at its bo
 a core only says the core model is not the alteration's exact shape.)"""
 
 
-MIN_ADDED_MASS_G = 2.0
-"""Added mass (an insert, a coat), less two standard uncertainties, that an alteration needs:
-about half a nail. On the 288 clean and gripped inspections the largest such reading off the
-handle was 0.6 g (a grip spread past 18 in, read beside H0's grip, aside: that is the grip's,
-``nested._as_grip``); 3 g before."""
-MIN_DIAMETER_LOST_IN = 0.01
-"""Outer diameter lost, less two standard uncertainties, that an alteration needs (caliper
-noise and sanding are thousandths of an inch; the 288 clean and gripped inspections reached
-0.006 in)."""
 GRIP_MIN_G = 1.0
 """A grip substance read by H0 (less two standard uncertainties) that is reported."""
 
@@ -145,9 +126,9 @@ def is_large(F_fit: float, p_fit: float, false_alarm: float) -> bool:
 def kind_supported(finding: Finding | None) -> bool:
     """Tell whether a finding is large enough for its kind to be an alteration.
 
-    A core's diameter, an insert's or a coat's mass and a lost diameter must each exceed
-    their gate (``MIN_CORE_DIAMETER_IN``, ``MIN_ADDED_MASS_G``, ``MIN_DIAMETER_LOST_IN``) by
-    two standard uncertainties; a grip substance and a change no kind explains never are.
+    Its kind's reading must exceed the kind's gate (``kind_table.Kind.gate``: a core's
+    diameter, an insert's or a coat's mass, a lost diameter) by two standard uncertainties;
+    a grip substance and a change no kind explains have no gate and never are.
 
     Parameters
     ----------
@@ -158,17 +139,10 @@ def kind_supported(finding: Finding | None) -> bool:
     -------
     bool
     """
-    if finding is None or finding.kind in ("handle_substance", "local_change"):
+    k = None if finding is None else kind_of(finding.kind, finding.rule)
+    if k is None or k.gate is None:
         return False
-    r, u = finding.reading, finding.uncertainty
-    if finding.kind == "core":
-        low = r["core_diameter_m"] - 2 * u.get("core_diameter_m", np.inf)
-        return low / IN_TO_M >= MIN_CORE_DIAMETER_IN
-    if finding.kind in ("inserted_mass", "surface_coating"):
-        low = r["added_mass_kg"] - 2 * u.get("added_mass_kg", np.inf)
-        return 1e3 * low >= MIN_ADDED_MASS_G
-    low = r["diameter_lost_m"] - 2 * u.get("diameter_lost_m", np.inf)
-    return low / IN_TO_M >= MIN_DIAMETER_LOST_IN
+    return k.gate.passed(finding.reading, finding.uncertainty)
 
 
 @dataclass(frozen=True)
@@ -249,9 +223,24 @@ class Evidence:
         return kind_supported(self.finding)
 
     @property
-    def kind(self) -> str | None:
-        """The finding's kind, or None."""
-        return None if self.finding is None else self.finding.kind
+    def kind(self) -> Kind | None:
+        """The finding's kind in the table of kinds, or None."""
+        return None if self.finding is None else kind_of(self.finding.kind, self.finding.rule)
+
+    @property
+    def grip_kind(self) -> bool:
+        """Whether the finding is a grip substance (a kind that is never an alteration)."""
+        return self.kind is not None and not self.kind.alteration
+
+    @property
+    def named(self) -> bool:
+        """Whether the finding is of a named kind (not the change no kind explains)."""
+        return self.kind is not None and self.kind.name != UNEXPLAINED
+
+    @property
+    def unexplained(self) -> bool:
+        """Whether the finding is the change no named kind explains."""
+        return self.kind is not None and self.kind.name == UNEXPLAINED
 
     @property
     def weight_note(self) -> str:
@@ -375,20 +364,18 @@ class Rule:
 
 RULES = (
     Rule("another bat", lambda e: e.uniform is not None, None, _another_bat),
-    Rule("grip substance", lambda e: e.kind == "handle_substance" and e.finding.legal, False,
-         _grip),
-    Rule("grip past 18 in", lambda e: e.kind == "handle_substance", False, _grip_past),
+    Rule("grip substance", lambda e: e.grip_kind and e.finding.legal, False, _grip),
+    Rule("grip past 18 in", lambda e: e.grip_kind, False, _grip_past),
     Rule("alteration", lambda e: e.would_alter and not e.rests_on, True, _altered),
     Rule("one mode or point", lambda e: e.would_alter, None, _one_datum),
     Rule("alteration or drift", lambda e: e.beyond and e.supported, None,
          _altered_or_drift),
-    Rule("unexplained change", lambda e: e.significant and e.kind == "local_change", None,
+    Rule("unexplained change", lambda e: e.significant and e.unexplained, None,
          _unexplained),
     Rule("weight", lambda e: e.significant and e.dlnw is not None
          and abs(e.dlnw) > WEIGHT_DRIFT_MAX, None, _weight),
     Rule("below its gate", lambda e: e.significant, None, _below_gate),
-    Rule("large change", lambda e: e.large and e.kind not in (None, "local_change"), None,
-         _large),
+    Rule("large change", lambda e: e.large and e.named, None, _large),
     Rule("drift beyond bounds", lambda e: e.drift_beyond_bounds, None, _drift_beyond_bounds),
     Rule("drift", lambda e: True, False, _drift),
 )

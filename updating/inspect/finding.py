@@ -1,21 +1,9 @@
 """What changed, in the rulebook's words: the kind of a local change and its reading.
 
 The families fitted beside the generic local change (``local_change``) say what the change
-is by its physics (../../docs/inspection.md, "The kinds and their signatures"):
-
-- a core (``hypotheses.fit_core``), from the barrel end: ``core``, "filled" ("hollowed" when
-  its fill is under ``HOLLOW_MAX_FILL`` of the wood's density);
-- added mass within 18 in of the knob: ``handle_substance``, "grip substance (3.02(c))",
-  legal;
-- added mass from within ``HANDLE_START_MAX_IN`` of the knob past 18 in:
-  ``handle_substance``, not legal as it is [1];
-- added mass elsewhere, up to ``INSERT_MAX_IN`` long: ``inserted_mass``, "nailed"; longer:
-  ``surface_coating``, "covered with a substance";
-- a diameter loss ``GROOVE_MAX_IN`` long or more: ``material_removed``, "flat-surfaced";
-  shorter: "grooved";
-- none of them as well as the generic change: ``local_change``, "altered or tampered with".
-
-[1] not an alteration: the bat must be cleaned before play, the verdict stays not altered.
+is by its physics (../../docs/inspection.md, "The kinds and their signatures"); which kind a
+family's fit reads as, its rule words and whether it is legal are the table of kinds'
+(``kind_table``).
 
 A family is chosen by Akaike's criterion on the weighted residual, RSS / s^2 + 2 k (k its
 parameters, s^2 the generic fit's residual variance per datum, at least 1); the generic
@@ -35,20 +23,9 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-RULE_MAX_HANDLE_IN = 18.0
-"""Rule 3.02(c): the handle, for not more than 18 in from its end, may be treated for grip."""
-HANDLE_SLACK_IN = 0.5
-"""A grip substance's fitted reach may pass 18 in by this much before it is said to."""
-HANDLE_START_MAX_IN = 8.0
-"""Added mass that starts this close to the knob and reaches past 18 in is a grip substance
-spread too far (clean the bat), not a coat of the barrel (which starts past the handle)."""
-INSERT_MAX_IN = 6.0
-"""Longest stretch of added mass read as an insert (nails 2-3.5 in, a dense end plug 2-4 in,
-as fitted: up to about 5 in) rather than a coat (wax over the last 10-16 in)."""
-GROOVE_MAX_IN = 2.0
-"""Shortest stretch of lost diameter read as flat-surfaced rather than grooved."""
-HOLLOW_MAX_FILL = 0.1
-"""A core whose fill is lighter than this share of the wood is read as hollowed."""
+from updating.inspect.kind_table import Kind, kind, kind_of, lab_values
+from updating.model.units import IN_TO_M
+
 KIND_MARGIN = 10.0
 """Akaike score by which every kind must trail the generic change for ``local_change``."""
 HEAVY_FILL_RATIO = 2.0
@@ -56,19 +33,6 @@ HEAVY_FILL_RATIO = 2.0
 (about 0.4-0.75 g/cm^3; the densest woods reach 1.2): metal, or mass standing for a thin core."""
 KIND_TIE = 4.0
 """Akaike difference within which two families are both supported (module docstring)."""
-
-RULES = {
-    "filled": "filled",
-    "hollowed": "hollowed",
-    "nailed": "nailed",
-    "flat-surfaced": "flat-surfaced",
-    "grooved": "grooved",
-    "coated": "covered with a substance",
-    "grip": "grip substance (3.02(c))",
-    "grip_past": "grip substance past 18 in (3.02(c))",
-    "other": "altered or tampered with",
-}
-"""The rulebook's words for each finding (contract ``finding.rule``)."""
 
 
 @dataclass(frozen=True)
@@ -78,14 +42,14 @@ class Finding:
     Parameters
     ----------
     kind : str
-        ``core``, ``inserted_mass``, ``material_removed``, ``surface_coating``,
-        ``handle_substance`` or ``local_change``.
+        The contract's kind (``kind_table.Kind.finding``): ``core``, ``inserted_mass``,
+        ``material_removed``, ``surface_coating``, ``handle_substance`` or ``local_change``.
     legal : bool
         True only for a grip substance within 18 in of the knob (Rule 3.02(c)).
     region_m : tuple of float
         Where, m from the knob end.
     rule : str
-        The rule's word (``RULES``).
+        The rule's words (``kind_table.Kind.rule``).
     reading : dict
         The kind's numbers, SI (``added_mass_kg``, ``diameter_lost_m``, ``removed_mass_kg``,
         ``core_diameter_m``, ``fill_density_ratio``, ``mass_change_rel``,
@@ -105,32 +69,11 @@ class Finding:
     uncertainty: dict = field(default_factory=dict)
     family: str = ""
 
-    @property
-    def past_handle(self) -> bool:
-        """A grip substance that reaches past 18 in (clean the bat; not an alteration)."""
-        return self.kind == "handle_substance" and not self.legal
 
-
-def added_mass_kind(region_in: tuple[float, float]) -> tuple[str, str, bool]:
-    """(kind, rule key, legal) of an added mass over ``region_in`` (in from the knob end)."""
-    start_in, end_in = region_in
-    if end_in <= RULE_MAX_HANDLE_IN + HANDLE_SLACK_IN:
-        return "handle_substance", "grip", True
-    if start_in <= HANDLE_START_MAX_IN:
-        return "handle_substance", "grip_past", False
-    if end_in - start_in <= INSERT_MAX_IN:
-        return "inserted_mass", "nailed", False
-    return "surface_coating", "coated", False
-
-
-def diameter_loss_rule(region_in: tuple[float, float]) -> str:
-    """Rule key of a diameter loss over ``region_in``: flat-surfaced, or grooved when short."""
-    return "flat-surfaced" if region_in[1] - region_in[0] >= GROOVE_MAX_IN else "grooved"
-
-
-def core_rule(fill_density_ratio: float) -> str:
-    """Rule key of a core: hollowed when (nearly) empty, else filled."""
-    return "hollowed" if fill_density_ratio < HOLLOW_MAX_FILL else "filled"
+def found(k: Kind, region_m: tuple[float, float], reading: dict, uncertainty: dict,
+          family: str) -> Finding:
+    """Return a finding of kind ``k`` (its contract kind, legality and rule words)."""
+    return Finding(k.finding, k.legal, region_m, k.rule, reading, uncertainty, family)
 
 
 def akaike(rss: float, n_params: int, s2: float) -> float:
@@ -182,22 +125,10 @@ def describe(f: Finding) -> str:
     Returns
     -------
     str
-        E.g. "about 18 g of metal in 29.2-32.5 in from the knob end (nailed)".
+        E.g. "about 18 g of metal in 29.2-32.5 in from the knob end (nailed)": its kind's
+        ``says`` (``kind_table``); a change of no kind in the table is said as ``other``.
     """
-    a, b = (v / 0.0254 for v in f.region_m)
-    where = f"{a:.1f}-{b:.1f} in from the knob end"
-    r = f.reading
-    if f.kind == "core":
-        return (f"a core {r['core_diameter_m'] / 0.0254:.2f} in across at {where}, fill/wood "
-                f"density {r['fill_density_ratio']:.2f} ({f.rule})")
-    if f.kind == "inserted_mass":
-        return f"about {1e3 * r['added_mass_kg']:.0f} g of metal in {where} ({f.rule})"
-    if f.kind == "surface_coating":
-        return f"about {1e3 * r['added_mass_kg']:.0f} g of a substance over {where} ({f.rule})"
-    if f.kind == "handle_substance":
-        return f"about {1e3 * r['added_mass_kg']:.0f} g added on the handle, {a:.0f}-{b:.0f} in"
-    if f.kind == "material_removed":
-        return (f"{r['diameter_lost_m'] / 0.0254:.3f} in of diameter removed over {where}, "
-                f"about {1e3 * r['removed_mass_kg']:.0f} g of wood ({f.rule})")
-    return (f"a local change of mass {100 * r['mass_change_rel']:+.0f} % and bending stiffness "
-            f"{100 * r['stiffness_change_rel']:+.0f} % over {where}")
+    a, b = (v / IN_TO_M for v in f.region_m)
+    k = kind_of(f.kind, f.rule) or kind("other")
+    return k.says.format_map({**lab_values(f.reading), "rule": f.rule, "a": a, "b": b,
+                              "where": f"{a:.1f}-{b:.1f} in from the knob end"})

@@ -19,18 +19,14 @@ import numpy as np
 
 from updating.inspect.decision import kind_supported
 from updating.inspect.finding import (
-    RULES,
     Finding,
-    added_mass_kind,
     akaike,
     choose_family,
-    core_rule,
-    diameter_loss_rule,
+    found,
     prefer_added_mass,
 )
 from updating.inspect.hypotheses import (
     MAX_NFEV_CORE,
-    N_CORE,
     N_NULL,
     ChangeFit,
     Differences,
@@ -41,6 +37,7 @@ from updating.inspect.hypotheses import (
     fit_core,
     residual_function,
 )
+from updating.inspect.kind_table import FAMILIES, read_kind
 from updating.inspect.local_change import (
     N_SEGMENT,
     SegmentSpace,
@@ -54,7 +51,9 @@ from updating.inspect.segments import segment_mass_kg
 from updating.model.units import IN_TO_M
 
 KIND_FAMILIES = ("core", "added_mass", "diameter_loss")
-N_PARAMS = {"core": N_CORE, "added_mass": 3, "diameter_loss": 3, "local_change": N_SEGMENT}
+"""The families fitted to tell a significant change's kind (``fit_families``)."""
+N_PARAMS = {name: len(f.params) for name, f in FAMILIES.items()}
+"""Each family's parameters beyond the null's (``kind_table.FAMILIES``)."""
 
 
 @dataclass(frozen=True)
@@ -138,8 +137,8 @@ def fit_families(predict, diff: Differences, space: ParamSpace, sigma_rel: Sigma
 
     # the families are independent: one on each core (a family's own starts then share
     # the first core with it), their scans included
-    families = ("core", "added_mass", "diameter_loss")
-    return {"local_change": generic, **dict(zip(families, fork_map(fit_family, families),
+    return {"local_change": generic, **dict(zip(KIND_FAMILIES,
+                                                fork_map(fit_family, KIND_FAMILIES),
                                                 strict=True))}
 
 
@@ -148,25 +147,30 @@ def segment_reading(fit: ChangeFit, fspace: SegmentSpace, cov: np.ndarray,
     """Read a segment family's fit: (reading, uncertainty), SI (``finding.Finding``)."""
     x = fit.x
     sd = np.sqrt(np.clip(np.diag(cov), 0.0, None))
-    unc = {"region_start_m": float(sd[N_NULL]) * IN_TO_M}
+    at = fspace.index
+    unc = {"region_start_m": float(sd[at("start_in")]) * IN_TO_M}
     if fspace.family == "added_mass":
-        return ({"added_mass_kg": float(x[N_NULL + 2]) * 1e-3},
-                dict(unc, added_mass_kg=float(sd[N_NULL + 2]) * 1e-3))
+        return ({"added_mass_kg": float(x[at("mass_g")]) * 1e-3},
+                dict(unc, added_mass_kg=float(sd[at("mass_g")]) * 1e-3))
     if fspace.family == "diameter_loss":
-        loss_in = float(x[N_NULL + 2])
+        loss_in = float(x[at("loss_in")])
         removed = -segment_mass_kg(predict.system().model, (fspace.segment(x),))
-        rel = float(sd[N_NULL + 2]) / loss_in if loss_in > 0 else 0.0
+        rel = float(sd[at("loss_in")]) / loss_in if loss_in > 0 else 0.0
         return ({"diameter_lost_m": loss_in * IN_TO_M, "removed_mass_kg": removed},
-                dict(unc, diameter_lost_m=float(sd[N_NULL + 2]) * IN_TO_M,
+                dict(unc, diameter_lost_m=float(sd[at("loss_in")]) * IN_TO_M,
                      removed_mass_kg=abs(removed) * rel))
-    return ({"mass_change_rel": float(x[N_NULL + 2]), "stiffness_change_rel": float(x[N_NULL + 3])},
-            dict(unc, mass_change_rel=float(sd[N_NULL + 2]),
-                 stiffness_change_rel=float(sd[N_NULL + 3])))
+    return ({"mass_change_rel": float(x[at("mass_rel")]),
+             "stiffness_change_rel": float(x[at("stiffness_rel")])},
+            dict(unc, mass_change_rel=float(sd[at("mass_rel")]),
+                 stiffness_change_rel=float(sd[at("stiffness_rel")])))
 
 
 def read_finding(family: str, fit: ChangeFit, space: ParamSpace, cov: np.ndarray,
                  predict) -> Finding:
-    """Read one family's fit as a finding: kind, rule, region, reading, uncertainty."""
+    """Read one family's fit as a finding: kind, rule, region, reading, uncertainty.
+
+    The kind is the one the family's fit reads as (``kind_table.read_kind``).
+    """
     length_m = space.profile.length_m
     if family == "core":
         r = space.reading(fit.x, cov)
@@ -176,19 +180,13 @@ def read_finding(family: str, fit: ChangeFit, space: ParamSpace, cov: np.ndarray
                    "fill_density_ratio": core.mean_fill_density_ratio}
         unc = {k: r["sd"][k] for k in ("region_start_m", "core_diameter_m",
                                         "fill_density_ratio")}
-        rule = core_rule(core.mean_fill_density_ratio)
-        return Finding("core", False, region, RULES[rule], reading, unc, family)
-    fspace = segment_space(space, family)
-    region = fspace.interval_m(fit.x)
-    reading, unc = segment_reading(fit, fspace, cov, predict)
+    else:
+        fspace = segment_space(space, family)
+        region = fspace.interval_m(fit.x)
+        reading, unc = segment_reading(fit, fspace, cov, predict)
     region_in = (region[0] / IN_TO_M, region[1] / IN_TO_M)
-    if family == "added_mass":
-        kind, rule, legal = added_mass_kind(region_in)
-        return Finding(kind, legal, region, RULES[rule], reading, unc, family)
-    if family == "diameter_loss":
-        return Finding("material_removed", False, region, RULES[diameter_loss_rule(region_in)],
-                       reading, unc, family)
-    return Finding("local_change", False, region, RULES["other"], reading, unc, family)
+    k = read_kind(family, region_in, length_m / IN_TO_M, reading)
+    return found(k, region, reading, unc, family)
 
 
 def classify(predict, diff: Differences, space: ParamSpace, sigma_rel: SigmaRel,

@@ -37,30 +37,18 @@ from updating.inspect.hypotheses import (
     null_params,
     residual_function,
 )
+from updating.inspect.kind_table import FAMILIES, MIN_LENGTH_IN, SEGMENT_FAMILIES
 from updating.inspect.model import ChangeParams
 from updating.inspect.parallel import fork_map
 from updating.inspect.segments import Segment, coverage, element_masses_kg
 from updating.model.profile import Profile
 from updating.model.units import IN_TO_M
 
-FAMILIES = ("local_change", "added_mass", "diameter_loss")
-N_SEGMENT = 4
+N_SEGMENT = len(FAMILIES["local_change"].params)
 """Parameters of the generic local change (start, length, alpha, beta): q of the F test."""
-MIN_LENGTH_IN, MAX_LENGTH_IN = 0.5, 24.0
-"""Shortest and longest stretch a family fits (a groove to a coat over the barrel, or a grip
-substance from the knob past 18 in)."""
-REL_MAX = 0.6
-"""Largest relative change of the wood's mass or stiffness in the stretch (a 1.25 in core
-removes 26 % of a 2.45 in barrel's section, a hollowed one half of its mass)."""
-MASS_MAX_G = 120.0
-"""Most mass a stretch may gain, g (six 10 g nails and a cap, or a thick coat)."""
-LOSS_MAX_IN = 0.3
-"""Most outer diameter a stretch may lose, in (a barrel shaved flat on one side)."""
 SCAN_STEP_IN = 3.0
 SCAN_LENGTHS_IN = (2.0, 5.0, 10.0)
 """Trial stretches of the scan: starts every ``SCAN_STEP_IN`` along the bat, these lengths."""
-UNIT = {"local_change": (0.05, 0.05), "added_mass": (10.0,), "diameter_loss": (0.05,)}
-"""The unit amplitudes whose responses the scan combines (alpha, beta; g; in)."""
 MAX_NFEV = 20
 
 
@@ -75,7 +63,8 @@ class SegmentSpace:
     bounds : NullBounds
         The null parameters' bounds and priors.
     family : str
-        One of ``FAMILIES``.
+        One of ``kind_table.SEGMENT_FAMILIES`` (its parameters and bounds:
+        ``kind_table.FAMILIES``).
     sensor_mount_m : float
         Nominal move of the accelerometer between the tests, m.
     """
@@ -92,16 +81,13 @@ class SegmentSpace:
 
     def family_bounds(self) -> tuple[np.ndarray, np.ndarray]:
         """(lower, upper) of the family's own parameters (start, length, amplitudes)."""
-        top = self.length_in - MIN_LENGTH_IN
-        if self.family == "local_change":
-            return (np.array([0.0, MIN_LENGTH_IN, -REL_MAX, -REL_MAX]),
-                    np.array([top, MAX_LENGTH_IN, REL_MAX, REL_MAX]))
-        if self.family == "added_mass":
-            return np.array([0.0, MIN_LENGTH_IN, 0.0]), np.array([top, MAX_LENGTH_IN, MASS_MAX_G])
-        if self.family == "diameter_loss":
-            return (np.array([0.0, MIN_LENGTH_IN, 0.0]),
-                    np.array([top, MAX_LENGTH_IN, LOSS_MAX_IN]))
-        raise ValueError(f"unknown local-change family {self.family!r}")
+        if self.family not in SEGMENT_FAMILIES:
+            raise ValueError(f"unknown local-change family {self.family!r}")
+        return FAMILIES[self.family].bounds(self.length_in)
+
+    def index(self, name: str) -> int:
+        """Return where the family's parameter ``name`` sits in x (after the null's)."""
+        return N_NULL + FAMILIES[self.family].index(name)
 
     def lower(self) -> np.ndarray:
         """Lower bounds of the whole vector (null, then the family's)."""
@@ -113,20 +99,20 @@ class SegmentSpace:
 
     def interval_m(self, x: np.ndarray) -> tuple[float, float]:
         """Return the stretch (start, end) of x, m from the knob end, within the bat."""
-        start_in, length_in = float(x[N_NULL]), float(x[N_NULL + 1])
+        start_in, length_in = float(x[self.index("start_in")]), float(x[self.index("length_in")])
         end_in = min(start_in + length_in, self.length_in)
         return start_in * IN_TO_M, end_in * IN_TO_M
 
     def segment(self, x: np.ndarray) -> Segment:
         """Return the family's ``Segment`` for x."""
         x0, x1 = self.interval_m(x)
-        amp = x[N_NULL + 2:]
         if self.family == "local_change":
-            return Segment(x0, x1, mass_rel=float(amp[0]), bend_rel=float(amp[1]),
-                           shear_rel=float(amp[0]))
+            alpha = float(x[self.index("mass_rel")])
+            return Segment(x0, x1, mass_rel=alpha, bend_rel=float(x[self.index("stiffness_rel")]),
+                           shear_rel=alpha)
         if self.family == "added_mass":
-            return Segment(x0, x1, added_mass_kg=float(amp[0]) * 1e-3)
-        return Segment(x0, x1, diameter_loss_m=float(amp[0]) * IN_TO_M)
+            return Segment(x0, x1, added_mass_kg=float(x[self.index("mass_g")]) * 1e-3)
+        return Segment(x0, x1, diameter_loss_m=float(x[self.index("loss_in")]) * IN_TO_M)
 
     def params(self, x: np.ndarray) -> ChangeParams:
         """Return the bat's state for x (null part and, when present, the family's stretch)."""
@@ -195,7 +181,7 @@ def segment_scan(predict, diff: Differences, space: SegmentSpace, sigma_rel: Sig
     """
     fun = residual_function(predict, diff, space, sigma_rel)
     r0 = null.residual
-    units = UNIT[space.family]
+    units = FAMILIES[space.family].scan_unit
     stretches = trial_stretches(space.length_in)
     norms, seeds = [], []
     for start, ell in stretches:
@@ -263,7 +249,7 @@ def start_from(other: ChangeFit, other_space: SegmentSpace, space: SegmentSpace,
     x0, x1 = other_space.interval_m(x)
     start_in, ell_in = x0 / IN_TO_M, max(x1 - x0, MIN_LENGTH_IN * IN_TO_M) / IN_TO_M
     generic = other_space.family == "local_change"
-    alpha = float(x[N_NULL + 2]) if generic else 0.0
+    alpha = float(x[other_space.index("mass_rel")]) if generic else 0.0
     model = predict.system().model
     if space.family == "added_mass":
         wood_g = 1e3 * float(coverage(model.node_x_m, x0, x1) @ element_masses_kg(model))
@@ -272,5 +258,5 @@ def start_from(other: ChangeFit, other_space: SegmentSpace, space: SegmentSpace,
         d_m = float(np.mean(space.profile.diameter_at(np.linspace(x0, x1, 9))))
         amp = [max(-alpha, 0.005) * d_m / 2 / IN_TO_M]
     else:
-        amp = [alpha, float(x[N_NULL + 3]) if generic else 0.0]
+        amp = [alpha, float(x[other_space.index("stiffness_rel")]) if generic else 0.0]
     return np.concatenate([x[:N_NULL], space.seed(start_in, ell_in, amp)])

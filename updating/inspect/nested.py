@@ -19,9 +19,12 @@ from updating.inspect.decision import (
     is_large,
     is_significant,
 )
-from updating.inspect.finding import RULES, Finding, describe
+from updating.inspect.finding import Finding, describe, found
 from updating.inspect.hypotheses import (
     END_MOISTURE_NAMES,
+    GRIP_FROM,
+    GRIP_G,
+    GRIP_TO,
     HANDLE_MAX_IN,
     N_NULL,
     ChangeFit,
@@ -33,6 +36,7 @@ from updating.inspect.hypotheses import (
     fit_null,
     shape_noise,
 )
+from updating.inspect.kind_table import kind
 from updating.inspect.kinds import N_PARAMS, KindFits, classify, refit_family, segment_space
 from updating.inspect.local_change import N_SEGMENT, fit_segment
 from updating.inspect.model import ChangePredictor
@@ -251,14 +255,13 @@ def _core_beyond_drift(predict, diff, space, hyp: Hypotheses, q: int, dof: int,
 
 def _grip_in_null(null: ChangeFit, n: int) -> Finding | None:
     """Return the grip substance H0 read on the handle, when ``GRIP_MIN_G`` at 2 sigma."""
-    sd = float(np.sqrt(max(covariance(null, max(n - N_NULL, 1))[7, 7], 0.0)))
-    mass_g = float(null.x[7])
+    sd = float(np.sqrt(max(covariance(null, max(n - N_NULL, 1))[GRIP_G, GRIP_G], 0.0)))
+    mass_g = float(null.x[GRIP_G])
     if mass_g - 2 * sd < GRIP_MIN_G:
         return None
-    region = (float(null.x[9]) * IN_TO_M, float(null.x[8]) * IN_TO_M)
-    return Finding("handle_substance", True, region, RULES["grip"],
-                   {"added_mass_kg": mass_g * 1e-3}, {"added_mass_kg": sd * 1e-3},
-                   "null")
+    region = (float(null.x[GRIP_FROM]) * IN_TO_M, float(null.x[GRIP_TO]) * IN_TO_M)
+    return found(kind("grip"), region, {"added_mass_kg": mass_g * 1e-3},
+                 {"added_mass_kg": sd * 1e-3}, "null")
 
 
 def _as_grip(finding: Finding, null: ChangeFit, grip: Finding | None) -> Finding:
@@ -272,7 +275,7 @@ def _as_grip(finding: Finding, null: ChangeFit, grip: Finding | None) -> Finding
     2.3-16.9 in and H1 the rest, 17.5-22.2 in, as 2.9 g: an "insert" next to the grip.)
     """
     start_in, end_in = (v / IN_TO_M for v in finding.region_m)
-    reach_held = null.x[8] >= HANDLE_MAX_IN - 0.1 and null.x[7] >= GRIP_MIN_G
+    reach_held = null.x[GRIP_TO] >= HANDLE_MAX_IN - 0.1 and null.x[GRIP_G] >= GRIP_MIN_G
     beside_grip = grip is not None and start_in <= grip.region_m[1] / IN_TO_M + GRIP_GAP_IN
     if grip is not None and end_in <= HANDLE_MAX_IN + 0.5:
         total = grip.reading["added_mass_kg"] + finding.reading.get("added_mass_kg", 0.0)
@@ -281,10 +284,10 @@ def _as_grip(finding: Finding, null: ChangeFit, grip: Finding | None) -> Finding
                        reading={"added_mass_kg": total})
     if (finding.family == "added_mass" and (reach_held or beside_grip)
             and start_in <= HANDLE_MAX_IN + GRIP_PAST_IN):
-        total = float(null.x[7]) * 1e-3 + finding.reading["added_mass_kg"]
-        return replace(finding, kind="handle_substance", legal=False,
-                       rule=RULES["grip_past"],
-                       region_m=(float(null.x[9]) * IN_TO_M, finding.region_m[1]),
+        total = float(null.x[GRIP_G]) * 1e-3 + finding.reading["added_mass_kg"]
+        past = kind("grip_past")
+        return replace(finding, kind=past.finding, legal=past.legal, rule=past.rule,
+                       region_m=(float(null.x[GRIP_FROM]) * IN_TO_M, finding.region_m[1]),
                        reading={"added_mass_kg": total})
     return finding
 

@@ -280,7 +280,7 @@ def reported_finding(evidence: Evidence, altered: bool | None, reading: Reading,
                        reading={"core_diameter_m": c.diameter_m,
                                 "fill_density_ratio": c.mean_fill_density_ratio},
                        uncertainty={**f.uncertainty, **reading.core_sd})
-    if f is not None and (altered or f.kind == "handle_substance" or altered is None):
+    if f is not None and (altered or evidence.grip_kind or altered is None):
         return f
     if altered is False and evidence.grip is not None:
         return evidence.grip
