@@ -10,6 +10,7 @@ from __future__ import annotations
 import math
 
 from updating.inspect.details import InspectionDetails
+from updating.inspect.kind_table import UNEXPLAINED, kind, kind_of, say_parts
 from updating.inspect.words import CHANCE, chance, percent
 
 
@@ -224,34 +225,15 @@ def finding_words(finding: dict | None, length_in: float | None = None) -> str |
     Returns
     -------
     str or None
-        One clause, None when nothing was found.
+        One clause, None when nothing was found: its kind's words
+        (``updating.inspect.kind_table.Kind.words``).
     """
     if not finding:
         return None
     a, b = finding["region_in"]
-    r = finding.get("reading") or {}
+    k = kind_of(finding["kind"], finding.get("rule")) or kind(UNEXPLAINED)
     where = f"{a:.1f}-{b:.1f} in from the knob end"
-    if length_in is not None and length_in - b < 1.5 and finding["kind"] != "handle_substance":
+    if length_in is not None and length_in - b < 1.5 and k.alteration:
         where = f"the last {length_in - a:.0f} in of the barrel ({a:.1f}-{b:.1f} in)"
-    kind, rule = finding["kind"], finding["rule"]
-    if kind == "core":
-        fill = r.get("fill_density_ratio")
-        what = (f"a bore about {r.get('core_diameter_in', float('nan')):.2f} in across and "
-                f"{b - a:.1f} in long")
-        if fill is not None:
-            what += (", left hollow" if fill < 0.05 else
-                     f", filled with material about {fill:.2f} times as dense as the wood")
-        return f"{rule}: {what}, in {where}"
-    if kind == "inserted_mass":
-        return f"{rule}: about {r.get('added_mass_g', 0):.0f} g of metal in {where}"
-    if kind == "surface_coating":
-        return f"{rule}: about {r.get('added_mass_g', 0):.0f} g of a substance over {where}"
-    if kind == "material_removed":
-        return (f"{rule}: about {r.get('diameter_lost_in', 0):.3f} in of the diameter removed "
-                f"along {b - a:.1f} in, {where}")
-    if kind == "handle_substance":
-        text = f"about {r.get('added_mass_g', 0):.0f} g added on the handle, {a:.0f}-{b:.0f} in"
-        if finding.get("legal"):
-            return text + ": grip substance, legal under Rule 3.02(c)"
-        return text + ": a grip substance past 18 in; the bat must be cleaned before play"
-    return f"a local change no alteration explains, over {where}"
+    return say_parts(k.words, {**(finding.get("reading") or {}), "rule": finding["rule"],
+                               "where": where, "a": a, "b": b, "length_in": b - a})

@@ -40,6 +40,7 @@ from batlab.report_check import seal_page
 from batlab.version import code_version
 from ema.io.atomic_write import atomic_write
 from updating.inspect.details import InspectionDetails, ModePair
+from updating.inspect.kind_table import HOLLOW_MAX_FILL, OTHER_COLOUR, UNEXPLAINED, kind, kind_of
 from updating.inspect.words import percent
 from updating.model.mass_properties import MassProperties, mass_properties
 from updating.model.sections import Core
@@ -159,9 +160,6 @@ SIGN_WORDS = {"alpha": ("mass added", "mass removed"), "beta": ("stiffer", "soft
 """The legend's words for a bar pointing up, down, per panel."""
 FADED = 0.3
 """Opacity of a map bar inside its noise band (not a change)."""
-REGION_COLOURS = {"altered": "C3", "legal": "#27ae60", "other": "#d4a017"}
-"""Shading of the finding's region: an alteration, a legal grip, anything else (no verdict,
-or a grip past 18 in: clean the bat)."""
 
 
 def shown_finding(v: dict) -> dict | None:
@@ -197,17 +195,15 @@ def finding_label(f: dict, status: str) -> tuple[str, str, str]:
     tuple of str
         (region's legend label, short words, colour): "finding region: nailed", "nailed";
         "legal grip (Rule 3.02(c))", "legal grip"; a grip past 18 in says to clean the bat,
-        a finding with no verdict says so.
+        a finding with no verdict says so: its kind's ``label``, ``short`` and ``colour``
+        (``updating.inspect.kind_table``).
     """
-    if f["kind"] == "handle_substance":
-        if f.get("legal"):
-            return "legal grip (Rule 3.02(c))", "legal grip", REGION_COLOURS["legal"]
-        return ("grip past 18 in: clean the bat", "grip past 18 in",
-                REGION_COLOURS["other"])
+    k = kind_of(f["kind"], f.get("rule")) or kind(UNEXPLAINED)
     rule = str(f.get("rule") or f["kind"].replace("_", " "))
-    if status == "altered":
-        return f"finding region: {rule}", rule, REGION_COLOURS["altered"]
-    return f"finding region: {rule} (no verdict)", f"{rule}?", REGION_COLOURS["other"]
+    label, short = k.label.format(rule=rule), k.short.format(rule=rule)
+    if not k.alteration or status == "altered":
+        return label, short, k.colour
+    return f"{label} (no verdict)", f"{short}?", OTHER_COLOUR
 
 
 def sign_colours(values: np.ndarray, opacity: np.ndarray | float = 1.0) -> np.ndarray:
@@ -457,7 +453,7 @@ def headline(r: ReportInputs) -> str:
             size = f"a bore about {core:.2f} in across " if core else "a change "
             text += f": {size}from {region[0]:.1f} to {region[1]:.1f} in from the knob end"
             if fill is not None:
-                text += (", left hollow" if fill < 0.05 else
+                text += (", left hollow" if fill < HOLLOW_MAX_FILL else
                          f", filled with material about {fill:.2f} times as dense as the wood")
         rows = mass_rows(r)
         if len(rows) == 3:
