@@ -18,20 +18,12 @@ from dataclasses import dataclass
 import numpy as np
 
 from updating.simulate.lab_methods import lab_verdicts
+from updating.simulate.rulebook import SIZE
 
 METHODS = ("with retest.json", "without retest.json", "scale", "scale+balance")
 """The four methods, in the table's order."""
 RATE = 0.9
 MIN_BATS = 3
-UNITS = {"nails": "g net", "wax": "g", "shaved": "g removed", "flattened": "g removed",
-         "grooved": "g removed"}
-"""Each rulebook kind's size unit; a core's is in^3."""
-READING_KEY = {"nails": "net_added_mass_g", "wax": "added_mass_g",
-               "shaved": "removed_mass_g", "flattened": "removed_mass_g",
-               "grooved": "removed_mass_g"}
-"""Which number of ``truth["finding"]["reading"]`` is each rulebook kind's size."""
-
-
 @dataclass(frozen=True)
 class MethodCount:
     """How often one method called one kind's bats altered.
@@ -102,7 +94,8 @@ def change_size(truth: dict) -> tuple[float, str] | None:
         return None
     finding = truth.get("finding")
     if finding is not None:
-        return float(finding["reading"][READING_KEY[truth["kind"]]]), UNITS[truth["kind"]]
+        key, unit = SIZE[truth["kind"]]
+        return float(finding["reading"][key]), unit
     d_in, length_in = core_dimensions_in(truth)
     return float(np.pi / 4 * d_in**2 * length_in), "in^3"
 

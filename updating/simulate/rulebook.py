@@ -38,6 +38,7 @@ from typing import Literal, get_args
 
 import numpy as np
 
+from updating.inspect.kind_table import Kind, kind
 from updating.model.local_change import LocalChange, section_factors
 from updating.model.profile import Profile
 from updating.model.units import IN_TO_M
@@ -52,15 +53,16 @@ HANDLE_LIMIT_IN = 18.0
 STEEL_KG_M3 = 7850.0
 STEEL_E_PA = 200e9
 
-FINDING = {
-    "nails": ("inserted_mass", "nailed"), "shaved": ("material_removed", "flat-surfaced"),
-    "flattened": ("material_removed", "flat-surfaced"), "grooved": ("material_removed",
-                                                                    "grooved"),
-    "wax": ("surface_coating", "covered with a substance"),
-    **{k: ("handle_substance", "grip substance (3.02(c))")
-       for k in ("pine_tar", "grip_tape", "spray", "tar_past_18")},
-}
-"""Each kind's finding kind and rule words (docs/contract.md, ``finding``)."""
+TABLE_KIND = {"nails": "nailed", "shaved": "flat-surfaced", "flattened": "flat-surfaced",
+              "grooved": "grooved", "wax": "coated", "pine_tar": "grip", "grip_tape": "grip",
+              "spray": "grip", "tar_past_18": "grip_past"}
+"""Each change's kind in the table of kinds (``updating.inspect.kind_table``): its finding
+kind, rule words and legality (docs/contract.md, ``finding``)."""
+SIZE = {"nails": ("net_added_mass_g", "g net"), "wax": ("added_mass_g", "g"),
+        "shaved": ("removed_mass_g", "g removed"), "flattened": ("removed_mass_g", "g removed"),
+        "grooved": ("removed_mass_g", "g removed")}
+"""Each alteration's size for the detection limits (``updating.simulate.limits``): which
+number of its truth's reading, and its unit."""
 
 
 @dataclass(frozen=True)
@@ -85,20 +87,24 @@ class RulebookChange:
     reading: dict
 
     @property
+    def table_kind(self) -> Kind:
+        """Return its kind in the table of kinds (``TABLE_KIND``)."""
+        return kind(TABLE_KIND[self.kind])
+
+    @property
     def finding_kind(self) -> str:
         """Return the contract's finding kind (inserted_mass, material_removed, ...)."""
-        return FINDING[self.kind][0]
+        return self.table_kind.finding
 
     @property
     def altered(self) -> bool:
         """Return whether the rulebook calls this an alteration (a handle substance is not)."""
-        return self.finding_kind != "handle_substance"
+        return self.table_kind.alteration
 
     @property
     def legal(self) -> bool:
-        """Return whether it is a grip substance within 18 in of the knob."""
-        return (self.finding_kind == "handle_substance"
-                and self.region_in[1] <= HANDLE_LIMIT_IN)
+        """Return whether it is legal: a grip substance within 18 in of the knob."""
+        return self.table_kind.legal
 
     def truth(self, integrity: str | None = None) -> dict:
         """Return the JSON-able truth, with the answer expected of the inspection.
@@ -122,7 +128,7 @@ class RulebookChange:
                 "fill_density_ratio": None,
                 "needs_cleaning": not self.altered and not self.legal,
                 "finding": {"kind": self.finding_kind, "legal": self.legal,
-                            "region_in": region, "rule": FINDING[self.kind][1],
+                            "region_in": region, "rule": self.table_kind.rule,
                             "reading": {k: round(v, 4) for k, v in self.reading.items()}}}
 
 
