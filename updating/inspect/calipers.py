@@ -9,7 +9,7 @@ profile"):
    the data;
 3. runs of stations read short, in every orientation (shaving, a groove's ring) or in one
    (a flat facing it), are found by a scan whose false-alarm level is stated
-   (``caliper_scan``: Bonferroni over every run and pattern, ``CALIPER_FALSE_ALARM``); the
+   (``caliper_scan``: Hunter's bound over every run and pattern, ``CALIPER_FALSE_ALARM``); the
    null is estimated again without the runs found and the scan repeated once;
 4. each run is read (``caliper_reading``): shaving, a flat (depth, normal) or grooves
    (rings, depth), where, and the wood removed, with standard uncertainties;
@@ -168,8 +168,8 @@ def _scan(st: Stations, registered: Profile, false_alarm: float):
     use = np.ones(st.n, dtype=bool)
     for _ in range(2):
         null = estimate_null(st, registered, bases, use)
-        z_crit = critical_z(st.n, len(patterns), false_alarm)
         terms = station_terms(st, bases, null, patterns)
+        z_crit = critical_z(terms, false_alarm)
         runs, z_max = find_runs(terms, z_crit)
         found = np.zeros(st.n, dtype=bool)
         for r in runs:
