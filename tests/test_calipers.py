@@ -16,7 +16,7 @@ from dataclasses import replace
 
 import numpy as np
 import pytest
-from hypothesis import given, settings
+from hypothesis import example, given, settings
 from hypothesis import strategies as st
 
 from updating.inspect.caliper_null import estimate_null, station_basis, station_table
@@ -160,6 +160,25 @@ def test_a_shaved_barrel_is_found_with_its_depth_and_stretch(seed):
     assert abs(c.diameter_lost_m - depth) <= 3 * c.diameter_lost_sd_m + 0.002 * IN_TO_M
     assert abs(c.removed_mass_kg - 1e-3 * truth["reading"]["removed_mass_g"]) <= \
         3 * c.removed_mass_sd_kg + 0.05 * c.removed_mass_kg
+
+
+@settings(max_examples=6, deadline=None, derandomize=True)
+@given(seed=st.integers(0, 10**6), start_in=st.floats(17.0, 20.0), depth_in=st.floats(0.05, 0.1))
+@example(seed=2406, start_in=18.089, depth_in=0.0881)  # its taper was once read as grooves
+def test_a_shave_that_begins_on_the_taper_is_one_shaving_from_its_start(seed, start_in,
+                                                                       depth_in):
+    """The taper, where the caliper's placement is noisiest, may be taken as a run of its
+    own; read beside the shaving with the same depth, it is the shaving's start."""
+    case, _, rho = _bat(seed)
+    length_in = case.retest.profile.length_m / IN_TO_M
+    shave = LocalChange(start_in * IN_TO_M, (length_in - 1.0) * IN_TO_M,
+                        diameter_loss_m=depth_in * IN_TO_M)
+    bat = _with(case, [shave])
+    survey, _ = retest_survey(np.random.default_rng([seed, 38]), bat, 4,
+                              mark_deg=case.baseline.theta_deg)
+    (c,) = compare_profiles(case.profile, survey, rho).changes
+    assert c.kind == "shaved"
+    assert abs(c.region_m[0] / IN_TO_M - start_in) <= 1.5
 
 
 REGISTRATIONS = ("mean", "one_orientation", "any_orientation", "averaged")

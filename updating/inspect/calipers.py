@@ -118,14 +118,22 @@ def _same_change(a: CaliperChange, b: CaliperChange) -> bool:
     """Tell whether two changes found side by side are one (shaving, or one flat).
 
     Side by side: at most ``JOIN_GAP_IN`` apart (a station that read less than its
-    neighbours stops a run's end: the rest is found as another run).
+    neighbours stops a run's end: the rest is found as another run). Shaving joins shaving,
+    and a short piece read as grooves beside it that lost the same diameter (within three
+    standard uncertainties of the difference: a shaved taper, where the caliper's placement
+    is noisiest, can be taken as a separate run under 2 in long); the joined run is read
+    again as a whole, so rings between stations that read no loss stay grooves.
     """
     gap = b.region_m[0] - a.region_m[1]
-    if a.kind != b.kind or a.kind == "grooves" or gap > JOIN_GAP_IN * IN_TO_M:
+    if gap > JOIN_GAP_IN * IN_TO_M:
         return False
-    if a.kind == "flat":
+    if a.kind == b.kind == "flat":
         return abs((a.flat_angle_deg - b.flat_angle_deg + 90.0) % 180.0 - 90.0) < FLAT_SAME_DEG
-    return True
+    kinds = {a.kind, b.kind}
+    if "shaved" not in kinds or not kinds <= {"shaved", "grooves"}:
+        return False
+    sd = np.hypot(a.diameter_lost_sd_m, b.diameter_lost_sd_m)
+    return abs(a.diameter_lost_m - b.diameter_lost_m) <= 3 * sd
 
 
 def _joined(changes: list[CaliperChange], runs: list[Run], read) -> list[CaliperChange]:
