@@ -181,6 +181,21 @@ def test_a_shave_that_begins_on_the_taper_is_one_shaving_from_its_start(seed, st
     assert abs(c.region_m[0] / IN_TO_M - start_in) <= 1.5
 
 
+@pytest.mark.parametrize("seed", [510125, 510199])
+def test_a_shaving_found_at_one_orientation_reads_as_shaving_to_its_end(seed):
+    """Field bats whose shaving the scan first took at one orientation, its last station
+    past the shaving's end (bench_calipers --seed 500000): read as shaving, not grooves,
+    over its own stretch."""
+    case, bat, rho = _bat(seed, "shaved")
+    survey, _ = retest_survey(np.random.default_rng([seed, 38]), bat, 4,
+                              mark_deg=case.baseline.theta_deg)
+    (c,) = compare_profiles(case.profile, survey, rho).changes
+    start, end = case.truth["region_in"]
+    assert c.kind == "shaved"
+    assert abs(c.region_m[0] / IN_TO_M - start) <= 1.5
+    assert abs(c.region_m[1] / IN_TO_M - end) <= 1.5
+
+
 REGISTRATIONS = ("mean", "one_orientation", "any_orientation", "averaged")
 
 
