@@ -30,7 +30,7 @@ Each window is paired with the one of its earlier neighbours it is most correlat
 same run one station earlier, the next shorter run from the same station, or the same run in
 an earlier pattern (``critical_z``); r from the stations' cross-information and the common
 offsets. The runs overlap heavily (a run of L stations and its shift share L - 1; orientations
-90 deg apart have the same residual), so the bound is 0.2-0.4 below Bonferroni's
+90 deg apart have the same residual), so the bound is 0.15-0.2 below Bonferroni's
 ``Phi^-1(1 - alpha / M)`` (M = patterns x runs), which it never exceeds; a survey of an
 unaltered bat is called changed with probability at most alpha (``CALIPER_FALSE_ALARM``) under
 the null. A noise level estimated above its floor makes z a
