@@ -104,9 +104,10 @@ def wax_truth(mass_g, dw_lb, dcg_in):
 
 
 def hand_made_rows():
-    """Wax 2, 4, 6, 8 g: batlab finds 4-8 g with retest.json, 4 g of the two without; the
-    scale (> 2.4 % of 2 lb) only the 8 g bat; the balance point (limit 0.1 in) 6 and 8 g.
-    Two clean bats, one called altered with retest.json and moved 0.2 in on the balance."""
+    """Wax 2, 4, 6, 8 g: batlab finds 4-8 g with retest.json, 4 g of the two without, 6 g
+    of the two with the re-test profile; the scale (> 2.4 % of 2 lb) only the 8 g bat; the
+    balance point (limit 0.1 in) 6 and 8 g. Two clean bats, one called altered with
+    retest.json and moved 0.2 in on the balance, neither with the profile."""
     wax = {1: (2.0, 0.0, 0.0), 2: (4.0, 0.0, 0.05), 3: (6.0, 0.01, 0.2), 4: (8.0, 0.06, 0.2)}
     rows = []
     for seed, (m, dw, dcg) in wax.items():
@@ -116,10 +117,15 @@ def hand_made_rows():
         if seed <= 2:
             rows.append({"kind": "wax", "seed": seed, "with_meta": False, "truth": truth,
                          "status": "altered" if m == 4.0 else "inconclusive"})
+        if seed in (2, 3):
+            rows.append({"kind": "wax", "seed": seed, "with_meta": True, "with_profile": True,
+                         "truth": truth, "status": "altered" if m == 6.0 else "not_altered"})
     for seed, status, dcg in ((10, "altered", 0.2), (11, "not_altered", 0.0)):
         truth = {"kind": "none", "altered": False, "lab_readings": lab(0.0, dcg)}
         rows += [{"kind": "none", "seed": seed, "with_meta": meta, "truth": truth,
                   "status": status if meta else "not_altered"} for meta in (True, False)]
+        rows.append({"kind": "none", "seed": seed, "with_meta": True, "with_profile": True,
+                     "truth": truth, "status": "not_altered"})
     rows.append({"kind": "wax", "seed": 99, "with_meta": True, "status": "error",
                  "error": "simulation broke"})
     return rows
@@ -132,10 +138,10 @@ def cells(table, kind):
 
 def test_limits_table_counts_hand_made_rows():
     table = limits_table(hand_made_rows(), balance_limit_in=0.1)
-    assert cells(table, "wax") == ["wax", "4", "2-8 g", "3/4", "1/2", "1/4", "2/4",
-                                   "4 g", "-", "-", "-"]
+    assert cells(table, "wax") == ["wax", "4", "2-8 g", "3/4", "1/2", "1/2", "1/4", "2/4",
+                                   "4 g", "-", "-", "-", "-"]
     assert cells(table, "none") == ["none", "2", "false alarms (called altered)", "1/2", "0/2",
-                                    "0/2", "1/2", "-", "-", "-", "-"]
+                                    "0/2", "0/2", "1/2", "-", "-", "-", "-", "-"]
     assert "balance limit 0.100 in" in table
 
 
@@ -158,4 +164,5 @@ def test_bench_summary_prints_the_limits(tmp_path, capsys, monkeypatch):
     assert bench.main(["--summary", str(path), "--balance-clean", "7"]) == 0
     err = capsys.readouterr().err
     assert "## Detection limits" in err
-    assert cells(err.split("## Detection limits")[1], "wax")[3:7] == ["3/4", "1/2", "1/4", "2/4"]
+    assert cells(err.split("## Detection limits")[1], "wax")[3:8] == ["3/4", "1/2", "1/2", "1/4",
+                                                                     "2/4"]

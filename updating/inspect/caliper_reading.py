@@ -27,7 +27,10 @@ bat's own ovality of amplitude a, unknown, taken as random for the reading).
   round bat has): the ovality read on the whole bat may be less than the barrel's.
 - **Grooves**: a uniform run shorter than ``GROOVE_MAX_IN`` (the modal reading's length
   between grooved and flat-surfaced), or one whose stations do not all read its loss
-  (a station between two rings reads none), is grooves: every station whose own drop is
+  (a station between two rings reads none: a station's own drop below the run's by more
+  than ``Phi^-1(1 - GROOVE_GAP_TAIL / n)`` sd, n the run's stations, so that a shaving's
+  n stations show such a station by chance at most ``GROOVE_GAP_TAIL`` of the time,
+  whatever its length), is grooves: every station whose own drop is
   beyond ``GROOVE_MIN_Z`` standard uncertainties is in a ring; its depth is half the
   diameter it lost.
 
@@ -44,6 +47,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from scipy.special import ndtri
 
 from updating.inspect.caliper_null import OVALITY_DEFAULT_IN, CaliperNull, Stations, mean_variance
 from updating.inspect.caliper_scan import UNIFORM, Run, Terms, window_stats
@@ -57,6 +61,9 @@ FLAT_MIN_DCHI2 = 9.0
 """How much better (chi^2) a flat must fit a uniform run's orientations than shaving."""
 GROOVE_MIN_Z = 3.0
 """A station of a found run is in a ring when its own drop is this many sd beyond zero."""
+GROOVE_GAP_TAIL = 0.00135
+"""Chance that some station of a shaved run reads clearly less than the run by noise alone
+(one station: 3 sd)."""
 GROOVE_WIDTH_IN = (0.1, 0.25)
 """The widths grooves are cut (the rulebook's), for a ring's volume."""
 
@@ -209,13 +216,45 @@ def groove_stations(st: Stations, t: Terms, run: Run) -> np.ndarray:
     return np.arange(run.i0, run.i1)[z > GROOVE_MIN_Z]
 
 
+def _reads_less(t: Terms, i: int, h: float, n: int) -> bool:
+    """Tell whether station ``i`` reads none of an n-station run's loss ``h``.
+
+    Its own uniform drop lies below h by more than ``Phi^-1(1 - GROOVE_GAP_TAIL / n)`` of its
+    sd.
+    """
+    _, own, sd = window_stats(t, UNIFORM, i, i + 1)
+    return bool(own < h - ndtri(1.0 - GROOVE_GAP_TAIL / n) * sd)
+
+
+def trim_ends(t: Terms, run: Run) -> Run:
+    """Drop a uniform reading's end stations that read none of its loss.
+
+    A run found in an ``orientation`` pattern has its ends placed on that orientation's
+    readings, half the information of every orientation's: its last station may lie past a
+    shaving's end. Read as shaving or grooves, an end station whose own drop is below the
+    run's (``_reads_less``) is outside it.
+    """
+    i0, i1 = run.i0, run.i1
+    while i1 - i0 > 1:
+        h = window_stats(t, UNIFORM, i0, i1)[1]
+        if _reads_less(t, i1 - 1, h, i1 - i0):
+            i1 -= 1
+        elif _reads_less(t, i0, h, i1 - i0):
+            i0 += 1
+        else:
+            break
+    if (i0, i1) == (run.i0, run.i1):
+        return run
+    _, h, sd = window_stats(t, run.pattern, i0, i1)
+    return Run(run.pattern, i0, i1, run.z, h, sd)
+
+
 def is_grooves(st: Stations, t: Terms, run: Run) -> bool:
     """Tell whether a uniform run is grooves: short, or a station reading clearly less."""
     if st.x_m[run.i1 - 1] - st.x_m[run.i0] < GROOVE_MAX_IN * IN_TO_M:
         return True
-    own = np.array([window_stats(t, UNIFORM, i, i + 1) for i in range(run.i0, run.i1)])
     h = window_stats(t, UNIFORM, run.i0, run.i1)[1]
-    return bool(np.any(own[:, 1] < h - 3 * own[:, 2]))
+    return any(_reads_less(t, i, h, run.i1 - run.i0) for i in range(run.i0, run.i1))
 
 
 def read_grooves(st: Stations, t: Terms, run: Run, rho: float,
@@ -271,6 +310,12 @@ def read_run(st: Stations, null: CaliperNull, t: Terms, run: Run, rho: float,
     h_f, h_f_sd, phi, phi_sd, chi2_f = read_flat(rd)
     h_s, h_s_sd, chi2_s = read_shave(rd)
     flat = chi2_s - chi2_f > FLAT_MIN_DCHI2
+    if not flat:
+        trimmed = trim_ends(t, run)
+        if trimmed != run:
+            run = trimmed
+            rd = run_drops(st, null, run.i0, run.i1, t.tau_ov2)
+            h_s, h_s_sd, chi2_s = read_shave(rd)
     if not flat and is_grooves(st, t, run):
         return read_grooves(st, t, run, rho)
     x0, x1, start_sd = _ends(st, run.i0, run.i1, length_m)

@@ -18,12 +18,22 @@ A, B, C the sums over the run, C_g = sum c_i g_i; tau_ov (the registration's ova
 orientations' mean ovality, common along the bat) and tau_s (the shrinkage's uncertainty, in
 proportion to g) are the systematic offsets no averaging removes. Runs of
 ``WINDOW_LENGTHS`` stations at every start and every pattern are scanned; a change is found
-where z exceeds the Bonferroni bound over all of them,
+where z exceeds the bound u at which Hunter's (1976) improvement of Bonferroni's inequality
+over all of them reaches alpha:
 
-    z_crit = Phi^-1(1 - alpha / M),   M = patterns x runs,
+    P(max z > u) <= sum_w Q(u) - sum_(w, w') in T P(z_w > u, z_w' > u)
+                  = sum_roots Q(u) + sum_(w, w') in T 2 T_Owen(u, sqrt((1 - r) / (1 + r))) = alpha
 
-so that a survey of an unaltered bat is called changed with probability at most alpha
-(``CALIPER_FALSE_ALARM``) under the null. A noise level estimated above its floor makes z a
+for any forest T of pairs of windows (Q the normal upper tail; for a bivariate normal pair of
+correlation r, ``P(z_w' > u, z_w <= u) = 2 T_Owen(u, sqrt((1 - r) / (1 + r)))``, Owen 1956).
+Each window is paired with the one of its earlier neighbours it is most correlated with: the
+same run one station earlier, the next shorter run from the same station, or the same run in
+an earlier pattern (``critical_z``); r from the stations' cross-information and the common
+offsets. The runs overlap heavily (a run of L stations and its shift share L - 1; orientations
+90 deg apart have the same residual), so the bound is 0.15-0.2 below Bonferroni's
+``Phi^-1(1 - alpha / M)`` (M = patterns x runs), which it never exceeds; a survey of an
+unaltered bat is called changed with probability at most alpha (``CALIPER_FALSE_ALARM``) under
+the null. A noise level estimated above its floor makes z a
 Student's t: its degrees of freedom for a pattern, by Welch and Satterthwaite from the
 shares of the pattern's information carried by the mean channel (the registration's noise,
 nu_g) and the residual (the caliper's, nu_re), ``1 / nu = s_m^2 / nu_g + s_r^2 / nu_re``;
@@ -39,7 +49,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.special import ndtri, stdtr
+from scipy.optimize import brentq
+from scipy.special import ndtr, ndtri, owens_t, stdtr
 
 from updating.inspect.caliper_null import (
     CaliperNull,
@@ -92,6 +103,9 @@ class Terms:
     ----------
     a, b, c : ndarray
         (P, N) per pattern and station.
+    bx : ndarray
+        (P, P, N) the patterns' cross-information per station (``b`` on its diagonal):
+        the covariance of ``a`` between two patterns under the null.
     g_m : ndarray
         (N,) the registered diameters, m.
     tau_ov2, tau_s2 : float
@@ -103,6 +117,7 @@ class Terms:
     a: np.ndarray
     b: np.ndarray
     c: np.ndarray
+    bx: np.ndarray
     g_m: np.ndarray
     tau_ov2: float
     tau_s2: float
@@ -156,25 +171,26 @@ def station_terms(st: Stations, bases: list[StationBasis], null: CaliperNull,
     s2 = null.sigma_retest_m**2
     P, N = len(patterns), st.n
     a, b, c = np.zeros((P, N)), np.zeros((P, N)), np.zeros((P, N))
+    bx = np.zeros((P, P, N))
     info_r = np.zeros(P)
     for i in range(N):
         q = bases[i].q
         drops = st.g_m[i] * (1 + null.scale) - st.readings_m[i]
         yr = q.T @ drops
-        for k, pat in enumerate(patterns):
-            p = pat.vector(st.angles_deg[i])
-            pm, pr = p.mean(), q.T @ p
-            a[k, i] = pm * ybar[i] / v[i] + pr @ yr / s2
-            b[k, i] = pm**2 / v[i] + pr @ pr / s2
-            c[k, i] = pm / v[i]
-            info_r[k] += pr @ pr / s2
+        ps = np.array([pat.vector(st.angles_deg[i]) for pat in patterns])
+        pm, pr = ps.mean(axis=1), ps @ q
+        a[:, i] = pm * ybar[i] / v[i] + pr @ yr / s2
+        bx[:, :, i] = np.outer(pm, pm) / v[i] + pr @ pr.T / s2
+        b[:, i] = np.diagonal(bx[:, :, i])
+        c[:, i] = pm / v[i]
+        info_r += np.einsum("kj,kj->k", pr, pr) / s2
     worst = max((b.mean_ovality for b in bases), default=1.0)
     tau_ov2 = 0.5 * null.ovality_m**2 * (1.0 + worst**2)
     share_r = info_r / np.maximum(b.sum(axis=1), 1e-300)
     with np.errstate(divide="ignore"):
         inv = (1 - share_r) ** 2 / null.dof_registration + share_r**2 / null.dof_retest
         dof = np.where(inv > 0, 1.0 / np.where(inv > 0, inv, 1.0), np.inf)
-    return Terms(a, b, c, st.g_m, tau_ov2, null.scale_sd**2, dof)
+    return Terms(a, b, c, bx, st.g_m, tau_ov2, null.scale_sd**2, dof)
 
 
 def window_stats(t: Terms, k: int, i0: int, i1: int) -> tuple[float, float, float]:
@@ -193,9 +209,97 @@ def n_tests(n_stations: int, n_patterns: int) -> int:
     return n_patterns * sum(n_stations - L + 1 for L in WINDOW_LENGTHS if L <= n_stations)
 
 
-def critical_z(n_stations: int, n_patterns: int, false_alarm: float) -> float:
+def bonferroni_z(n_stations: int, n_patterns: int, false_alarm: float) -> float:
     """Bonferroni's bound: ``Phi^-1(1 - alpha / M)`` (module docstring)."""
     return float(ndtri(1.0 - false_alarm / max(n_tests(n_stations, n_patterns), 1)))
+
+
+def _cum(x: np.ndarray) -> np.ndarray:
+    """Cumulative sums along the last axis with a leading 0."""
+    return np.concatenate([np.zeros(x.shape[:-1] + (1,)), np.cumsum(x, axis=-1)], axis=-1)
+
+
+def window_correlations(t: Terms) -> np.ndarray:
+    """Return each scanned window's largest correlation with an earlier neighbour.
+
+    Windows are taken pattern by pattern, run length by run length, start by start; a
+    window's earlier neighbours are the same run one station earlier, the next shorter run
+    from the same station and the same run in each earlier pattern. Under the null the
+    windows' sums ``A`` have covariance ``sum_i bx_kl,i`` over the shared stations plus the
+    common offsets ``tau_ov^2 C C' + tau_s^2 C_g C_g'``.
+
+    Returns
+    -------
+    ndarray
+        One correlation per window the scan tests (``B > 0``); nan for a window with no
+        earlier neighbour (a root of the forest).
+    """
+    P, N = t.a.shape
+    cbx, cc, ccg = _cum(t.bx), _cum(t.c), _cum(t.c * t.g_m)
+    out = []
+    lengths = [L for L in WINDOW_LENGTHS if L <= N]
+
+    for k in range(P):
+        for j, L in enumerate(lengths):
+            i = np.arange(N - L + 1)
+
+            def win(m, i=i, L=L):
+                B = cbx[m, m, i + L] - cbx[m, m, i]
+                C, Cg = cc[m, i + L] - cc[m, i], ccg[m, i + L] - ccg[m, i]
+                return B, C, Cg, B + t.tau_ov2 * C**2 + t.tau_s2 * Cg**2
+
+            B, C, Cg, var = win(k)
+            best = np.full(i.size, -np.inf)
+            # the same run one station earlier: stations i .. i + L - 2 shared
+            if i.size > 1:
+                j0, j1 = i[1:], i[1:] + L - 1
+                Cp, Cgp, varp = C[:-1], Cg[:-1], var[:-1]
+                cov = (cbx[k, k, j1] - cbx[k, k, j0] + t.tau_ov2 * C[1:] * Cp
+                       + t.tau_s2 * Cg[1:] * Cgp)
+                r = cov / np.sqrt(np.maximum(var[1:] * varp, 1e-300))
+                best[1:] = np.where(B[:-1] > 0, r, -np.inf)
+            # the next shorter run from the same station: its stations all shared
+            if j:
+                Ls = lengths[j - 1]
+                Bs = cbx[k, k, i + Ls] - cbx[k, k, i]
+                Cs, Cgs = cc[k, i + Ls] - cc[k, i], ccg[k, i + Ls] - ccg[k, i]
+                vs = Bs + t.tau_ov2 * Cs**2 + t.tau_s2 * Cgs**2
+                cov = Bs + t.tau_ov2 * C * Cs + t.tau_s2 * Cg * Cgs
+                r = cov / np.sqrt(np.maximum(var * vs, 1e-300))
+                best = np.maximum(best, np.where(Bs > 0, r, -np.inf))
+            # the same run in an earlier pattern
+            for m in range(k):
+                Bm, Cm, Cgm, vm = win(m)
+                cov = cbx[k, m, i + L] - cbx[k, m, i] + t.tau_ov2 * C * Cm + t.tau_s2 * Cg * Cgm
+                r = cov / np.sqrt(np.maximum(var * vm, 1e-300))
+                best = np.maximum(best, np.where(Bm > 0, r, -np.inf))
+            best = np.where(np.isfinite(best), np.clip(best, -1.0, 1.0), np.nan)
+            out.append(best[B > 0])
+    return np.concatenate(out) if out else np.zeros(0)
+
+
+def hunter_tail(u: float, r: np.ndarray) -> float:
+    """Hunter's bound on P(max z > u) for windows with parent correlations ``r`` (nan: root).
+
+    ``sum_roots Q(u) + sum_pairs 2 T_Owen(u, sqrt((1 - r) / (1 + r)))`` (module docstring).
+    """
+    root = np.isnan(r)
+    rr = np.clip(r[~root], -1.0 + 1e-12, 1.0)
+    return float(root.sum() * ndtr(-u) + 2 * owens_t(u, np.sqrt((1 - rr) / (1 + rr))).sum())
+
+
+def critical_z(t: Terms, false_alarm: float) -> float:
+    """Return the scan's bound: u where ``hunter_tail`` reaches ``false_alarm`` (module docstring).
+
+    Never above Bonferroni's ``bonferroni_z`` over the windows tested.
+    """
+    r = window_correlations(t)
+    if not r.size:
+        return float(ndtri(1.0 - false_alarm))
+    top = float(ndtri(1.0 - false_alarm / r.size))
+    if hunter_tail(top, r) <= false_alarm * (1 + 1e-9) and hunter_tail(1.0, r) > false_alarm:
+        return float(brentq(lambda u: hunter_tail(u, r) - false_alarm, 1.0, top, xtol=1e-4))
+    return top
 
 
 def _window_z(t: Terms, used: np.ndarray) -> tuple[float, int, int, int]:

@@ -9,7 +9,7 @@ profile"):
    the data;
 3. runs of stations read short, in every orientation (shaving, a groove's ring) or in one
    (a flat facing it), are found by a scan whose false-alarm level is stated
-   (``caliper_scan``: Bonferroni over every run and pattern, ``CALIPER_FALSE_ALARM``); the
+   (``caliper_scan``: Hunter's bound over every run and pattern, ``CALIPER_FALSE_ALARM``); the
    null is estimated again without the runs found and the scan repeated once;
 4. each run is read (``caliper_reading``): shaving, a flat (depth, normal) or grooves
    (rings, depth), where, and the wood removed, with standard uncertainties;
@@ -118,14 +118,22 @@ def _same_change(a: CaliperChange, b: CaliperChange) -> bool:
     """Tell whether two changes found side by side are one (shaving, or one flat).
 
     Side by side: at most ``JOIN_GAP_IN`` apart (a station that read less than its
-    neighbours stops a run's end: the rest is found as another run).
+    neighbours stops a run's end: the rest is found as another run). Shaving joins shaving,
+    and a short piece read as grooves beside it that lost the same diameter (within three
+    standard uncertainties of the difference: a shaved taper, where the caliper's placement
+    is noisiest, can be taken as a separate run under 2 in long); the joined run is read
+    again as a whole, so rings between stations that read no loss stay grooves.
     """
     gap = b.region_m[0] - a.region_m[1]
-    if a.kind != b.kind or a.kind == "grooves" or gap > JOIN_GAP_IN * IN_TO_M:
+    if gap > JOIN_GAP_IN * IN_TO_M:
         return False
-    if a.kind == "flat":
+    if a.kind == b.kind == "flat":
         return abs((a.flat_angle_deg - b.flat_angle_deg + 90.0) % 180.0 - 90.0) < FLAT_SAME_DEG
-    return True
+    kinds = {a.kind, b.kind}
+    if "shaved" not in kinds or not kinds <= {"shaved", "grooves"}:
+        return False
+    sd = np.hypot(a.diameter_lost_sd_m, b.diameter_lost_sd_m)
+    return abs(a.diameter_lost_m - b.diameter_lost_m) <= 3 * sd
 
 
 def _joined(changes: list[CaliperChange], runs: list[Run], read) -> list[CaliperChange]:
@@ -168,8 +176,8 @@ def _scan(st: Stations, registered: Profile, false_alarm: float):
     use = np.ones(st.n, dtype=bool)
     for _ in range(2):
         null = estimate_null(st, registered, bases, use)
-        z_crit = critical_z(st.n, len(patterns), false_alarm)
         terms = station_terms(st, bases, null, patterns)
+        z_crit = critical_z(terms, false_alarm)
         runs, z_max = find_runs(terms, z_crit)
         found = np.zeros(st.n, dtype=bool)
         for r in runs:

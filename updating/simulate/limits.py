@@ -6,7 +6,8 @@ steel less the wood of its pilot holes); wax by its grams; shaved, flattened and
 barrels by the grams of wood removed (with the diameter lost beside it). ``found_from``
 reads, from the bats' sizes and whether a method found them, the smallest size from which
 a method finds at least 90 % of the bats; ``limits_rows`` and ``limits_table`` put batlab
-(with and without retest.json) beside a scale and a scale with the balance point
+(with and without retest.json, and with the re-test's caliper profile and retest.json) beside
+a scale and a scale with the balance point
 (``updating.simulate.lab_methods``) judged on the same bats. Clean and legal kinds give
 their false alarms instead.
 """
@@ -20,8 +21,10 @@ import numpy as np
 from updating.simulate.lab_methods import lab_verdicts
 from updating.simulate.rulebook import SIZE
 
-METHODS = ("with retest.json", "without retest.json", "scale", "scale+balance")
-"""The four methods, in the table's order."""
+PROFILE = "with re-test profile"
+"""The method that inspects with retest.json and the re-test's caliper profile."""
+METHODS = ("with retest.json", "without retest.json", PROFILE, "scale", "scale+balance")
+"""The methods, in the table's order."""
 RATE = 0.9
 MIN_BATS = 3
 @dataclass(frozen=True)
@@ -163,9 +166,10 @@ def found_from(sizes, found, rate: float = RATE, min_bats: int = MIN_BATS) -> fl
 
 
 def pair_bats(rows: list[dict]) -> dict[tuple, dict]:
-    """Gather result rows by bat, (kind, seed): its truth and its status with and without.
+    """Gather result rows by bat, (kind, seed): its truth and its status per way inspected.
 
-    Rows without a truth (the benchmark failed on that bat) are left out.
+    Rows without a truth (the benchmark failed on that bat) are left out. A row with
+    ``with_profile`` true was inspected with the re-test's caliper profile (and retest.json).
 
     Parameters
     ----------
@@ -175,7 +179,8 @@ def pair_bats(rows: list[dict]) -> dict[tuple, dict]:
     Returns
     -------
     dict
-        (kind, seed) to {"kind", "truth", True: status with retest.json, False: without}.
+        (kind, seed) to {"kind", "truth", True: status with retest.json, False: without,
+        ``PROFILE``: with the re-test profile}.
     """
     bats: dict[tuple, dict] = {}
     for r in rows:
@@ -183,7 +188,8 @@ def pair_bats(rows: list[dict]) -> dict[tuple, dict]:
             continue
         key = (r["kind"], r.get("seed", r.get("serial")))
         bat = bats.setdefault(key, {"kind": r["kind"], "truth": r["truth"]})
-        bat[bool(r.get("with_meta", True))] = r["status"]
+        way = PROFILE if r.get("with_profile") else bool(r.get("with_meta", True))
+        bat[way] = r["status"]
     return bats
 
 
@@ -191,9 +197,10 @@ def _calls(bats: list[dict], balance_limit_in: float) -> dict[str, tuple[list[in
     """Return, per method, the indices of the bats it judged and whether it called them altered."""
     lab = [lab_verdicts(b["truth"], balance_limit_in) for b in bats]
     calls = {}
-    for name, meta in (("with retest.json", True), ("without retest.json", False)):
-        idx = [i for i, b in enumerate(bats) if meta in b]
-        calls[name] = (idx, [bats[i][meta] == "altered" for i in idx])
+    for name, way in (("with retest.json", True), ("without retest.json", False),
+                      (PROFILE, PROFILE)):
+        idx = [i for i, b in enumerate(bats) if way in b]
+        calls[name] = (idx, [bats[i][way] == "altered" for i in idx])
     for name in ("scale", "scale+balance"):
         calls[name] = (list(range(len(bats))), [v[name] for v in lab])
     return calls
@@ -280,8 +287,9 @@ def _line(k: KindLimits) -> str:
 def limits_table(rows: list[dict], balance_limit_in: float) -> str:
     """Tabulate the detection limits per kind (markdown).
 
-    Per kind: bats, the size range with its unit, found k/n with retest.json, without it, by
-    the scale, by the scale and balance point, and for each of the four the size from which
+    Per kind: bats, the size range with its unit, found k/n with retest.json, without it,
+    with the re-test's caliper profile, by the scale, by the scale and balance point, and for
+    each the size from which
     90 % of the bats were found (``found_from``, at least 3 bats); a clean or legal kind's
     counts are its false alarms.
 
