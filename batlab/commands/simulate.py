@@ -25,9 +25,9 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                         "truth.json) in the folder -o; see --kind, --nuisances, --integrity, "
                         "--seed (--case DIR: deprecated, use --case -o DIR)")
     p.add_argument("--kind", default="none",
-                   help="--case: alteration of the re-test: none, cork, deep, empty, end_plug, "
-                        "partial, small, neutral, or the rulebook's nails, shaved, flattened, "
-                        "grooved, wax, pine_tar, grip_tape, spray, tar_past_18")
+                   help="--case: alteration of the re-test, one of the simulator's kinds "
+                        "(none, a core such as cork, or a rulebook kind such as nails or "
+                        "flattened); an unknown name is refused with the whole list")
     p.add_argument("--calipers", type=int, default=0, metavar="N",
                    help="--case: also the re-test's caliper profile read at N orientations "
                         "(retest_profile.csv; 4: 0, 45, 90, 135 deg)")
