@@ -20,7 +20,6 @@ import pytest
 from batlab.registry.records import decode_modes, encode_modes
 from updating.inspect.finding import Finding
 from updating.inspect.plane_split import (
-    RATIO_DRIFT,
     _patterns,
     read_plane_split,
     split_model,
@@ -31,7 +30,7 @@ from updating.model.local_change import LocalChange
 from updating.model.reference import BatReference
 from updating.model.units import IN_TO_M
 from updating.simulate.field_fleet import draw_case
-from updating.simulate.plane_pairs import simulate_pair_modes
+from updating.simulate.plane_pairs import planes_case
 from updating.simulate.virtual_bat import VirtualBat
 from updating.simulate.wide import pair_frequencies
 
@@ -40,27 +39,16 @@ NOISE = 3e-5
 
 
 def reference_of(bat: VirtualBat) -> BatReference:
-    """The bat's reference as calibration would give it: its nominal wood, no wood field."""
+    """The bat's nominal wood as its reference (no calibration error, no wood field)."""
     w = bat.material
     return BatReference(w.E_pa, w.rho_kg_m3, w.e_over_g, beam="timoshenko",
-                        rotary_inertia=True, sensor_mass_kg=bat.sensor_mass_kg,
-                        sensor_x_m=bat.sensor_x_m(), bungee_k_n_per_m=bat.bungee_k_n_per_m)
+                        rotary_inertia=True)
 
 
 def two_tests(seed: int, kind: str = "none", flat: LocalChange | None = None):
-    """A nuisance-rich two-plane case, both tests tapped 30-60 deg, the planes' E/G moved
-    apart by up to ``RATIO_DRIFT`` each; (case, baseline modes, re-test modes)."""
-    rng = np.random.default_rng(1000 + seed)
-    case = draw_case(np.random.default_rng(seed), kind)
-    base = replace(case.baseline, theta_deg=rng.uniform(30, 60))
-    re = case.retest
-    drift = 1 + rng.uniform(-RATIO_DRIFT, RATIO_DRIFT, 2)
-    re = replace(re, theta_deg=rng.uniform(30, 60), e_over_g_t=re.e_over_g_t * drift[0],
-                 material=replace(re.material, e_over_g=re.material.e_over_g * drift[1]),
-                 local_changes=re.local_changes + ((flat,) if flat else ()))
-    case = replace(case, baseline=base, retest=re)
-    return (case, simulate_pair_modes(base, 6, NOISE, seed=2 * seed),
-            simulate_pair_modes(re, 6, NOISE, seed=2 * seed + 1))
+    """(case, reference, baseline modes, re-test modes) of ``plane_pairs.planes_case``."""
+    c = planes_case(seed, kind, flat, NOISE)
+    return c.case, c.reference, c.baseline, c.retest
 
 
 def hidden_flat(seed: int, length_in: float) -> LocalChange:
@@ -78,8 +66,8 @@ def hidden_flat(seed: int, length_in: float) -> LocalChange:
 def test_a_hidden_flat_is_read_from_the_splits(seed):
     case0 = draw_case(np.random.default_rng(seed), "none")
     flat = hidden_flat(seed, case0.profile.length_m / IN_TO_M)
-    case, mb, mr = two_tests(seed, flat=flat)
-    s = read_plane_split(case.profile, reference_of(case.baseline), mb, mr)
+    case, ref, mb, mr = two_tests(seed, flat=flat)
+    s = read_plane_split(case.profile, ref, mb, mr)
     assert len(s.pairs) == 6 and s.significant and s.p_value < 1e-3
     # the simulator's radial plane is the upper member (E/G radial 9-12 < tangential 12-16)
     cos2 = np.cos(np.radians(2 * flat.flat_angle_deg))
@@ -94,8 +82,8 @@ def test_a_hidden_flat_is_read_from_the_splits(seed):
 @pytest.mark.parametrize("seed,kind", [(10, "none"), (11, "none"), (12, "none"),
                                        (13, "pine_tar"), (14, "grip_tape"), (15, "none")])
 def test_clean_drifting_and_gripped_bats_are_not_read(seed, kind):
-    case, mb, mr = two_tests(seed, kind)
-    s = read_plane_split(case.profile, reference_of(case.baseline), mb, mr)
+    case, ref, mb, mr = two_tests(seed, kind)
+    s = read_plane_split(case.profile, ref, mb, mr)
     assert len(s.pairs) == 6
     assert not s.significant and s.statistic < s.critical
     assert any("not evidence of a clean barrel" in n for n in s.notes)
@@ -107,8 +95,8 @@ def test_a_flat_at_45_deg_is_not_measurable_and_never_a_clean_barrel():
     L = case0.profile.length_m
     flat = LocalChange(L - 10 * IN_TO_M, L - IN_TO_M, flat_depth_m=0.08 * IN_TO_M,
                        flat_angle_deg=45.0)
-    case, mb, mr = two_tests(3, flat=flat)
-    s = read_plane_split(case.profile, reference_of(case.baseline), mb, mr)
+    case, ref, mb, mr = two_tests(3, flat=flat)
+    s = read_plane_split(case.profile, ref, mb, mr)
     assert not s.significant
     v = join_plane_split(_verdict(False), s)
     assert v.altered is False and "normal lies near 45 deg" in v.reasons[-1]
@@ -141,8 +129,8 @@ def test_a_read_flat_makes_a_clean_verdict_at_most_inconclusive_and_joins_the_ca
     case0 = draw_case(np.random.default_rng(1), "none")
     L = case0.profile.length_m
     flat = LocalChange(L - 9 * IN_TO_M, L - IN_TO_M, flat_depth_m=0.06 * IN_TO_M)
-    case, mb, mr = two_tests(1, flat=flat)
-    s = read_plane_split(case.profile, reference_of(case.baseline), mb, mr)
+    case, ref, mb, mr = two_tests(1, flat=flat)
+    s = read_plane_split(case.profile, ref, mb, mr)
     assert s.significant
     v = join_plane_split(_verdict(False), s)
     assert v.altered is None and v.reasons[0].startswith("a flat suspected")
@@ -156,9 +144,9 @@ def test_a_read_flat_makes_a_clean_verdict_at_most_inconclusive_and_joins_the_ca
 
 
 def test_too_few_pairs_is_not_measurable_with_what_would_measure_it():
-    case, mb, mr = two_tests(4)
+    case, ref, mb, mr = two_tests(4)
     one = mb.select([0, 1])
-    s = read_plane_split(case.profile, reference_of(case.baseline), one, mr)
+    s = read_plane_split(case.profile, ref, one, mr)
     assert not s.significant and len(s.pairs) == 2
     assert "not measurable" in s.notes[0] and "tap at 45 deg to the grain" in s.notes[0]
     v = join_plane_split(_verdict(False), s)
@@ -166,7 +154,7 @@ def test_too_few_pairs_is_not_measurable_with_what_would_measure_it():
 
 
 def test_the_registry_keeps_the_pairs_members():
-    _, mb, _ = two_tests(5)
+    _, _, mb, _ = two_tests(5)
     back = decode_modes(encode_modes(mb))
     np.testing.assert_allclose(back.plane_pair_hz, mb.plane_pair_hz)
     np.testing.assert_allclose(back.plane_pair_std_hz, mb.plane_pair_std_hz)
