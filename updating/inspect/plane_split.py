@@ -21,11 +21,12 @@ moment; the bat's Timoshenko model from the calibrated reference), I_n, I_p the 
 moments bending towards and along the flat (``updating.model.local_change.flat_section``),
 phi the flat's normal from the upper member's plane (the radial plane where G_LR > G_LT, as
 in ash and maple), u_u, u_l the changes of ln(E/G) of the two planes between the tests, and
-e_k the fits' noise (their sd and ``REMOUNT_REL``). Null H0: no flat, |u_u|, |u_l| <=
-``RATIO_DRIFT`` (what moisture and temperature do to the two planes' shear moduli relative
-to E, which need not move together; stated, not measured on real bats). H1: a flat over
-[x0, x1] on a 1 in grid, 2-16 in long, with the amplitude a = cos(2 phi) P(h) / P(h_ref)
-free. Per region a weighted least-squares fit (u bounded); the statistic
+e_k the fits' noise (their sd and ``REMOUNT_REL``; ``MODEL_REL`` for the model's error).
+Null H0: no flat, |u_u|, |u_l| <= ``RATIO_DRIFT`` (what moisture and temperature do to the
+two planes' shear moduli relative to E, which need not move together; stated, not measured
+on real bats). H1: a flat over [x0, x1] on a 1 in grid, 2-16 in long, with the amplitude
+a = cos(2 phi) P(h) / P(h_ref) free. Per region a weighted least-squares fit (u bounded);
+the statistic
 
     Delta chi^2 = chi^2_0 - min_regions chi^2_1,
     p = min(1, N_regions * P(chi^2_1 > Delta chi^2))       (Bonferroni over the regions),
@@ -64,6 +65,11 @@ and maple: E/G_LT / E/G_LR about 1.1-1.6)."""
 REMOUNT_REL = 2e-5
 """Per pair, the split's change a re-mounted accelerometer and another tap angle may leave
 (the fit's bias from the other member's tail), relative."""
+MODEL_REL = 0.1
+"""The first-order patterns' error, relative (to the two-plane model within 10 % per mode; the
+reference's calibration error, the wood's field): added to a pair's sd, in the test as this
+share of the drift H0 reads, in the reading (region, depth, whether a flat fits) of the whole
+change."""
 FIT_REL_SD = 1e-4
 """A member's relative frequency uncertainty when the fit gave none."""
 MAX_REL_DF = 0.03
@@ -340,8 +346,6 @@ def read_plane_split(profile: Profile, reference: BatReference, baseline: Measur
             f"{len(pairs)} pair{'s' if len(pairs) != 1 else ''} resolved in both tests, "
             f"{MIN_PAIRS} needed to tell a flat from the planes' own drift; what would: "
             f"{WHAT_WOULD}",))
-    sd = np.array([p.sd for p in pairs])
-    d = np.array([p.change for p in pairs]) / sd
     m, offset = split_model(profile, reference,
                             np.array([np.mean(p.baseline_hz) for p in pairs]))
     keep = np.abs(offset) < 0.1
@@ -349,20 +353,27 @@ def read_plane_split(profile: Profile, reference: BatReference, baseline: Measur
         return PlaneSplit(pairs, notes=(
             "a flat is not measurable from the bending planes' splits: the resolved pairs "
             "are not the reference's modes; what would: " + WHAT_WOULD,))
-    d, sd = d[keep], sd[keep]
-    m = SplitModel(m.g[keep] / sd[:, None], m.S[keep] / sd[:, None], m.x_m, m.radius_m,
-                   m.length_m)
+    change = np.array([p.change for p in pairs])[keep]
+    meas = np.array([p.sd for p in pairs])[keep]
+    m = SplitModel(m.g[keep], m.S[keep], m.x_m, m.radius_m, m.length_m)
+    # the test: the fits' noise and MODEL_REL of the drift H0 reads (its pattern's error)
+    d, w = _whiten(m, change, meas)
+    _, u = _bounded_fit(w.S, d, 0)
+    d, w = _whiten(m, change, np.hypot(meas, MODEL_REL * (m.S @ u)))
     regions = _regions(m.length_m)
-    P = _patterns(m, regions, H_REF_M)
-    chi0, u0 = _bounded_fit(m.S, d, 0)
-    chi1, amp = _flat_fits(d, m.S, P)
-    best = int(np.argmin(chi1))
-    stat = max(chi0 - chi1[best], 0.0)
+    chi0, u0 = _bounded_fit(w.S, d, 0)
+    chi1, _ = _flat_fits(d, w.S, _patterns(w, regions, H_REF_M))
+    stat = max(chi0 - float(chi1.min()), 0.0)
     n_reg = len(regions)
     p = float(min(1.0, n_reg * chi2.sf(stat, 1)))
     critical = float(chi2.isf(LEVEL / n_reg, 1))
+    detect = _detectable_depth(w, regions, critical)
+    # the reading: MODEL_REL of the whole change (the flat's pattern's error too)
+    d, w = _whiten(m, change, np.hypot(meas, MODEL_REL * change))
+    P = _patterns(w, regions, H_REF_M)
+    chi1, amp = _flat_fits(d, w.S, P)
+    best = int(np.argmin(chi1))
     fits = bool(chi2.sf(chi1[best], max(len(d) - 3, 1)) >= LEVEL)
-    detect = _detectable_depth(m, regions, critical)
     common = dict(statistic=float(stat), p_value=p, critical=critical, fits=fits,
                   ratio_drift=(float(u0[0]), float(u0[1])), detectable_depth_m=detect)
     if p >= LEVEL or not fits:
@@ -371,13 +382,20 @@ def read_plane_split(profile: Profile, reference: BatReference, baseline: Measur
     scale = max(1.0, chi1[best] / max(len(d) - 3, 1))
     centres = regions[chi1 <= chi1[best] + scale].mean(axis=1)
     half = max(0.5 * (centres.max() - centres.min()), GRID_IN * IN_TO_M / np.sqrt(12))
-    depth, depth_sd = _depth(m, regions[best], amp[best], P[best])
+    depth, depth_sd = _depth(w, regions[best], amp[best], P[best])
     return PlaneSplit(pairs, significant=True,
                       region_m=(float(regions[best, 0]), float(regions[best, 1])),
                       centre_m=float(0.5 * (centres.max() + centres.min())),
                       region_centre_sd_m=float(half), localised=half <= LOCALISED_IN * IN_TO_M,
                       depth_m=depth, depth_sd_m=depth_sd,
                       nearer_plane="upper" if amp[best] > 0 else "lower", **common)
+
+
+def _whiten(m: SplitModel, change: np.ndarray, sd: np.ndarray
+            ) -> tuple[np.ndarray, SplitModel]:
+    """Return the changes and the model divided by the pairs' sd."""
+    return change / sd, SplitModel(m.g / sd[:, None], m.S / sd[:, None], m.x_m, m.radius_m,
+                                   m.length_m)
 
 
 def _depth(m: SplitModel, region: np.ndarray, a: float, p_ref: np.ndarray
