@@ -58,7 +58,8 @@ from updating.model.units import IN_TO_M
 LEVEL = 1e-3
 """Family-wise significance level of the flat from the splits."""
 RATIO_DRIFT = 0.03
-"""|u|: the two planes' E/G may move apart by this much between tests on an unaltered bat."""
+"""|u_u|, |u_l|: each plane's E/G may move by this much (relative) between the tests of an
+unaltered bat, the two independently (a stated allowance)."""
 LOWER_EG_RATIO = 1.3
 """The lower member's plane's E/G over the reference's when diagnose did not resolve it (ash
 and maple: E/G_LT / E/G_LR about 1.1-1.6)."""
