@@ -12,11 +12,13 @@ said to be not measurable, never a clean barrel.
 
 from __future__ import annotations
 
+import json
 from dataclasses import replace
 
 import numpy as np
 import pytest
 
+from batlab.pipeline.records import verdict_record
 from batlab.registry.records import decode_modes, encode_modes
 from updating.inspect.finding import Finding
 from updating.inspect.plane_split import (
@@ -160,3 +162,13 @@ def test_the_registry_keeps_the_pairs_members():
     np.testing.assert_allclose(back.plane_pair_std_hz, mb.plane_pair_std_hz)
     old = {k: v for k, v in encode_modes(mb).items() if not k.startswith("plane_pair")}
     assert decode_modes(old).plane_pair_hz is None
+
+
+def test_the_registry_record_keeps_the_reading_under_details():
+    case, ref, mb, mr = two_tests(4)
+    s = read_plane_split(case.profile, ref, mb, mr)
+    rec = verdict_record("SIM-0001", join_plane_split(_verdict(False), s),
+                         {"false_alarm_rate": 0.01, "chance": None})
+    stored = json.loads(json.dumps(rec, allow_nan=False))["details"]["plane_split"]
+    assert len(stored["pairs"]) == len(s.pairs) and stored["level"] == 1e-3
+    assert stored["significant"] is False and stored["notes"] == list(s.notes)
