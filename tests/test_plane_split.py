@@ -153,6 +153,9 @@ def test_too_few_pairs_is_not_measurable_with_what_would_measure_it():
     assert "not measurable" in s.notes[0] and "tap at 45 deg to the grain" in s.notes[0]
     v = join_plane_split(_verdict(False), s)
     assert v.altered is False and v.reasons[-1] == s.notes[0]
+    altered = join_plane_split(_verdict(True), s)  # altered already: its reasons kept
+    assert altered.altered is True and altered.reasons == ("the modal verdict",)
+    assert altered.plane_split is s
 
 
 def test_the_registry_keeps_the_pairs_members():

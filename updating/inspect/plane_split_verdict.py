@@ -8,9 +8,10 @@ unaltered bat, ``plane_split.RATIO_DRIFT``) is stated, not measured on real bats
 - **a flat read** adds its reading to the reasons of any verdict (beside a flat the calipers
   measured, whether it agrees with it); alone it makes a not-altered verdict at most
   **inconclusive** (a flat suspected: measure the re-test's profile), never altered;
-- **no flat read**: the reasons say what the splits cannot tell (too few pairs resolved, a
-  flat too shallow, a normal near 45 deg to the grain planes) and what would measure it;
-  never evidence of a clean barrel.
+- **no flat read**: the reasons of a verdict that is not altered say what the splits cannot
+  tell (too few pairs resolved, a flat too shallow, a normal near 45 deg to the grain
+  planes) and what would measure it; never evidence of a clean barrel. An altered verdict
+  keeps its reasons (the reading is still in ``Verdict.plane_split``).
 """
 
 from __future__ import annotations
@@ -61,7 +62,8 @@ def join_plane_split(verdict: Verdict, split: PlaneSplit) -> Verdict:
         The joined verdict, ``plane_split`` set to ``split``.
     """
     if not split.significant:
-        return replace(verdict, reasons=(*verdict.reasons, *split.notes), plane_split=split)
+        notes = () if verdict.altered else split.notes
+        return replace(verdict, reasons=(*verdict.reasons, *notes), plane_split=split)
     line = f"the bending planes' splits read {describe_split(split)}"
     f = verdict.finding
     if f is not None and f.kind == "material_removed" and f.family == "calipers":
