@@ -292,10 +292,13 @@ def verdict_record(serial: str, verdict: Verdict, stated: dict | None = None) ->
     -------
     dict
         The contract dict and the verdict's statistic, drift, uncertainties, paired modes
-        and details, in JSON types.
+        and details (with ``plane_split``, the bending pairs' splits' reading), in JSON
+        types.
     """
     out = contract_dict(serial, verdict, stated)
     details = {} if verdict.details is None else verdict.details.to_json_dict()
+    if verdict.plane_split is not None:
+        details["plane_split"] = verdict.plane_split.to_json_dict()
     out.update(jsonable({"statistic": verdict.statistic, "moisture": verdict.moisture,
                          "uncertainty": verdict.uncertainty,
                          "modes": [m.to_json_dict() for m in verdict.modes],

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import json
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import sqlalchemy as sa
 
@@ -21,6 +22,9 @@ from batlab.registry.chain import (
 from batlab.registry.common import now_utc, sha256_bytes
 from batlab.registry.lock import transaction
 from batlab.registry.schema import bats, custody, files, inspections, stations
+
+if TYPE_CHECKING:
+    import numpy as np
 
 
 @dataclass(frozen=True)
@@ -109,14 +113,35 @@ def encode_modes(m) -> dict:
             "sensor_x_m": float(m.sensor_x_m),
             "freq_std_hz": None if m.freq_std_hz is None else np.asarray(m.freq_std_hz).tolist(),
             "band_top_hz": None if m.band_top_hz is None else float(m.band_top_hz),
-            "members": None if m.members is None else np.asarray(m.members).tolist()}
+            "members": None if m.members is None else np.asarray(m.members).tolist(),
+            "plane_pair_hz": _pairs(m.plane_pair_hz),
+            "plane_pair_std_hz": _pairs(m.plane_pair_std_hz)}
+
+
+def _pairs(a: np.ndarray | None) -> list | None:
+    """Return the merged pairs' members (m, 2) as lists, NaN as None (JSON null)."""
+    import numpy as np
+
+    if a is None:
+        return None
+    return [[None if np.isnan(v) else float(v) for v in row] for row in np.asarray(a, float)]
+
+
+def _unpairs(v: list | None) -> np.ndarray | None:
+    """Inverse of ``_pairs`` (None: not recorded)."""
+    import numpy as np
+
+    if v is None:
+        return None
+    return np.array([[np.nan if x is None else x for x in row] for row in v],
+                    dtype=float).reshape(-1, 2)
 
 
 def decode_modes(d: dict):
     """Return the stored modes as ``MeasuredModes`` (shapes points x modes).
 
-    Records stored before the band's top and the merged pairs were kept read them as
-    unknown (None).
+    Records stored before the band's top, the merged pairs or the pairs' members were kept
+    read them as unknown (None).
     """
     import numpy as np
 
@@ -128,7 +153,9 @@ def decode_modes(d: dict):
                          np.asarray(d["x_m"], float), np.asarray(d["damping_ratio"], float),
                          float(d["sensor_x_m"]), None if std is None else np.asarray(std, float),
                          band_top_hz=d.get("band_top_hz"),
-                         members=None if members is None else np.asarray(members, int))
+                         members=None if members is None else np.asarray(members, int),
+                         plane_pair_hz=_unpairs(d.get("plane_pair_hz")),
+                         plane_pair_std_hz=_unpairs(d.get("plane_pair_std_hz")))
 
 
 def has_file(conn: sa.Connection, sha256: str) -> bool:

@@ -39,6 +39,11 @@ class MeasuredModes:
         members: (m,) how many fitted modes each mode stands for: 2 where a resolved pair of
             bending planes was merged into it (``planes.merge_plane_pairs``), 1 for a mode
             seen once; None when not recorded.
+        plane_pair_hz: (m, 2) the frequencies of the two fitted members (lower, upper) of
+            each merged pair, NaN for a mode seen once; None when not recorded. The
+            re-test's change of their split reads a flat (``updating.inspect.plane_split``).
+        plane_pair_std_hz: (m, 2) their standard uncertainties (NaN where the fit gave
+            none), or None.
     """
 
     freq_hz: np.ndarray
@@ -50,6 +55,8 @@ class MeasuredModes:
     mass_line: np.ndarray | None = None
     band_top_hz: float | None = None
     members: np.ndarray | None = None
+    plane_pair_hz: np.ndarray | None = None
+    plane_pair_std_hz: np.ndarray | None = None
 
     @property
     def omega2(self) -> np.ndarray:
@@ -61,9 +68,11 @@ class MeasuredModes:
         idx = np.asarray(idx)
         std = None if self.freq_std_hz is None else self.freq_std_hz[idx]
         members = None if self.members is None else self.members[idx]
+        pair = None if self.plane_pair_hz is None else self.plane_pair_hz[idx]
+        pair_std = None if self.plane_pair_std_hz is None else self.plane_pair_std_hz[idx]
         return MeasuredModes(self.freq_hz[idx], self.shapes[:, idx], self.x_m,
                              self.damping_ratio[idx], self.sensor_x_m, std, self.mass_line,
-                             self.band_top_hz, members)
+                             self.band_top_hz, members, pair, pair_std)
 
 
 def from_fit(fit, sensor_x_m: float, min_hz: float = 20.0) -> MeasuredModes:

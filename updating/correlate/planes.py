@@ -14,6 +14,10 @@ which is phi with the frequency an unresolved fit would give (the members' mean 
 their share of the response). A re-test tapped at another angle moves that weighting: the
 inspection treats the resulting frequency change as a nuisance
 (``updating.inspect.hypotheses.plane_shift``).
+
+The merged modes keep the members' own frequencies (``MeasuredModes.plane_pair_hz``, lower
+and upper, with their uncertainties): the change of a pair's split between the tests reads a
+flat (``updating.inspect.plane_split``).
 """
 
 from __future__ import annotations
@@ -37,12 +41,15 @@ def merge_plane_pairs(modes: MeasuredModes) -> MeasuredModes:
 
     The modes with each resolved two-plane pair (adjacent, within ``PAIR_MAX_REL_DF``,
     MAC >= ``PAIR_MIN_MAC``) replaced by one mode (module docstring); ``members`` says
-    which modes were merged (2) and which were seen once (1); the band's top is kept.
+    which modes were merged (2) and which were seen once (1), ``plane_pair_hz`` and
+    ``plane_pair_std_hz`` the merged members' own frequencies; the band's top is kept.
     """
     f, psi = np.asarray(modes.freq_hz, float), np.asarray(modes.shapes, float)
     std = None if modes.freq_std_hz is None else np.asarray(modes.freq_std_hz, float)
     was = np.ones(f.size, int) if modes.members is None else np.asarray(modes.members, int)
     out_f, out_psi, out_z, out_std, out_members = [], [], [], [], []
+    nan2 = np.full(2, np.nan)
+    pair_hz, pair_std = [], []
     k = 0
     while k < f.size:
         if k + 1 < f.size and f[k + 1] / f[k] - 1 < PAIR_MAX_REL_DF and \
@@ -57,6 +64,8 @@ def merge_plane_pairs(modes: MeasuredModes) -> MeasuredModes:
             if std is not None:
                 out_std.append(max(std[k], std[k + 1]))
             out_members.append(was[k] + was[k + 1])
+            pair_hz.append(f[k:k + 2])
+            pair_std.append(nan2 if std is None else std[k:k + 2])
             k += 2
         else:
             out_f.append(f[k])
@@ -65,9 +74,13 @@ def merge_plane_pairs(modes: MeasuredModes) -> MeasuredModes:
             if std is not None:
                 out_std.append(std[k])
             out_members.append(was[k])
+            pair_hz.append(nan2)
+            pair_std.append(nan2)
             k += 1
     return MeasuredModes(np.array(out_f), np.column_stack(out_psi), modes.x_m,
                          np.array(out_z), modes.sensor_x_m,
                          None if std is None else np.array(out_std),
                          band_top_hz=modes.band_top_hz,
-                         members=np.array(out_members, dtype=int))
+                         members=np.array(out_members, dtype=int),
+                         plane_pair_hz=np.array(pair_hz, dtype=float).reshape(-1, 2),
+                         plane_pair_std_hz=np.array(pair_std, dtype=float).reshape(-1, 2))

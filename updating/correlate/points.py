@@ -147,4 +147,6 @@ def reorder(modes: MeasuredModes, order: np.ndarray) -> MeasuredModes:
     """
     return MeasuredModes(modes.freq_hz, modes.shapes[order], modes.x_m[order],
                          modes.damping_ratio, modes.sensor_x_m, modes.freq_std_hz,
-                         band_top_hz=modes.band_top_hz, members=modes.members)
+                         band_top_hz=modes.band_top_hz, members=modes.members,
+                         plane_pair_hz=modes.plane_pair_hz,
+                         plane_pair_std_hz=modes.plane_pair_std_hz)

@@ -60,6 +60,7 @@ from updating.inspect.finding import Finding
 from updating.inspect.hypotheses import NullBounds, ParamSpace
 from updating.inspect.model import ChangeParams, ChangePredictor, baseline_sensor_offset
 from updating.inspect.nested import fit_hypotheses, nested_test, weigh_evidence
+from updating.inspect.plane_split_verdict import with_plane_split
 from updating.inspect.reading import (
     Reading,
     element_map,
@@ -318,11 +319,14 @@ def inspect(profile: Profile, reference: BatReference, baseline: MeasuredModes,
     Returns
     -------
     Verdict
-        The verdict (``inspect_retest``), with the calipers' reading when given.
+        The verdict (``inspect_retest``), with the calipers' reading when given and the
+        flat the bending planes' splits read, or why they cannot tell
+        (``plane_split_verdict``).
     """
     reg = registered or RetestConditions()
     verdict = inspect_retest(profile, reference, baseline, retest, false_alarm=false_alarm,
                              conditions=conditions, registered_weight_kg=reg.weight_kg,
                              baseline_temperature_c=reg.temperature_c,
                              baseline_sensor_mass_kg=reg.sensor_mass_kg, with_map=with_map)
-    return with_calipers(verdict, profile, retest_profile, reference.rho_kg_m3)
+    verdict = with_calipers(verdict, profile, retest_profile, reference.rho_kg_m3)
+    return with_plane_split(verdict, profile, reference, baseline, retest)

@@ -13,6 +13,7 @@ from updating.inspect.finding import Finding
 
 if TYPE_CHECKING:
     from updating.inspect.calipers import CaliperResult
+    from updating.inspect.plane_split import PlaneSplit
 
 
 class Status(str, Enum):
@@ -62,6 +63,9 @@ class Verdict:
     calipers
         The re-test's caliper profile against the registration's
         (``updating.inspect.calipers.CaliperResult``), None without one.
+    plane_split
+        The flat the bending planes' splits read, or why they cannot tell
+        (``updating.inspect.plane_split.PlaneSplit``), None when not read.
     """
 
     altered: bool | None
@@ -82,6 +86,7 @@ class Verdict:
     reasons: tuple[str, ...] = ()
     finding: Finding | None = None
     calipers: CaliperResult | None = None
+    plane_split: PlaneSplit | None = None
 
     @property
     def status(self) -> Status:
