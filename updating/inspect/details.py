@@ -263,11 +263,15 @@ class InspectionDetails:
         Wall time of the inspection.
     fit
         The test and fits, or None when no test was made (inconclusive before it).
+    plane_split
+        The bending pairs' splits' reading as stored (``PlaneSplit.to_json_dict``), or None
+        (not read, or a record written before it).
     """
 
     n_modes: int
     time_s: float | None = None
     fit: FitEvidence | None = None
+    plane_split: dict[str, Any] | None = None
 
     @property
     def p_value(self) -> float | None:
@@ -285,11 +289,12 @@ class InspectionDetails:
         The stored form (key order as stored since issue 11).
         """
         f = self.fit
+        split = {} if self.plane_split is None else {"plane_split": dict(self.plane_split)}
         if f is None:
             out: dict[str, Any] = {"n_modes": self.n_modes}
             if self.time_s is not None:
                 out["time_s"] = self.time_s
-            return out
+            return {**out, **split}
         return {
             "statistic": f.statistic, "dof": list(f.dof), "p_value": f.p_value,
             "rss_null": f.rss_null, "rss_core": f.rss_core,
@@ -311,7 +316,7 @@ class InspectionDetails:
             "empty_m": f.empty_m, "local_change": dict(f.local_change),
             "kind_scores": dict(f.kind_scores), "time_s": self.time_s,
             "leave_one_out": dict(f.leave_one_out),
-            "modes_left_out": list(f.modes_left_out), "F_fit": f.F_fit,
+            "modes_left_out": list(f.modes_left_out), "F_fit": f.F_fit, **split,
         }
 
     @classmethod
@@ -327,8 +332,9 @@ class InspectionDetails:
         d = d or {}
         n_modes = int(d.get("n_modes") or 0)
         time_s = None if d.get("time_s") is None else float(d["time_s"])
+        split = d.get("plane_split")
         if "statistic" not in d and "p_value" not in d:
-            return cls(n_modes, time_s)
+            return cls(n_modes, time_s, plane_split=split)
         dof = d.get("dof") or (0, 0)
         weight = d.get("weight_change_rel")
         fit = FitEvidence(
@@ -354,7 +360,7 @@ class InspectionDetails:
             kind_scores=dict(d.get("kind_scores") or {}),
             leave_one_out=dict(d.get("leave_one_out") or {}),
             modes_left_out=tuple(d.get("modes_left_out") or ()), F_fit=_num(d.get("F_fit")))
-        return cls(n_modes, time_s, fit)
+        return cls(n_modes, time_s, fit, split)
 
 
 def _levels(v: Any) -> tuple[float, ...]:
