@@ -32,8 +32,10 @@ from updating.model.assembly import (
     BatModel,
     assemble,
     attachment_matrices,
+    element_at,
     place,
     point_vector,
+    with_core,
 )
 from updating.model.modes import solve_modes
 from updating.model.profile import Profile
@@ -110,11 +112,19 @@ def wood_system(
     """Model of the bat (wood only) with nodes at the test points, and its bungees.
 
     The end-grain moisture excess decays over ``end_decay_m`` from each end (module
-    docstring).
+    docstring). ``like``, the uncored system, gives a cored one its end-grain matrices and
+    its model, rebuilt over the core alone (``assembly.with_core``, the same bit for bit).
     """
-    model = replace(reference, sensor_mass_kg=0.0).build(profile, points_m, core=core)
+    if like is not None and core is not None:
+        model = with_core(like.model, core)
+    else:
+        model = replace(reference, sensor_mass_kg=0.0).build(profile, points_m, core=core)
     K, M = assemble(model, with_attachments=False)
-    Kb, _ = attachment_matrices(model)
+    if like is not None and all(model.phi[e] == like.model.phi[e] for e in
+                                (element_at(model, a.x_m) for a in model.attachments)):
+        Kb = like.K_bungees  # the bungees' elements as they were: the same point vectors
+    else:
+        Kb, _ = attachment_matrices(model)
     idx = np.searchsorted(model.node_x_m, points_m - 1e-9)
     if np.any(np.abs(model.node_x_m[np.minimum(idx, model.n_nodes - 1)] - points_m) > 1e-9):
         raise ValueError("test points must be nodes of the model")
@@ -223,10 +233,7 @@ class ChangePredictor:
             if len(self._cache) > 32:
                 for key in [k for k in self._cache if k is not None]:
                     del self._cache[key]
-                # caches keyed by a system's id: a new system may take a dropped one's id
-                self._local.clear()
-                self._woods.clear()
-                self._points.clear()
+                self._woods.clear()  # keyed by a system's id: a new one may take a dropped id
             like = None if core is None else self.system(None)
             self._cache[core] = wood_system(self.profile, self.reference, self.points_m, core,
                                             like, self.end_decay_m)
@@ -235,15 +242,20 @@ class ChangePredictor:
     def local(self, ws: WoodSystem, segments: tuple[Segment, ...]):
         """(dK, dM, mass change) of local changes on a wood system, or None for none.
 
-        The sum of each segment's change, cached per (system, segment), at most
-        ``LOCAL_CACHE`` entries: a fit's Jacobian moves one parameter at a time, so most of
-        its columns share the segments, and a step of one segment leaves the other's.
+        The sum of each segment's change, cached per segment and the shear parameters phi
+        of the elements it covers, at most ``LOCAL_CACHE`` entries: the change depends on
+        the system through those alone (``segments.segment_parts``; the wood, the mesh and
+        the profile are the predictor's), so a core elsewhere on the bat leaves it. A fit's
+        Jacobian moves one parameter at a time, so most of its columns share the segments,
+        and a step of one segment, or of the core, leaves the other's.
         """
         if not segments:
             return None
         parts = []
+        nodes = ws.model.node_x_m
         for seg in segments:
-            key = (id(ws), seg)
+            covered = np.minimum(nodes[1:], seg.x1_m) > np.maximum(nodes[:-1], seg.x0_m)
+            key = (seg, ws.model.phi[covered].tobytes())
             if key not in self._local:
                 if len(self._local) >= LOCAL_CACHE:
                     self._local.clear()
@@ -383,8 +395,12 @@ class ChangePredictor:
         return self._woods[key]
 
     def _point(self, ws: WoodSystem, x_m: float) -> tuple[np.ndarray, np.ndarray]:
-        """Return ``point_vector`` of the accelerometer at ``x_m`` (the last few kept)."""
-        key = (id(ws), x_m)
+        """Return ``point_vector`` of the accelerometer at ``x_m`` (the last few kept).
+
+        Kept per position and the shear parameter phi of the element there, the one thing
+        of the system the vector depends on besides the mesh (a core elsewhere leaves it).
+        """
+        key = (x_m, float(ws.model.phi[element_at(ws.model, x_m)]))
         if key not in self._points:
             if len(self._points) >= LOCAL_CACHE:
                 self._points.clear()

@@ -193,15 +193,64 @@ def build_model(
     """Mesh and integrate a bat. Rotary inertia defaults to on for Timoshenko, off for Euler."""
     if rotary_inertia is None:
         rotary_inertia = beam == "timoshenko"
-    if core is not None and not 0 < core.plug_m < core.depth_m <= profile.length_m:
-        raise ValueError("core: need 0 < plug < depth <= bat length")
-    if core is not None and not 0 <= core.empty_m < core.depth_m - core.plug_m:
-        raise ValueError("core: need 0 <= empty length < depth - plug")
+    if core is not None:
+        check_core(core, profile.length_m)
     nodes = mesh_nodes(profile.length_m, n_elements, element_length_m, stations_m)
     samples = sample_sections(nodes, profile, material, core)
     phi, parts = parts_from_samples(nodes, samples, beam, rotary_inertia)
     return BatModel(nodes, beam, rotary_inertia, samples, phi, parts, tuple(attachments),
                     profile, material, core)
+
+
+def check_core(core: Core, length_m: float) -> None:
+    """Raise ValueError unless the core fits the bat.
+
+    0 < plug < depth <= the bat's length, and 0 <= empty length < depth - plug.
+    """
+    if not 0 < core.plug_m < core.depth_m <= length_m:
+        raise ValueError("core: need 0 < plug < depth <= bat length")
+    if not 0 <= core.empty_m < core.depth_m - core.plug_m:
+        raise ValueError("core: need 0 <= empty length < depth - plug")
+
+
+def with_core(model: BatModel, core: Core) -> BatModel:
+    """Return the uncored ``model`` with ``core``, rebuilding only the elements it reaches.
+
+    The same model as ``build_model(..., core=core)`` on the same mesh, bit for bit: the mesh
+    does not depend on the core, an element the core interval does not reach keeps its
+    samples, phi and parts, and those it reaches are sampled and integrated as
+    ``sample_sections`` and ``parts_from_samples`` do over the whole bat (the same breaks
+    in them, in the same order). A change fit steps a core's four parameters for every
+    Jacobian, and each step's model differs from the uncored one over the core alone.
+    """
+    if model.core is not None:
+        raise ValueError("with_core: the model must be uncored")
+    check_core(core, model.profile.length_m)
+    nodes = model.node_x_m
+    x0, x1 = core.interval_m(model.profile.length_m)
+    hit = np.flatnonzero((nodes[1:] > x0) & (nodes[:-1] < x1))
+    first, last = int(hit[0]), int(hit[-1])
+    span = nodes[first:last + 2]
+    part = sample_sections(span, model.profile, model.material, core)
+    phi_span, parts_span = parts_from_samples(span, part, model.beam, model.rotary_inertia)
+    s = model.samples
+    i0, i1 = np.searchsorted(s.elem, [first, last + 1])
+
+    def merged(old: np.ndarray, new: np.ndarray) -> np.ndarray:
+        return np.concatenate([old[:i0], new, old[i1:]])
+
+    props = SectionProps(*(merged(getattr(s.props, k), getattr(part.props, k))
+                           for k in ("ei", "kga", "rhoa", "rhoi")))
+    samples = Samples(merged(s.elem, part.elem + first), merged(s.xi, part.xi),
+                      merged(s.weight_m, part.weight_m), merged(s.x_m, part.x_m), props)
+    phi = model.phi.copy()
+    phi[first:last + 1] = phi_span
+    mats = []
+    for k in ("k_bend", "k_shear", "m_trans", "m_rot"):
+        a = getattr(model.parts, k).copy()
+        a[first:last + 1] = getattr(parts_span, k)
+        mats.append(a)
+    return replace(model, samples=samples, phi=phi, parts=ElementParts(*mats), core=core)
 
 
 def scale_sections(
@@ -222,14 +271,19 @@ def scale_sections(
     return replace(model, samples=samples, phi=phi, parts=parts)
 
 
+def element_at(model: BatModel, x_m: float) -> int:
+    """Return the index of the element holding x_m (the first or last one beyond the ends)."""
+    return int(np.clip(np.searchsorted(model.node_x_m, x_m, side="right") - 1, 0,
+                       model.n_elements - 1))
+
+
 def point_vector(model: BatModel, x_m: float) -> tuple[np.ndarray, np.ndarray]:
     """(dofs, N_w) of the element containing x: a point load's consistent distribution."""
     from updating.model.element import shape_functions
 
     if not model.node_x_m[0] - 1e-9 <= x_m <= model.node_x_m[-1] + 1e-9:
         raise ValueError(f"attachment at x = {x_m:.4f} m lies outside the bat")
-    e = int(np.clip(np.searchsorted(model.node_x_m, x_m, side="right") - 1, 0,
-                    model.n_elements - 1))
+    e = element_at(model, x_m)
     L = model.element_length_m[e]
     sf = shape_functions(np.array([(x_m - model.node_x_m[e]) / L]), np.array([L]),
                          np.array([model.phi[e]]))
