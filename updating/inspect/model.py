@@ -27,7 +27,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 from scipy.linalg import solveh_banded
 
-from updating.inspect.segments import Segment, segment_change
+from updating.inspect.segments import Segment, segment_changes
 from updating.model.assembly import (
     BatModel,
     assemble,
@@ -251,20 +251,31 @@ class ChangePredictor:
         """
         if not segments:
             return None
-        parts = []
-        nodes = ws.model.node_x_m
-        for seg in segments:
-            covered = np.minimum(nodes[1:], seg.x1_m) > np.maximum(nodes[:-1], seg.x0_m)
-            key = (seg, ws.model.phi[covered].tobytes())
-            if key not in self._local:
-                if len(self._local) >= LOCAL_CACHE:
-                    self._local.clear()
-                self._local[key] = segment_change(ws.model, (seg,))
-            parts.append(self._local[key])
+        keys = self._keep_local(ws, segments)
+        parts = [self._local[key] for key in keys]
         if len(parts) == 1:
             return parts[0]
         return (sum(p[0] for p in parts), sum(p[1] for p in parts),
                 sum(p[2] for p in parts))
+
+    def _keep_local(self, ws: WoodSystem, segments) -> list:
+        """Return the cache keys of ``segments`` on ``ws``, integrating the missing ones.
+
+        The missing ones are integrated together (``segments.segment_changes``); when they
+        would overflow ``LOCAL_CACHE``, the cache is emptied first.
+        """
+        nodes, phi = ws.model.node_x_m, ws.model.phi
+        keys = [(seg, phi[np.minimum(nodes[1:], seg.x1_m)
+                          > np.maximum(nodes[:-1], seg.x0_m)].tobytes()) for seg in segments]
+        missing = list(dict.fromkeys(k for k in keys if k not in self._local))
+        if missing:
+            if len(self._local) + len(missing) > LOCAL_CACHE:
+                self._local.clear()
+                missing = list(dict.fromkeys(keys))
+            dK, dM, mass = segment_changes(ws.model, [k[0] for k in missing])
+            for i, key in enumerate(missing):
+                self._local[key] = (dK[i], dM[i], float(mass[i]))
+        return keys
 
     def wood_mass_kg(self, p: ChangeParams) -> float:
         """Return the wood's mass with the changes ``p``, kg."""
@@ -324,6 +335,10 @@ class ChangePredictor:
             np.zeros((k, n_dof))
         ws = self.system(p.core)
         Kw, Mw = self._wood(ws, p.end_moisture_pt)
+        # every segment the steps on this core hold, integrated together
+        self._keep_local(ws, dict.fromkeys([*p.segments, *(seg for s, _ in steps
+                                                            if s.core == p.core
+                                                            for seg in s.segments)]))
         local = self.local(ws, p.segments)
         W = Kw if local is None else Kw + local[0]
         v0 = base.sensor_vector()

@@ -9,6 +9,7 @@ piece of the profile that the element overlaps (steps included exactly).
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass, field, replace
 from typing import Literal
 
@@ -131,12 +132,25 @@ def mesh_nodes(
     return nodes[np.concatenate([[True], np.diff(nodes) > 1e-9 * length_m])]
 
 
+@functools.cache
+def gauss_legendre(n: int) -> tuple[np.ndarray, np.ndarray]:
+    """Gauss-Legendre points and weights on [-1, 1], n of them (read-only arrays).
+
+    ``numpy.polynomial.legendre.leggauss``, computed once per n: a change fit samples
+    thousands of cored models.
+    """
+    g, w = np.polynomial.legendre.leggauss(n)
+    g.flags.writeable = w.flags.writeable = False
+    return g, w
+
+
 def sample_sections(
     node_x_m: np.ndarray, profile: Profile, material: Material, core: Core | None,
     n_gauss: int = GAUSS_POINTS,
 ) -> Samples:
     """Gauss samples on every (element x profile piece x core zone) interval."""
-    cuts = [profile.segments()[:, 0], profile.segments()[:, 1], node_x_m]
+    pieces = profile.segments()
+    cuts = [pieces[:, 0], pieces[:, 1], node_x_m]
     if core is not None:
         x0, x1 = core.interval_m(profile.length_m)
         cuts.append(np.array([x0, x1 - core.empty_m, x1]))
@@ -145,7 +159,7 @@ def sample_sections(
     a, b = breaks[:-1], breaks[1:]
     keep = b - a > 1e-12 * profile.length_m
     a, b = a[keep], b[keep]
-    g, gw = np.polynomial.legendre.leggauss(n_gauss)
+    g, gw = gauss_legendre(n_gauss)
     x = (0.5 * (a + b))[:, None] + (0.5 * (b - a))[:, None] * g[None, :]
     w = (0.5 * (b - a))[:, None] * gw[None, :]
     x, w = x.ravel(), w.ravel()
