@@ -20,6 +20,7 @@ from updating.inspect.changes import differences, pair_tests
 from updating.inspect.hypotheses import N_NULL, NullBounds, ParamSpace, residual_function
 from updating.inspect.kinds import segment_space
 from updating.inspect.model import ChangePredictor, baseline_sensor_offset
+from updating.inspect.sensitivity import predicted_change
 from updating.model.sensitivity import full_modes, mode_derivatives
 from updating.model.units import IN_TO_M
 from updating.simulate.fleet import case_modes, random_case
@@ -178,3 +179,26 @@ def test_predictor_caches_give_the_uncached_matrices():
                      (got.dofs, want.dofs)):
             np.testing.assert_array_equal(a, b)
         assert kept.wood_mass_kg(p) == fresh().wood_mass_kg(p)
+
+
+def test_kept_modes_are_read_only_and_per_accelerometer():
+    """A predictor keeps the modes and derivatives of its last states, read-only; a
+    predictor with the accelerometer elsewhere (``at_sensor``, which shares the wood
+    systems) keeps its own, the same as a new predictor's there."""
+    predict, _, space, rng = _fit_problem(41, False)
+    p = space.params(np.concatenate([_random_null(space, rng), _family_tail("core", rng)]))
+    f, phi = predict(p)
+    assert predict(p)[1] is phi
+    with pytest.raises(ValueError, match="read-only"):
+        phi[0, 0] = 0.0
+    steps = [(replace(p, density_scale=p.density_scale + 1e-4), 1e-4)]
+    pc = predicted_change(predict, p, steps)
+    assert predicted_change(predict, p, steps) is pc
+    with pytest.raises(ValueError, match="read-only"):
+        pc.d_shapes[0, 0, 0] = 0.0
+    x_s = predict.sensor_x_m - 0.3 * IN_TO_M
+    moved = predict.at_sensor(x_s)
+    new = ChangePredictor(predict.profile, predict.reference, predict.points_m, x_s,
+                          predict.n_solve)
+    assert not np.array_equal(moved(p)[1], phi)
+    np.testing.assert_array_equal(moved(p)[1], new(p)[1])

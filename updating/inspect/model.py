@@ -177,6 +177,8 @@ class StateMatrices:
 
 LOCAL_CACHE = 64
 """Local-change matrices a predictor keeps (``ChangePredictor.local``)."""
+DERIVED_CACHE = 16
+"""States whose modes or derivatives a predictor keeps (``ChangePredictor.derived``)."""
 
 
 class ChangePredictor:
@@ -199,6 +201,7 @@ class ChangePredictor:
         self._local: dict = {}
         self._points: dict = {}
         self._woods: dict = {}
+        self._derived: dict = {}
 
     def at_sensor(self, sensor_x_m: float) -> ChangePredictor:
         """Return the same bat with its accelerometer elsewhere.
@@ -433,10 +436,35 @@ class ChangePredictor:
                                                at_points[self.drive])
 
     def __call__(self, p: ChangeParams) -> tuple[np.ndarray, np.ndarray]:
-        """Return the frequencies, Hz, and shapes at the points of the bat changed by ``p``."""
-        state = self.matrices(p)
-        modes = solve_modes(state.K, state.M, None, self.n_solve)
-        return modes.freq_hz, self.observe(state, modes.shapes)
+        """Return the frequencies, Hz, and shapes at the points of the bat changed by ``p``.
+
+        Read-only arrays, kept for the last few states (``derived``).
+        """
+        def solve() -> tuple[np.ndarray, np.ndarray]:
+            state = self.matrices(p)
+            modes = solve_modes(state.K, state.M, None, self.n_solve)
+            return modes.freq_hz, self.observe(state, modes.shapes)
+
+        return self.derived(("modes", p), solve)
+
+    def derived(self, key, compute: Callable[[], tuple]) -> tuple:
+        """Return ``compute()``, kept per ``key`` for the last ``DERIVED_CACHE`` keys.
+
+        What the predictor's states give (their modes, a Jacobian's derivatives) depends on
+        the state alone, not on the data a fit weighs: the leave-one-out refits all start
+        from the fit on all the data, and a refit with other noise levels from its end. The
+        arrays of the tuple are made read-only, so that no caller changes a kept result.
+        ``at_sensor`` starts a predictor with none kept (its accelerometer is elsewhere).
+        """
+        if key not in self._derived:
+            if len(self._derived) >= DERIVED_CACHE:
+                del self._derived[next(iter(self._derived))]
+            out = compute()
+            for a in (out if isinstance(out, tuple) else vars(out).values()):
+                if isinstance(a, np.ndarray):
+                    a.flags.writeable = False
+            self._derived[key] = out
+        return self._derived[key]
 
 
 def make_predictor(
