@@ -1,5 +1,7 @@
 """FE model of the bat: the paper's numbers, analytic beams, convergence, matrix properties."""
 
+from dataclasses import replace
+
 import numpy as np
 import pytest
 from hypothesis import given, settings
@@ -11,6 +13,7 @@ from updating.model.assembly import (
     build_model,
     skyline_mask,
     with_core,
+    with_cores,
 )
 from updating.model.element import element_parts
 from updating.model.mass_properties import mass_properties
@@ -233,6 +236,15 @@ def test_with_core_rebuilds_the_cored_model_bit_for_bit(beam, depth, plug, empty
     core = Core(d_in * IN_TO_M, depth_m, ratio, 0.1, plug_m, empty * (depth_m - plug_m))
     full = build_model(profile, paper_material(), beam=beam, stations_m=stations, core=core)
     fast = with_core(bare, core)
+    # among a Jacobian's steps: integrated together with other cores, each is its own
+    others = (replace(core, depth_m=0.9 * core.depth_m, empty_m=0.0),
+              replace(core, diameter_m=0.5 * core.diameter_m))
+    for got, want in zip(with_cores(bare, (*others, core)), (*others, core), strict=True):
+        alone = with_core(bare, want)
+        np.testing.assert_array_equal(got.phi, alone.phi)
+        np.testing.assert_array_equal(got.samples.x_m, alone.samples.x_m)
+        for k in ("k_bend", "k_shear", "m_trans", "m_rot"):
+            np.testing.assert_array_equal(getattr(got.parts, k), getattr(alone.parts, k))
     assert fast.core == core
     np.testing.assert_array_equal(fast.phi, full.phi)
     for k in ("k_bend", "k_shear", "m_trans", "m_rot"):

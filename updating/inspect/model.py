@@ -36,6 +36,7 @@ from updating.model.assembly import (
     place,
     point_vector,
     with_core,
+    with_cores,
 )
 from updating.model.modes import solve_modes
 from updating.model.profile import Profile
@@ -119,6 +120,21 @@ def wood_system(
         model = with_core(like.model, core)
     else:
         model = replace(reference, sensor_mass_kg=0.0).build(profile, points_m, core=core)
+    return system_of(model, points_m, like, end_decay_m)
+
+
+def cored_systems(like: WoodSystem, points_m: np.ndarray,
+                  cores: tuple[Core, ...]) -> list[WoodSystem]:
+    """Return ``wood_system`` of each core, their models integrated together.
+
+    ``assembly.with_cores``: the cores of a Jacobian's steps in one pass.
+    """
+    return [system_of(model, points_m, like) for model in with_cores(like.model, cores)]
+
+
+def system_of(model: BatModel, points_m: np.ndarray, like: WoodSystem | None,
+              end_decay_m: float = END_DECAY_M) -> WoodSystem:
+    """Return the wood system of a built model (``wood_system``)."""
     K, M = assemble(model, with_attachments=False)
     if like is not None and all(model.phi[e] == like.model.phi[e] for e in
                                 (element_at(model, a.x_m) for a in model.attachments)):
@@ -233,14 +249,27 @@ class ChangePredictor:
     def system(self, core: Core | None = None) -> WoodSystem:
         """Return the wood's system, with ``core`` if given."""
         if core not in self._cache:
-            if len(self._cache) > 32:
-                for key in [k for k in self._cache if k is not None]:
-                    del self._cache[key]
-                self._woods.clear()  # keyed by a system's id: a new one may take a dropped id
-            like = None if core is None else self.system(None)
-            self._cache[core] = wood_system(self.profile, self.reference, self.points_m, core,
-                                            like, self.end_decay_m)
+            if core is not None:
+                self.systems((core,))
+            else:
+                self._cache[None] = wood_system(self.profile, self.reference, self.points_m,
+                                                None, None, self.end_decay_m)
         return self._cache[core]
+
+    def systems(self, cores) -> None:
+        """Build the wood systems of the cores not built yet, together (``cored_systems``).
+
+        At most 32 cored systems are kept: beyond, all but the uncored one are dropped.
+        """
+        missing = tuple(dict.fromkeys(c for c in cores if c not in self._cache))
+        if not missing:
+            return
+        if len(self._cache) + len(missing) > 33:
+            for key in [k for k in self._cache if k is not None]:
+                del self._cache[key]
+            self._woods.clear()  # keyed by a system's id: a new one may take a dropped id
+        built = cored_systems(self.system(None), self.points_m, missing)
+        self._cache.update(zip(missing, built, strict=True))
 
     def local(self, ws: WoodSystem, segments: tuple[Segment, ...]):
         """(dK, dM, mass change) of local changes on a wood system, or None for none.
@@ -336,6 +365,7 @@ class ChangePredictor:
         n_dof, k = base.K.shape[0], len(steps)
         dK, dM, dv = np.zeros((k, n_dof, n_dof)), np.zeros((k, n_dof, n_dof)), \
             np.zeros((k, n_dof))
+        self.systems(s.core for s, _ in steps if s.core != p.core)  # the steps' cores together
         ws = self.system(p.core)
         Kw, Mw = self._wood(ws, p.end_moisture_pt)
         # every segment the steps on this core hold, integrated together

@@ -237,34 +237,95 @@ def with_core(model: BatModel, core: Core) -> BatModel:
     in them, in the same order). A change fit steps a core's four parameters for every
     Jacobian, and each step's model differs from the uncored one over the core alone.
     """
+    return with_cores(model, (core,))[0]
+
+
+def with_cores(model: BatModel, cores) -> list[BatModel]:
+    """Return ``with_core(model, c)`` for each core, all sampled and integrated in one pass.
+
+    Each core's samples, phi and parts are the ones it gets alone (its own breaks, its
+    elements' sums over their own samples, in order), so each model is the full build's
+    bit for bit; the cores of a Jacobian's steps cost one pass instead of one each.
+    """
     if model.core is not None:
         raise ValueError("with_core: the model must be uncored")
-    check_core(core, model.profile.length_m)
-    nodes = model.node_x_m
-    x0, x1 = core.interval_m(model.profile.length_m)
-    hit = np.flatnonzero((nodes[1:] > x0) & (nodes[:-1] < x1))
-    first, last = int(hit[0]), int(hit[-1])
-    span = nodes[first:last + 2]
-    part = sample_sections(span, model.profile, model.material, core)
-    phi_span, parts_span = parts_from_samples(span, part, model.beam, model.rotary_inertia)
+    cores = tuple(cores)
+    profile, nodes = model.profile, model.node_x_m
+    length = profile.length_m
+    n_el = nodes.size - 1
+    pieces = profile.segments()
+    spans, a, b, cid = [], [], [], []
+    for i, core in enumerate(cores):
+        check_core(core, length)
+        x0, x1 = core.interval_m(length)
+        hit = np.flatnonzero((nodes[1:] > x0) & (nodes[:-1] < x1))
+        first, last = int(hit[0]), int(hit[-1])
+        span = nodes[first:last + 2]
+        breaks = np.unique(np.concatenate([pieces[:, 0], pieces[:, 1], span,
+                                           np.array([x0, x1 - core.empty_m, x1])]))
+        breaks = breaks[(breaks >= span[0]) & (breaks <= span[-1])]
+        lo, hi = breaks[:-1], breaks[1:]
+        keep = hi - lo > 1e-12 * length
+        spans.append((first, last))
+        a.append(lo[keep])
+        b.append(hi[keep])
+        cid.append(np.full(int(keep.sum()), i))
+    a, b, cid = np.concatenate(a), np.concatenate(b), np.concatenate(cid)
+    g, gw = gauss_legendre(GAUSS_POINTS)
+    x = ((0.5 * (a + b))[:, None] + (0.5 * (b - a))[:, None] * g[None, :]).ravel()
+    w = ((0.5 * (b - a))[:, None] * gw[None, :]).ravel()
+    cid = np.repeat(cid, GAUSS_POINTS)
+    elem = np.clip(np.searchsorted(nodes, x, side="right") - 1, 0, n_el - 1)
+    L = np.diff(nodes)
+    xi = (x - nodes[elem]) / L[elem]
+    D = profile.diameter_at(x)
+
+    def per_core(name: str) -> np.ndarray:
+        return np.array([float(getattr(c, name)) for c in cores])[cid]
+
+    x0 = per_core("depth_m")
+    x0 = length - x0
+    x1 = length - per_core("plug_m")
+    d_core = np.where((x > x0) & (x < x1), per_core("diameter_m"), 0.0)
+    filled = (x > x0) & (x < x1 - per_core("empty_m"))
+    ratio_rho = np.where(filled, per_core("fill_density_ratio"), 0.0)
+    ratio_e = np.where(filled, per_core("fill_modulus_ratio"), 0.0)
+    props = section_props(D, model.material, d_core, ratio_rho, ratio_e)
+    bins = cid * n_el + elem
+    Lk = np.tile(L, len(cores))
+    phi_k = np.zeros(Lk.size)
+    if model.beam == "timoshenko":
+        ei_avg = np.bincount(bins, w * props.ei, Lk.size) / Lk
+        kga_avg = np.bincount(bins, w * props.kga, Lk.size) / Lk
+        used = np.unique(bins)
+        phi_k[used] = 12 * ei_avg[used] / (kga_avg[used] * Lk[used] ** 2)
+    rhoi = props.rhoi if model.rotary_inertia else np.zeros_like(props.rhoi)
+    parts_k = element_parts(bins, xi, w, props.ei, props.kga, props.rhoa, rhoi, Lk, phi_k)
+    bounds = np.searchsorted(cid, np.arange(len(cores) + 1))
     s = model.samples
-    i0, i1 = np.searchsorted(s.elem, [first, last + 1])
+    out = []
+    for i, (core, (first, last)) in enumerate(zip(cores, spans, strict=True)):
+        i0, i1 = np.searchsorted(s.elem, [first, last + 1])
+        own = slice(bounds[i], bounds[i + 1])
 
-    def merged(old: np.ndarray, new: np.ndarray) -> np.ndarray:
-        return np.concatenate([old[:i0], new, old[i1:]])
+        def merged(old: np.ndarray, new: np.ndarray, i0=i0, i1=i1, own=own) -> np.ndarray:
+            return np.concatenate([old[:i0], new[own], old[i1:]])
 
-    props = SectionProps(*(merged(getattr(s.props, k), getattr(part.props, k))
-                           for k in ("ei", "kga", "rhoa", "rhoi")))
-    samples = Samples(merged(s.elem, part.elem + first), merged(s.xi, part.xi),
-                      merged(s.weight_m, part.weight_m), merged(s.x_m, part.x_m), props)
-    phi = model.phi.copy()
-    phi[first:last + 1] = phi_span
-    mats = []
-    for k in ("k_bend", "k_shear", "m_trans", "m_rot"):
-        a = getattr(model.parts, k).copy()
-        a[first:last + 1] = getattr(parts_span, k)
-        mats.append(a)
-    return replace(model, samples=samples, phi=phi, parts=ElementParts(*mats), core=core)
+        samples = Samples(merged(s.elem, elem), merged(s.xi, xi), merged(s.weight_m, w),
+                          merged(s.x_m, x),
+                          SectionProps(*(merged(getattr(s.props, k), getattr(props, k))
+                                         for k in ("ei", "kga", "rhoa", "rhoi"))))
+        rows = slice(i * n_el + first, i * n_el + last + 1)
+        phi = model.phi.copy()
+        phi[first:last + 1] = phi_k[rows]
+        mats = []
+        for k in ("k_bend", "k_shear", "m_trans", "m_rot"):
+            m = getattr(model.parts, k).copy()
+            m[first:last + 1] = getattr(parts_k, k)[rows]
+            mats.append(m)
+        out.append(replace(model, samples=samples, phi=phi, parts=ElementParts(*mats),
+                           core=core))
+    return out
 
 
 def scale_sections(
