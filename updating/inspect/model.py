@@ -193,8 +193,10 @@ class StateMatrices:
 
 LOCAL_CACHE = 64
 """Local-change matrices a predictor keeps (``ChangePredictor.local``)."""
-DERIVED_CACHE = 16
-"""States whose modes or derivatives a predictor keeps (``ChangePredictor.derived``)."""
+DERIVED_CACHE = 256
+"""States whose modes or derivatives a predictor keeps (``ChangePredictor.derived``): a
+refit evaluates some 20 states, and the next leave-out starts where the last one did (about
+25 kB a Jacobian's derivatives)."""
 
 
 class ChangePredictor:
@@ -478,7 +480,7 @@ class ChangePredictor:
         return self.derived(("modes", p), solve)
 
     def derived(self, key, compute: Callable[[], tuple]) -> tuple:
-        """Return ``compute()``, kept per ``key`` for the last ``DERIVED_CACHE`` keys.
+        """Return ``compute()``, kept per ``key`` for the ``DERIVED_CACHE`` keys last used.
 
         What the predictor's states give (their modes, a Jacobian's derivatives) depends on
         the state alone, not on the data a fit weighs: the leave-one-out refits all start
@@ -486,15 +488,16 @@ class ChangePredictor:
         arrays of the tuple are made read-only, so that no caller changes a kept result.
         ``at_sensor`` starts a predictor with none kept (its accelerometer is elsewhere).
         """
-        if key not in self._derived:
+        out = self._derived.pop(key, None)
+        if out is None:
             if len(self._derived) >= DERIVED_CACHE:
-                del self._derived[next(iter(self._derived))]
+                del self._derived[next(iter(self._derived))]  # the least recently used
             out = compute()
             for a in (out if isinstance(out, tuple) else vars(out).values()):
                 if isinstance(a, np.ndarray):
                     a.flags.writeable = False
-            self._derived[key] = out
-        return self._derived[key]
+        self._derived[key] = out
+        return out
 
 
 def make_predictor(
