@@ -1,11 +1,20 @@
 """FE model of the bat: the paper's numbers, analytic beams, convergence, matrix properties."""
 
+from dataclasses import replace
+
 import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from updating.model.assembly import Attachment, assemble, build_model, skyline_mask
+from updating.model.assembly import (
+    Attachment,
+    assemble,
+    build_model,
+    skyline_mask,
+    with_core,
+    with_cores,
+)
 from updating.model.element import element_parts
 from updating.model.mass_properties import mass_properties
 from updating.model.material import Material, paper_material
@@ -204,3 +213,49 @@ def test_partial_fill_core_is_the_filled_core_plus_an_empty_cavity():
     assert partial.mean_fill_density_ratio == pytest.approx(r * (hole - empty) / hole)
     with pytest.raises(ValueError, match="empty length"):
         build_model(prof, WOOD, core=Core(d, plug + hole, r, 0.0, plug, hole))
+
+
+@settings(max_examples=25, deadline=None)
+@given(beam=st.sampled_from(["euler", "timoshenko"]), depth=st.floats(0.1, 0.55),
+       plug=st.floats(0.01, 0.6), empty=st.floats(0.0, 0.8), d_in=st.floats(0.2, 0.75),
+       ratio=st.floats(0.0, 2.5), on_nodes=st.booleans(), seed=st.integers(0, 99))
+def test_with_core_rebuilds_the_cored_model_bit_for_bit(beam, depth, plug, empty, d_in, ratio,
+                                                        on_nodes, seed):
+    """``with_core`` recomputes only the elements a core reaches: every sample, shear
+    parameter and element part must be the full build's exactly, cores ending on a node
+    included, and the bare bat's elements untouched."""
+    profile = paper_profile()
+    L = profile.length_m
+    stations = np.sort(np.random.default_rng(seed).uniform(0.01, L - 0.01, 17))
+    bare = build_model(profile, paper_material(), beam=beam, stations_m=stations)
+    depth_m = depth * L
+    plug_m = plug * depth_m
+    if on_nodes:  # the hole's ends on nodes of the mesh
+        n = bare.node_x_m
+        depth_m, plug_m = L - n[n.size // 2], L - n[5 * n.size // 6]
+    core = Core(d_in * IN_TO_M, depth_m, ratio, 0.1, plug_m, empty * (depth_m - plug_m))
+    full = build_model(profile, paper_material(), beam=beam, stations_m=stations, core=core)
+    fast = with_core(bare, core)
+    # among a Jacobian's steps: integrated together with other cores, each is its own
+    others = (replace(core, depth_m=0.9 * core.depth_m, empty_m=0.0),
+              replace(core, diameter_m=0.5 * core.diameter_m))
+    for got, want in zip(with_cores(bare, (*others, core)), (*others, core), strict=True):
+        alone = with_core(bare, want)
+        np.testing.assert_array_equal(got.phi, alone.phi)
+        np.testing.assert_array_equal(got.samples.x_m, alone.samples.x_m)
+        for k in ("k_bend", "k_shear", "m_trans", "m_rot"):
+            np.testing.assert_array_equal(getattr(got.parts, k), getattr(alone.parts, k))
+    assert fast.core == core
+    np.testing.assert_array_equal(fast.phi, full.phi)
+    for k in ("k_bend", "k_shear", "m_trans", "m_rot"):
+        np.testing.assert_array_equal(getattr(fast.parts, k), getattr(full.parts, k))
+    for k in ("elem", "xi", "weight_m", "x_m"):
+        np.testing.assert_array_equal(getattr(fast.samples, k), getattr(full.samples, k))
+    for k in ("ei", "kga", "rhoa", "rhoi"):
+        np.testing.assert_array_equal(getattr(fast.samples.props, k),
+                                      getattr(full.samples.props, k))
+    x0, x1 = core.interval_m(L)
+    away = (bare.node_x_m[1:] <= x0) | (bare.node_x_m[:-1] >= x1)
+    np.testing.assert_array_equal(fast.parts.m_trans[away], bare.parts.m_trans[away])
+    with pytest.raises(ValueError, match="uncored"):
+        with_core(full, core)

@@ -20,7 +20,9 @@ from updating.inspect.changes import differences, pair_tests
 from updating.inspect.hypotheses import N_NULL, NullBounds, ParamSpace, residual_function
 from updating.inspect.kinds import segment_space
 from updating.inspect.model import ChangePredictor, baseline_sensor_offset
+from updating.inspect.sensitivity import predicted_change
 from updating.model.sensitivity import full_modes, mode_derivatives
+from updating.model.units import IN_TO_M
 from updating.simulate.fleet import case_modes, random_case
 
 
@@ -142,3 +144,61 @@ def test_matrix_steps_equal_assembled_differences(family, sensor_mass_g):
             tol = 1e-11 * max(np.abs(want).max(), np.abs(b).max() / hi)
             assert np.allclose(got, want, rtol=0, atol=tol), (i, np.abs(got - want).max())
     assert np.count_nonzero(np.abs(dK).sum(axis=(1, 2))) >= 2
+
+
+def test_predictor_caches_give_the_uncached_matrices():
+    """The predictor keeps wood systems (a cored one rebuilt over its core alone), segment
+    changes and the accelerometer's point vector across states, keyed by what they depend
+    on. A run of states that share and do not share them (cores over and away from the
+    grip, the accelerometer and an added mass, segments moved) must give, state by
+    state, exactly the matrices of a new predictor that has kept nothing."""
+    predict, _, space, rng = _fit_problem(31, False)
+    fspace = segment_space(space, "added_mass")
+
+    def fresh():
+        return ChangePredictor(predict.profile, predict.reference, predict.points_m,
+                               predict.sensor_x_m, predict.n_solve)
+
+    kept = fresh()
+    states = []
+    for _ in range(12):
+        x = _random_null(space, rng)
+        states.append(space.params(np.concatenate([x, _family_tail("core", rng)])))
+        states.append(fspace.params(np.concatenate([x, _family_tail("added_mass", rng)])))
+        tail = _family_tail("core", rng)
+        tail[0] = rng.uniform(0.05, 0.4)  # a plug of a few tenths: the hole under the sensor
+        states.append(space.params(np.concatenate([x, tail])))
+        mass = _family_tail("added_mass", rng)
+        mass[:2] = predict.profile.length_m / IN_TO_M - rng.uniform(3.0, 6.0), 2.0
+        segs = fspace.params(np.concatenate([x, mass])).segments
+        states += [replace(states[-1], core=None, segments=segs),  # a mass, then over a core
+                   replace(states[-1], segments=segs)]
+    for p in states + states[::-1]:
+        got, want = kept.matrices(p), fresh().matrices(p)
+        for a, b in ((got.K, want.K), (got.M, want.M), (got.n, want.n),
+                     (got.dofs, want.dofs)):
+            np.testing.assert_array_equal(a, b)
+        assert kept.wood_mass_kg(p) == fresh().wood_mass_kg(p)
+
+
+def test_kept_modes_are_read_only_and_per_accelerometer():
+    """A predictor keeps the modes and derivatives of its last states, read-only; a
+    predictor with the accelerometer elsewhere (``at_sensor``, which shares the wood
+    systems) keeps its own, the same as a new predictor's there."""
+    predict, _, space, rng = _fit_problem(41, False)
+    p = space.params(np.concatenate([_random_null(space, rng), _family_tail("core", rng)]))
+    f, phi = predict(p)
+    assert predict(p)[1] is phi
+    with pytest.raises(ValueError, match="read-only"):
+        phi[0, 0] = 0.0
+    steps = [(replace(p, density_scale=p.density_scale + 1e-4), 1e-4)]
+    pc = predicted_change(predict, p, steps)
+    assert predicted_change(predict, p, steps) is pc
+    with pytest.raises(ValueError, match="read-only"):
+        pc.d_shapes[0, 0, 0] = 0.0
+    x_s = predict.sensor_x_m - 0.3 * IN_TO_M
+    moved = predict.at_sensor(x_s)
+    new = ChangePredictor(predict.profile, predict.reference, predict.points_m, x_s,
+                          predict.n_solve)
+    assert not np.array_equal(moved(p)[1], phi)
+    np.testing.assert_array_equal(moved(p)[1], new(p)[1])

@@ -5,7 +5,8 @@
 - a lost diameter on a uniform cylinder: the removed mass is rho pi/4 (D^2 - (D - delta)^2)
   times the length, the bending stiffness falls as (1 - delta/D)^4;
 - the covered share of each element is continuous in the segment's ends;
-- a generic change equals the element factors of MSSO (K = K_S + sum beta_i k_i).
+- a generic change equals the element factors of MSSO (K = K_S + sum beta_i k_i);
+- the segments a Jacobian steps, integrated together, are each one's own integration.
 """
 
 import numpy as np
@@ -14,16 +15,21 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from updating.inspect.segments import (
+    GAUSS_POINTS,
+    MIN_DIAMETER_SHARE,
     Segment,
     coverage,
     element_masses_kg,
+    segment_changes,
     segment_mass_kg,
     segment_matrices,
 )
 from updating.model.assembly import assemble, build_model, displacement_at
-from updating.model.material import Material
+from updating.model.element import element_parts
+from updating.model.material import Material, paper_material
 from updating.model.modes import solve_modes
-from updating.model.profile import make_profile
+from updating.model.profile import make_profile, paper_profile
+from updating.model.sections import section_props
 from updating.model.units import IN_TO_M
 
 WOOD = Material(E_pa=12e9, rho_kg_m3=650.0, e_over_g=13.0)
@@ -112,3 +118,74 @@ def test_a_generic_change_is_msso_element_factors():
     np.testing.assert_allclose(M0 + dM, M, rtol=1e-12, atol=1e-12 * np.abs(M).max())
     assert element_masses_kg(model).sum() == pytest.approx(
         WOOD.rho_kg_m3 * np.pi / 4 * 0.06**2 * 0.86, rel=1e-9)
+
+
+def _one_segment(model, seg):
+    """Reference: one segment integrated and placed alone, element by element (the loop
+    ``segments_parts`` replaced)."""
+    nodes = model.node_x_m
+    lo, hi = nodes[:-1], nodes[1:]
+    a, b = np.maximum(lo, seg.x0_m), np.minimum(hi, seg.x1_m)
+    elem = np.flatnonzero(b > a)
+    g, gw = GAUSS_POINTS
+    half = 0.5 * (b[elem] - a[elem])
+    x = ((a[elem] + half)[:, None] + half[:, None] * g[None, :]).ravel()
+    w = (half[:, None] * gw[None, :]).ravel()
+    elem = np.repeat(elem, g.size)
+    L = np.diff(nodes)
+    D = np.asarray(model.profile.diameter_at(x), dtype=float)
+    wood = section_props(D, model.material)
+    d_ei, d_kga = seg.bend_rel * wood.ei, seg.shear_rel * wood.kga
+    d_rhoa, d_rhoi = seg.mass_rel * wood.rhoa, seg.mass_rel * wood.rhoi
+    if seg.diameter_loss_m:
+        s = np.clip(1.0 - seg.diameter_loss_m / D, MIN_DIAMETER_SHARE, None)
+        d_ei = d_ei + wood.ei * (s**4 - 1.0)
+        d_kga = d_kga + wood.kga * (s**2 - 1.0)
+        d_rhoa = d_rhoa + wood.rhoa * (s**2 - 1.0)
+        d_rhoi = d_rhoi + wood.rhoi * (s**4 - 1.0)
+    if seg.added_mass_kg and x.size:
+        shape = D if seg.mass_at_surface else np.ones_like(D)
+        mu = seg.added_mass_kg * shape / float(np.sum(w * shape))
+        d_rhoa = d_rhoa + mu
+        if seg.mass_at_surface:
+            d_rhoi = d_rhoi + mu * D**2 / 8
+    if not model.rotary_inertia:
+        d_rhoi = np.zeros_like(d_rhoi)
+    p = element_parts(elem, (x - nodes[elem]) / L[elem], w, d_ei, d_kga, d_rhoa, d_rhoi, L,
+                      model.phi)
+    dK, dM = np.zeros((model.n_dof, model.n_dof)), np.zeros((model.n_dof, model.n_dof))
+    for e in np.unique(elem):
+        d = model.dofs[e]
+        dK[np.ix_(d, d)] += p.k_bend[e] + p.k_shear[e]
+        dM[np.ix_(d, d)] += p.m_trans[e] + p.m_rot[e]
+    return dK, dM, float(np.sum(w * d_rhoa))
+
+
+@settings(max_examples=15, deadline=None)
+@given(seed=st.integers(0, 10_000), k=st.integers(1, 9),
+       beam=st.sampled_from(["euler", "timoshenko"]))
+def test_segments_integrated_together_are_each_alone(seed, k, beam):
+    """``segment_changes`` integrates a Jacobian's segments in one pass; each one's dK, dM
+    and mass must be its own integration, bit for bit (segments past the ends, over one
+    element, of every kind)."""
+    rng = np.random.default_rng(seed)
+    profile = paper_profile()
+    L = profile.length_m
+    model = build_model(profile, paper_material(), beam=beam,
+                        stations_m=np.sort(rng.uniform(0.01, L - 0.01, 17)))
+    segs = []
+    for _ in range(k):
+        x0 = rng.uniform(-0.05, L)
+        segs.append(Segment(x0, x0 + rng.uniform(0.001, 0.3),
+                            added_mass_kg=rng.choice([0.0, rng.uniform(0.001, 0.03)]),
+                            diameter_loss_m=rng.choice([0.0, rng.uniform(0.0, 0.004)]),
+                            mass_rel=rng.choice([0.0, rng.normal(0, 0.1)]),
+                            bend_rel=rng.choice([0.0, rng.normal(0, 0.1)]),
+                            shear_rel=rng.choice([0.0, rng.normal(0, 0.1)]),
+                            mass_at_surface=bool(rng.integers(2))))
+    dK, dM, mass = segment_changes(model, segs)
+    for i, seg in enumerate(segs):
+        want = _one_segment(model, seg)
+        np.testing.assert_array_equal(dK[i], want[0])
+        np.testing.assert_array_equal(dM[i], want[1])
+        assert mass[i] == want[2]

@@ -27,13 +27,16 @@ from dataclasses import dataclass, replace
 import numpy as np
 from scipy.linalg import solveh_banded
 
-from updating.inspect.segments import Segment, segment_change
+from updating.inspect.segments import Segment, segment_changes
 from updating.model.assembly import (
     BatModel,
     assemble,
     attachment_matrices,
+    element_at,
     place,
     point_vector,
+    with_core,
+    with_cores,
 )
 from updating.model.modes import solve_modes
 from updating.model.profile import Profile
@@ -110,11 +113,34 @@ def wood_system(
     """Model of the bat (wood only) with nodes at the test points, and its bungees.
 
     The end-grain moisture excess decays over ``end_decay_m`` from each end (module
-    docstring).
+    docstring). ``like``, the uncored system, gives a cored one its end-grain matrices and
+    its model, rebuilt over the core alone (``assembly.with_core``, the same bit for bit).
     """
-    model = replace(reference, sensor_mass_kg=0.0).build(profile, points_m, core=core)
+    if like is not None and core is not None:
+        model = with_core(like.model, core)
+    else:
+        model = replace(reference, sensor_mass_kg=0.0).build(profile, points_m, core=core)
+    return system_of(model, points_m, like, end_decay_m)
+
+
+def cored_systems(like: WoodSystem, points_m: np.ndarray,
+                  cores: tuple[Core, ...]) -> list[WoodSystem]:
+    """Return ``wood_system`` of each core, their models integrated together.
+
+    ``assembly.with_cores``: the cores of a Jacobian's steps in one pass.
+    """
+    return [system_of(model, points_m, like) for model in with_cores(like.model, cores)]
+
+
+def system_of(model: BatModel, points_m: np.ndarray, like: WoodSystem | None,
+              end_decay_m: float = END_DECAY_M) -> WoodSystem:
+    """Return the wood system of a built model (``wood_system``)."""
     K, M = assemble(model, with_attachments=False)
-    Kb, _ = attachment_matrices(model)
+    if like is not None and all(model.phi[e] == like.model.phi[e] for e in
+                                (element_at(model, a.x_m) for a in model.attachments)):
+        Kb = like.K_bungees  # the bungees' elements as they were: the same point vectors
+    else:
+        Kb, _ = attachment_matrices(model)
     idx = np.searchsorted(model.node_x_m, points_m - 1e-9)
     if np.any(np.abs(model.node_x_m[np.minimum(idx, model.n_nodes - 1)] - points_m) > 1e-9):
         raise ValueError("test points must be nodes of the model")
@@ -167,6 +193,10 @@ class StateMatrices:
 
 LOCAL_CACHE = 64
 """Local-change matrices a predictor keeps (``ChangePredictor.local``)."""
+DERIVED_CACHE = 256
+"""States whose modes or derivatives a predictor keeps (``ChangePredictor.derived``): a
+refit evaluates some 20 states, and the next leave-out starts where the last one did (about
+25 kB a Jacobian's derivatives)."""
 
 
 class ChangePredictor:
@@ -189,6 +219,7 @@ class ChangePredictor:
         self._local: dict = {}
         self._points: dict = {}
         self._woods: dict = {}
+        self._derived: dict = {}
 
     def at_sensor(self, sensor_x_m: float) -> ChangePredictor:
         """Return the same bat with its accelerometer elsewhere.
@@ -220,39 +251,65 @@ class ChangePredictor:
     def system(self, core: Core | None = None) -> WoodSystem:
         """Return the wood's system, with ``core`` if given."""
         if core not in self._cache:
-            if len(self._cache) > 32:
-                for key in [k for k in self._cache if k is not None]:
-                    del self._cache[key]
-                # caches keyed by a system's id: a new system may take a dropped one's id
-                self._local.clear()
-                self._woods.clear()
-                self._points.clear()
-            like = None if core is None else self.system(None)
-            self._cache[core] = wood_system(self.profile, self.reference, self.points_m, core,
-                                            like, self.end_decay_m)
+            if core is not None:
+                self.systems((core,))
+            else:
+                self._cache[None] = wood_system(self.profile, self.reference, self.points_m,
+                                                None, None, self.end_decay_m)
         return self._cache[core]
+
+    def systems(self, cores) -> None:
+        """Build the wood systems of the cores not built yet, together (``cored_systems``).
+
+        At most 32 cored systems are kept: beyond, all but the uncored one are dropped.
+        """
+        missing = tuple(dict.fromkeys(c for c in cores if c not in self._cache))
+        if not missing:
+            return
+        if len(self._cache) + len(missing) > 33:
+            for key in [k for k in self._cache if k is not None]:
+                del self._cache[key]
+            self._woods.clear()  # keyed by a system's id: a new one may take a dropped id
+        built = cored_systems(self.system(None), self.points_m, missing)
+        self._cache.update(zip(missing, built, strict=True))
 
     def local(self, ws: WoodSystem, segments: tuple[Segment, ...]):
         """(dK, dM, mass change) of local changes on a wood system, or None for none.
 
-        The sum of each segment's change, cached per (system, segment), at most
-        ``LOCAL_CACHE`` entries: a fit's Jacobian moves one parameter at a time, so most of
-        its columns share the segments, and a step of one segment leaves the other's.
+        The sum of each segment's change, cached per segment and the shear parameters phi
+        of the elements it covers, at most ``LOCAL_CACHE`` entries: the change depends on
+        the system through those alone (``segments.segment_parts``; the wood, the mesh and
+        the profile are the predictor's), so a core elsewhere on the bat leaves it. A fit's
+        Jacobian moves one parameter at a time, so most of its columns share the segments,
+        and a step of one segment, or of the core, leaves the other's.
         """
         if not segments:
             return None
-        parts = []
-        for seg in segments:
-            key = (id(ws), seg)
-            if key not in self._local:
-                if len(self._local) >= LOCAL_CACHE:
-                    self._local.clear()
-                self._local[key] = segment_change(ws.model, (seg,))
-            parts.append(self._local[key])
+        keys = self._keep_local(ws, segments)
+        parts = [self._local[key] for key in keys]
         if len(parts) == 1:
             return parts[0]
         return (sum(p[0] for p in parts), sum(p[1] for p in parts),
                 sum(p[2] for p in parts))
+
+    def _keep_local(self, ws: WoodSystem, segments) -> list:
+        """Return the cache keys of ``segments`` on ``ws``, integrating the missing ones.
+
+        The missing ones are integrated together (``segments.segment_changes``); when they
+        would overflow ``LOCAL_CACHE``, the cache is emptied first.
+        """
+        nodes, phi = ws.model.node_x_m, ws.model.phi
+        keys = [(seg, phi[np.minimum(nodes[1:], seg.x1_m)
+                          > np.maximum(nodes[:-1], seg.x0_m)].tobytes()) for seg in segments]
+        missing = list(dict.fromkeys(k for k in keys if k not in self._local))
+        if missing:
+            if len(self._local) + len(missing) > LOCAL_CACHE:
+                self._local.clear()
+                missing = list(dict.fromkeys(keys))
+            dK, dM, mass = segment_changes(ws.model, [k[0] for k in missing])
+            for i, key in enumerate(missing):
+                self._local[key] = (dK[i], dM[i], float(mass[i]))
+        return keys
 
     def wood_mass_kg(self, p: ChangeParams) -> float:
         """Return the wood's mass with the changes ``p``, kg."""
@@ -310,8 +367,13 @@ class ChangePredictor:
         n_dof, k = base.K.shape[0], len(steps)
         dK, dM, dv = np.zeros((k, n_dof, n_dof)), np.zeros((k, n_dof, n_dof)), \
             np.zeros((k, n_dof))
+        self.systems(s.core for s, _ in steps if s.core != p.core)  # the steps' cores together
         ws = self.system(p.core)
         Kw, Mw = self._wood(ws, p.end_moisture_pt)
+        # every segment the steps on this core hold, integrated together
+        self._keep_local(ws, dict.fromkeys([*p.segments, *(seg for s, _ in steps
+                                                            if s.core == p.core
+                                                            for seg in s.segments)]))
         local = self.local(ws, p.segments)
         W = Kw if local is None else Kw + local[0]
         v0 = base.sensor_vector()
@@ -383,8 +445,12 @@ class ChangePredictor:
         return self._woods[key]
 
     def _point(self, ws: WoodSystem, x_m: float) -> tuple[np.ndarray, np.ndarray]:
-        """Return ``point_vector`` of the accelerometer at ``x_m`` (the last few kept)."""
-        key = (id(ws), x_m)
+        """Return ``point_vector`` of the accelerometer at ``x_m`` (the last few kept).
+
+        Kept per position and the shear parameter phi of the element there, the one thing
+        of the system the vector depends on besides the mesh (a core elsewhere leaves it).
+        """
+        key = (x_m, float(ws.model.phi[element_at(ws.model, x_m)]))
         if key not in self._points:
             if len(self._points) >= LOCAL_CACHE:
                 self._points.clear()
@@ -402,10 +468,36 @@ class ChangePredictor:
                                                at_points[self.drive])
 
     def __call__(self, p: ChangeParams) -> tuple[np.ndarray, np.ndarray]:
-        """Return the frequencies, Hz, and shapes at the points of the bat changed by ``p``."""
-        state = self.matrices(p)
-        modes = solve_modes(state.K, state.M, None, self.n_solve)
-        return modes.freq_hz, self.observe(state, modes.shapes)
+        """Return the frequencies, Hz, and shapes at the points of the bat changed by ``p``.
+
+        Read-only arrays, kept for the last few states (``derived``).
+        """
+        def solve() -> tuple[np.ndarray, np.ndarray]:
+            state = self.matrices(p)
+            modes = solve_modes(state.K, state.M, None, self.n_solve)
+            return modes.freq_hz, self.observe(state, modes.shapes)
+
+        return self.derived(("modes", p), solve)
+
+    def derived(self, key, compute: Callable[[], tuple]) -> tuple:
+        """Return ``compute()``, kept per ``key`` for the ``DERIVED_CACHE`` keys last used.
+
+        What the predictor's states give (their modes, a Jacobian's derivatives) depends on
+        the state alone, not on the data a fit weighs: the leave-one-out refits all start
+        from the fit on all the data, and a refit with other noise levels from its end. The
+        arrays of the tuple are made read-only, so that no caller changes a kept result.
+        ``at_sensor`` starts a predictor with none kept (its accelerometer is elsewhere).
+        """
+        out = self._derived.pop(key, None)
+        if out is None:
+            if len(self._derived) >= DERIVED_CACHE:
+                del self._derived[next(iter(self._derived))]  # the least recently used
+            out = compute()
+            for a in (out if isinstance(out, tuple) else vars(out).values()):
+                if isinstance(a, np.ndarray):
+                    a.flags.writeable = False
+        self._derived[key] = out
+        return out
 
 
 def make_predictor(

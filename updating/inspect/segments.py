@@ -32,7 +32,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from updating.model.assembly import BatModel
+from updating.model.assembly import BatModel, gauss_legendre
 from updating.model.element import ElementParts, element_parts
 from updating.model.sections import section_props
 from updating.msso.core_elements import CoreFactors, core_element_factors
@@ -41,7 +41,7 @@ MIN_DIAMETER_SHARE = 0.2
 """A diameter loss never takes a section below this share of its diameter."""
 N_GAUSS = 4
 """Gauss points per covered element: exact for the cubic shape functions' products."""
-GAUSS_POINTS = np.polynomial.legendre.leggauss(N_GAUSS)
+GAUSS_POINTS = gauss_legendre(N_GAUSS)
 """Gauss-Legendre points and weights on [-1, 1] (computed once: a fit integrates thousands of
 segments)."""
 
@@ -115,39 +115,79 @@ def segment_parts(model: BatModel, seg: Segment) -> tuple[ElementParts, float]:
     mass_kg : float
         int drhoA dx: the change of the bat's mass on a scale.
     """
+    parts, mass = segments_parts(model, (seg,))
+    return ElementParts(parts.k_bend[0], parts.k_shear[0], parts.m_trans[0],
+                        parts.m_rot[0]), float(mass[0])
+
+
+def segments_parts(model: BatModel, segments) -> tuple[ElementParts, np.ndarray]:
+    """Integrate k segments' changes, each alone, in one pass over all their samples.
+
+    The module docstring's integrals for every segment at once (a Jacobian steps several
+    segments): each segment's samples and element parts are the ones it would get alone,
+    bit for bit (its sums over its own samples, in their order).
+
+    Parameters
+    ----------
+    model : BatModel
+        The wood model the segments change.
+    segments : sequence of Segment
+        The changes.
+
+    Returns
+    -------
+    parts : ElementParts
+        (k, e, 4, 4) each segment's element parts.
+    mass_kg : numpy.ndarray
+        (k,) each segment's int drhoA dx, kg.
+    """
+    segs = tuple(segments)
+    k = len(segs)
     nodes = model.node_x_m
-    lo, hi = nodes[:-1], nodes[1:]
-    a, b = np.maximum(lo, seg.x0_m), np.minimum(hi, seg.x1_m)
-    elem = np.flatnonzero(b > a)
+    n_el = nodes.size - 1
+
+    def each(name: str) -> np.ndarray:
+        return np.array([float(getattr(seg, name)) for seg in segs])
+
+    a = np.maximum(nodes[None, :-1], each("x0_m")[:, None])
+    b = np.minimum(nodes[None, 1:], each("x1_m")[:, None])
+    sid, elem = np.nonzero(b > a)  # segment by segment, elements ascending
     g, gw = GAUSS_POINTS
-    half = 0.5 * (b[elem] - a[elem])
-    x = ((a[elem] + half)[:, None] + half[:, None] * g[None, :]).ravel()
+    half = 0.5 * (b[sid, elem] - a[sid, elem])
+    x = ((a[sid, elem] + half)[:, None] + half[:, None] * g[None, :]).ravel()
     w = (half[:, None] * gw[None, :]).ravel()
-    elem = np.repeat(elem, N_GAUSS)
+    sid, elem = np.repeat(sid, N_GAUSS), np.repeat(elem, N_GAUSS)
+    bounds = np.searchsorted(sid, np.arange(k + 1))
     L = np.diff(nodes)
     D = np.asarray(model.profile.diameter_at(x), dtype=float)
     wood = section_props(D, model.material)
-    d_ei = seg.bend_rel * wood.ei
-    d_kga = seg.shear_rel * wood.kga
-    d_rhoa = seg.mass_rel * wood.rhoa
-    d_rhoi = seg.mass_rel * wood.rhoi
-    if seg.diameter_loss_m:
-        s = np.clip(1.0 - seg.diameter_loss_m / D, MIN_DIAMETER_SHARE, None)
-        d_ei = d_ei + wood.ei * (s**4 - 1.0)
-        d_kga = d_kga + wood.kga * (s**2 - 1.0)
-        d_rhoa = d_rhoa + wood.rhoa * (s**2 - 1.0)
-        d_rhoi = d_rhoi + wood.rhoi * (s**4 - 1.0)
-    if seg.added_mass_kg and x.size:
-        shape = D if seg.mass_at_surface else np.ones_like(D)
-        mu = seg.added_mass_kg * shape / float(np.sum(w * shape))
-        d_rhoa = d_rhoa + mu
-        if seg.mass_at_surface:
-            d_rhoi = d_rhoi + mu * D**2 / 8
+    d_ei = each("bend_rel")[sid] * wood.ei
+    d_kga = each("shear_rel")[sid] * wood.kga
+    d_rhoa = each("mass_rel")[sid] * wood.rhoa
+    d_rhoi = each("mass_rel")[sid] * wood.rhoi
+    for i, seg in enumerate(segs):
+        sl = slice(bounds[i], bounds[i + 1])
+        if seg.diameter_loss_m:
+            s = np.clip(1.0 - seg.diameter_loss_m / D[sl], MIN_DIAMETER_SHARE, None)
+            d_ei[sl] = d_ei[sl] + wood.ei[sl] * (s**4 - 1.0)
+            d_kga[sl] = d_kga[sl] + wood.kga[sl] * (s**2 - 1.0)
+            d_rhoa[sl] = d_rhoa[sl] + wood.rhoa[sl] * (s**2 - 1.0)
+            d_rhoi[sl] = d_rhoi[sl] + wood.rhoi[sl] * (s**4 - 1.0)
+        if seg.added_mass_kg and sl.stop > sl.start:
+            shape = D[sl] if seg.mass_at_surface else np.ones_like(D[sl])
+            mu = seg.added_mass_kg * shape / float(np.sum(w[sl] * shape))
+            d_rhoa[sl] = d_rhoa[sl] + mu
+            if seg.mass_at_surface:
+                d_rhoi[sl] = d_rhoi[sl] + mu * D[sl] ** 2 / 8
     if not model.rotary_inertia:
         d_rhoi = np.zeros_like(d_rhoi)
-    parts = element_parts(elem, (x - nodes[elem]) / L[elem], w, d_ei, d_kga, d_rhoa, d_rhoi,
-                          L, model.phi)
-    return parts, float(np.sum(w * d_rhoa))
+    flat = element_parts(sid * n_el + elem, (x - nodes[elem]) / L[elem], w, d_ei, d_kga,
+                         d_rhoa, d_rhoi, np.tile(L, k), np.tile(model.phi, k))
+    parts = ElementParts(*(getattr(flat, f).reshape(k, n_el, 4, 4)
+                           for f in ("k_bend", "k_shear", "m_trans", "m_rot")))
+    mass = np.array([float(np.sum(w[bounds[i]:bounds[i + 1]] * d_rhoa[bounds[i]:bounds[i + 1]]))
+                     for i in range(k)])
+    return parts, mass
 
 
 def segment_change(model: BatModel, segments) -> tuple[np.ndarray, np.ndarray, float]:
@@ -173,6 +213,23 @@ def segment_change(model: BatModel, segments) -> tuple[np.ndarray, np.ndarray, f
         np.add.at(dK, at, (p.k_bend + p.k_shear)[touched])
         np.add.at(dM, at, (p.m_trans + p.m_rot)[touched])
         mass += m
+    return dK, dM, mass
+
+
+def segment_changes(model: BatModel, segments) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(dK, dM, mass change in kg) of each segment alone, (k, N, N) twice and (k,).
+
+    ``segment_change(model, (seg,))`` for each segment, bit for bit, integrated in one pass
+    (``segments_parts``). Every entry of dK or dM gets at most two elements' terms, so the
+    order they are placed in does not change the sum.
+    """
+    parts, mass = segments_parts(model, segments)
+    k, n = mass.size, model.n_dof
+    dK, dM = np.zeros((k, n, n)), np.zeros((k, n, n))
+    d = model.dofs
+    at = (np.arange(k)[:, None, None, None], d[None, :, :, None], d[None, :, None, :])
+    np.add.at(dK, at, parts.k_bend + parts.k_shear)
+    np.add.at(dM, at, parts.m_trans + parts.m_rot)
     return dK, dM, mass
 
 

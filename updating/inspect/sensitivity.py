@@ -64,8 +64,16 @@ def predicted_change(predict: ChangePredictor, params: ChangeParams,
     Returns
     -------
     PredictedChange
-        Frequencies and observed shapes, and their derivatives (module docstring).
+        Frequencies and observed shapes, and their derivatives (module docstring); kept
+        by the predictor for the same state and steps (``ChangePredictor.derived``).
     """
+    return predict.derived(("change", params, tuple(steps)),
+                           lambda: _predicted_change(predict, params, steps))
+
+
+def _predicted_change(predict: ChangePredictor, params: ChangeParams,
+                      steps: list[tuple[ChangeParams, float]]) -> PredictedChange:
+    """``predicted_change`` computed."""
     base = predict.matrices(params)
     modes = full_modes(base.K, base.M)
     m = predict.n_solve

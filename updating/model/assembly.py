@@ -9,6 +9,7 @@ piece of the profile that the element overlaps (steps included exactly).
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass, field, replace
 from typing import Literal
 
@@ -131,12 +132,25 @@ def mesh_nodes(
     return nodes[np.concatenate([[True], np.diff(nodes) > 1e-9 * length_m])]
 
 
+@functools.cache
+def gauss_legendre(n: int) -> tuple[np.ndarray, np.ndarray]:
+    """Gauss-Legendre points and weights on [-1, 1], n of them (read-only arrays).
+
+    ``numpy.polynomial.legendre.leggauss``, computed once per n: a change fit samples
+    thousands of cored models.
+    """
+    g, w = np.polynomial.legendre.leggauss(n)
+    g.flags.writeable = w.flags.writeable = False
+    return g, w
+
+
 def sample_sections(
     node_x_m: np.ndarray, profile: Profile, material: Material, core: Core | None,
     n_gauss: int = GAUSS_POINTS,
 ) -> Samples:
     """Gauss samples on every (element x profile piece x core zone) interval."""
-    cuts = [profile.segments()[:, 0], profile.segments()[:, 1], node_x_m]
+    pieces = profile.segments()
+    cuts = [pieces[:, 0], pieces[:, 1], node_x_m]
     if core is not None:
         x0, x1 = core.interval_m(profile.length_m)
         cuts.append(np.array([x0, x1 - core.empty_m, x1]))
@@ -145,7 +159,7 @@ def sample_sections(
     a, b = breaks[:-1], breaks[1:]
     keep = b - a > 1e-12 * profile.length_m
     a, b = a[keep], b[keep]
-    g, gw = np.polynomial.legendre.leggauss(n_gauss)
+    g, gw = gauss_legendre(n_gauss)
     x = (0.5 * (a + b))[:, None] + (0.5 * (b - a))[:, None] * g[None, :]
     w = (0.5 * (b - a))[:, None] * gw[None, :]
     x, w = x.ravel(), w.ravel()
@@ -193,15 +207,125 @@ def build_model(
     """Mesh and integrate a bat. Rotary inertia defaults to on for Timoshenko, off for Euler."""
     if rotary_inertia is None:
         rotary_inertia = beam == "timoshenko"
-    if core is not None and not 0 < core.plug_m < core.depth_m <= profile.length_m:
-        raise ValueError("core: need 0 < plug < depth <= bat length")
-    if core is not None and not 0 <= core.empty_m < core.depth_m - core.plug_m:
-        raise ValueError("core: need 0 <= empty length < depth - plug")
+    if core is not None:
+        check_core(core, profile.length_m)
     nodes = mesh_nodes(profile.length_m, n_elements, element_length_m, stations_m)
     samples = sample_sections(nodes, profile, material, core)
     phi, parts = parts_from_samples(nodes, samples, beam, rotary_inertia)
     return BatModel(nodes, beam, rotary_inertia, samples, phi, parts, tuple(attachments),
                     profile, material, core)
+
+
+def check_core(core: Core, length_m: float) -> None:
+    """Raise ValueError unless the core fits the bat.
+
+    0 < plug < depth <= the bat's length, and 0 <= empty length < depth - plug.
+    """
+    if not 0 < core.plug_m < core.depth_m <= length_m:
+        raise ValueError("core: need 0 < plug < depth <= bat length")
+    if not 0 <= core.empty_m < core.depth_m - core.plug_m:
+        raise ValueError("core: need 0 <= empty length < depth - plug")
+
+
+def with_core(model: BatModel, core: Core) -> BatModel:
+    """Return the uncored ``model`` with ``core``, rebuilding only the elements it reaches.
+
+    The same model as ``build_model(..., core=core)`` on the same mesh, bit for bit: the mesh
+    does not depend on the core, an element the core interval does not reach keeps its
+    samples, phi and parts, and those it reaches are sampled and integrated as
+    ``sample_sections`` and ``parts_from_samples`` do over the whole bat (the same breaks
+    in them, in the same order). A change fit steps a core's four parameters for every
+    Jacobian, and each step's model differs from the uncored one over the core alone.
+    """
+    return with_cores(model, (core,))[0]
+
+
+def with_cores(model: BatModel, cores) -> list[BatModel]:
+    """Return ``with_core(model, c)`` for each core, all sampled and integrated in one pass.
+
+    Each core's samples, phi and parts are the ones it gets alone (its own breaks, its
+    elements' sums over their own samples, in order), so each model is the full build's
+    bit for bit; the cores of a Jacobian's steps cost one pass instead of one each.
+    """
+    if model.core is not None:
+        raise ValueError("with_core: the model must be uncored")
+    cores = tuple(cores)
+    profile, nodes = model.profile, model.node_x_m
+    length = profile.length_m
+    n_el = nodes.size - 1
+    pieces = profile.segments()
+    spans, a, b, cid = [], [], [], []
+    for i, core in enumerate(cores):
+        check_core(core, length)
+        x0, x1 = core.interval_m(length)
+        hit = np.flatnonzero((nodes[1:] > x0) & (nodes[:-1] < x1))
+        first, last = int(hit[0]), int(hit[-1])
+        span = nodes[first:last + 2]
+        breaks = np.unique(np.concatenate([pieces[:, 0], pieces[:, 1], span,
+                                           np.array([x0, x1 - core.empty_m, x1])]))
+        breaks = breaks[(breaks >= span[0]) & (breaks <= span[-1])]
+        lo, hi = breaks[:-1], breaks[1:]
+        keep = hi - lo > 1e-12 * length
+        spans.append((first, last))
+        a.append(lo[keep])
+        b.append(hi[keep])
+        cid.append(np.full(int(keep.sum()), i))
+    a, b, cid = np.concatenate(a), np.concatenate(b), np.concatenate(cid)
+    g, gw = gauss_legendre(GAUSS_POINTS)
+    x = ((0.5 * (a + b))[:, None] + (0.5 * (b - a))[:, None] * g[None, :]).ravel()
+    w = ((0.5 * (b - a))[:, None] * gw[None, :]).ravel()
+    cid = np.repeat(cid, GAUSS_POINTS)
+    elem = np.clip(np.searchsorted(nodes, x, side="right") - 1, 0, n_el - 1)
+    L = np.diff(nodes)
+    xi = (x - nodes[elem]) / L[elem]
+    D = profile.diameter_at(x)
+
+    def per_core(name: str) -> np.ndarray:
+        return np.array([float(getattr(c, name)) for c in cores])[cid]
+
+    x0 = per_core("depth_m")
+    x0 = length - x0
+    x1 = length - per_core("plug_m")
+    d_core = np.where((x > x0) & (x < x1), per_core("diameter_m"), 0.0)
+    filled = (x > x0) & (x < x1 - per_core("empty_m"))
+    ratio_rho = np.where(filled, per_core("fill_density_ratio"), 0.0)
+    ratio_e = np.where(filled, per_core("fill_modulus_ratio"), 0.0)
+    props = section_props(D, model.material, d_core, ratio_rho, ratio_e)
+    bins = cid * n_el + elem
+    Lk = np.tile(L, len(cores))
+    phi_k = np.zeros(Lk.size)
+    if model.beam == "timoshenko":
+        ei_avg = np.bincount(bins, w * props.ei, Lk.size) / Lk
+        kga_avg = np.bincount(bins, w * props.kga, Lk.size) / Lk
+        used = np.unique(bins)
+        phi_k[used] = 12 * ei_avg[used] / (kga_avg[used] * Lk[used] ** 2)
+    rhoi = props.rhoi if model.rotary_inertia else np.zeros_like(props.rhoi)
+    parts_k = element_parts(bins, xi, w, props.ei, props.kga, props.rhoa, rhoi, Lk, phi_k)
+    bounds = np.searchsorted(cid, np.arange(len(cores) + 1))
+    s = model.samples
+    out = []
+    for i, (core, (first, last)) in enumerate(zip(cores, spans, strict=True)):
+        i0, i1 = np.searchsorted(s.elem, [first, last + 1])
+        own = slice(bounds[i], bounds[i + 1])
+
+        def merged(old: np.ndarray, new: np.ndarray, i0=i0, i1=i1, own=own) -> np.ndarray:
+            return np.concatenate([old[:i0], new[own], old[i1:]])
+
+        samples = Samples(merged(s.elem, elem), merged(s.xi, xi), merged(s.weight_m, w),
+                          merged(s.x_m, x),
+                          SectionProps(*(merged(getattr(s.props, k), getattr(props, k))
+                                         for k in ("ei", "kga", "rhoa", "rhoi"))))
+        rows = slice(i * n_el + first, i * n_el + last + 1)
+        phi = model.phi.copy()
+        phi[first:last + 1] = phi_k[rows]
+        mats = []
+        for k in ("k_bend", "k_shear", "m_trans", "m_rot"):
+            m = getattr(model.parts, k).copy()
+            m[first:last + 1] = getattr(parts_k, k)[rows]
+            mats.append(m)
+        out.append(replace(model, samples=samples, phi=phi, parts=ElementParts(*mats),
+                           core=core))
+    return out
 
 
 def scale_sections(
@@ -222,14 +346,19 @@ def scale_sections(
     return replace(model, samples=samples, phi=phi, parts=parts)
 
 
+def element_at(model: BatModel, x_m: float) -> int:
+    """Return the index of the element holding x_m (the first or last one beyond the ends)."""
+    return int(np.clip(np.searchsorted(model.node_x_m, x_m, side="right") - 1, 0,
+                       model.n_elements - 1))
+
+
 def point_vector(model: BatModel, x_m: float) -> tuple[np.ndarray, np.ndarray]:
     """(dofs, N_w) of the element containing x: a point load's consistent distribution."""
     from updating.model.element import shape_functions
 
     if not model.node_x_m[0] - 1e-9 <= x_m <= model.node_x_m[-1] + 1e-9:
         raise ValueError(f"attachment at x = {x_m:.4f} m lies outside the bat")
-    e = int(np.clip(np.searchsorted(model.node_x_m, x_m, side="right") - 1, 0,
-                    model.n_elements - 1))
+    e = element_at(model, x_m)
     L = model.element_length_m[e]
     sf = shape_functions(np.array([(x_m - model.node_x_m[e]) / L]), np.array([L]),
                          np.array([model.phi[e]]))
