@@ -15,6 +15,12 @@ what the calipers read with the modal verdict (``join_calipers``):
   off since registration leaves: said, not an alteration;
 - **a loss along most of the bat** is not shaving (4-14 in): another bat's profile or a
   caliper zeroed wrong; said, and the verdict is left to the vibration test;
+- **no removal the scan finds, but the vibration test reads one** (its finding
+  ``material_removed``, whatever its status): the survey is asked about that stretch alone
+  (``calipers.check_region``, a bound over the patterns only, at the same level). Read there,
+  it is the calipers' removal above, and the bat is altered: two independent measurements
+  read it in the same place, and the survey alone passes the check on an unaltered bat at
+  most ``CALIPER_FALSE_ALARM`` of the time;
 - **no removal**: the vibration verdict stands, and its reasons gain what the survey cannot
   see (flats between its orientations, grooves between its stations) and what would measure
   it -- never as evidence of a clean barrel.
@@ -25,7 +31,7 @@ from __future__ import annotations
 from dataclasses import replace
 
 from updating.inspect.caliper_reading import CaliperChange
-from updating.inspect.calipers import CaliperResult, compare_profiles
+from updating.inspect.calipers import CaliperResult, check_region, compare_profiles
 from updating.inspect.finding import Finding, found
 from updating.inspect.kind_table import HANDLE_SLACK_IN, RULE_MAX_HANDLE_IN, kind
 from updating.inspect.verdict import Verdict
@@ -96,8 +102,23 @@ def _measured(r: CaliperResult) -> str:
             "of the time)")
 
 
+def _confirmed(r: CaliperResult) -> str:
+    c = r.region_check
+    return (f"beyond caliper noise ({r.null.sigma_retest_m / IN_TO_M:.4f} in) and a round "
+            f"bat's ovality where the vibration test reads a removal ({_in(c.region_m[0])}-"
+            f"{_in(c.region_m[1])} in; z {c.statistic:.1f} against {c.critical:.1f} for that "
+            f"one stretch, an unaltered bat's survey reads so there at most {c.false_alarm:g} "
+            f"of the time; below the whole survey's scan bound, z {r.statistic:.1f} against "
+            f"{r.critical:.1f})")
+
+
 def _blind(r: CaliperResult) -> str:
     return "; ".join(r.unseen)
+
+
+def _removals(r: CaliperResult) -> list[CaliperChange]:
+    """Return the changes found that may be alterations (off the handle, not most of the bat)."""
+    return [c for c in r.changes if not _on_handle(c) and not _most_of_bat(c, r)]
 
 
 def _side_notes(r: CaliperResult) -> list[str]:
@@ -133,16 +154,22 @@ def join_calipers(verdict: Verdict, result: CaliperResult | None) -> Verdict:
     """
     if result is None:
         return verdict
-    removals = [c for c in result.changes if not _on_handle(c) and not _most_of_bat(c, result)]
+    removals = _removals(result)
     notes = _side_notes(result)
     modal = [f"vibration test: {r}" for r in verdict.reasons]
+    check = result.region_check
+    confirmed = not removals and check is not None and check.change is not None and \
+        not _on_handle(check.change)
+    if confirmed:
+        removals = [check.change]
     if not removals:
         blind = (f"the re-test's caliper profile reads no removal beyond noise and ovality, "
                  f"which is not evidence of a clean barrel: {_blind(result)}")
         return replace(verdict, reasons=(*verdict.reasons, *notes, blind), calipers=result)
     main = max(removals, key=lambda c: c.removed_mass_kg)
     read = [f"the re-test's caliper profile measures {describe_change(c)}" for c in removals]
-    read[0] += f", {_measured(result)}: a measurement, not an inference"
+    read[0] += (f", {_confirmed(result) if confirmed else _measured(result)}: a measurement, "
+                "not an inference")
     kind = verdict.finding.kind if verdict.finding is not None else None
     if verdict.altered and kind not in (None, "material_removed"):
         return replace(verdict, reasons=(*verdict.reasons, *read, *notes), calipers=result)
@@ -177,4 +204,10 @@ def with_calipers(verdict: Verdict, profile: Profile, survey: CaliperSurvey | No
     """
     if survey is None:
         return verdict
-    return join_calipers(verdict, compare_profiles(profile, survey, rho_kg_m3))
+    result = compare_profiles(profile, survey, rho_kg_m3)
+    f = verdict.finding
+    if not _removals(result) and f is not None and f.family != "calipers" and \
+            f.kind == kind("flat-surfaced").finding and f.region_m is not None:
+        result = replace(result, region_check=check_region(
+            profile, survey, rho_kg_m3, f.region_m, result.false_alarm))
+    return join_calipers(verdict, result)

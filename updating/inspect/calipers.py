@@ -17,6 +17,14 @@ profile"):
    orientations read, grooves between the stations, stretches not surveyed -- and what
    would measure them.
 
+``check_region`` is the second entry: where the vibration test, an independent measurement,
+already reads a removal over a stretch, the survey is asked about that one stretch alone --
+z of each pattern over the stations inside it (``caliper_scan.window_stats``) against
+Bonferroni's bound over the patterns only, ``Phi^-1(1 - alpha / P)`` (about 3.5 at four
+orientations against the scan's 4.8). The stretch is chosen by data the calipers' null is
+independent of, so an unaltered bat's survey passes it with probability at most alpha
+whatever the vibration test said, and both must read the removal for it to count.
+
 Pure numpy; the result is a small frozen dataclass (``CaliperResult``).
 """
 
@@ -25,6 +33,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from scipy.special import ndtri
 
 from updating.inspect.caliper_null import (
     CaliperNull,
@@ -88,6 +97,9 @@ class CaliperResult:
         The first and last station compared, m.
     unseen : tuple of str
         What the survey cannot see, each with what would measure it.
+    region_check : RegionCheck or None
+        The survey asked about the stretch the vibration test named (``check_region``;
+        None: not asked).
     """
 
     changes: tuple[CaliperChange, ...]
@@ -100,6 +112,7 @@ class CaliperResult:
     hidden_flat_depth_m: float
     surveyed_m: tuple[float, float]
     unseen: tuple[str, ...]
+    region_check: RegionCheck | None = None
 
 
 def _merged(runs: list[Run], t: Terms) -> list[Run]:
@@ -291,3 +304,76 @@ def compare_profiles(registered: Profile, survey: CaliperSurvey, rho_kg_m3: floa
                          tuple(float(a) for a in survey.orientations_deg), spacing, hidden,
                          (float(st.x_m[0]), float(st.x_m[-1])), unseen)
 
+
+@dataclass(frozen=True)
+class RegionCheck:
+    """The survey asked about one stretch another measurement named (``check_region``), SI.
+
+    Attributes
+    ----------
+    region_m : tuple of float
+        The stretch asked about (start, end) from the knob end.
+    statistic, critical : float
+        The largest z over the patterns on the stations inside it, and Bonferroni's bound
+        over the patterns at ``false_alarm`` (NaN: no station inside).
+    false_alarm : float
+        The check's level: an unaltered bat's survey passes it at most this often.
+    change : CaliperChange or None
+        What the calipers read there when ``statistic`` exceeds ``critical``.
+    """
+
+    region_m: tuple[float, float]
+    statistic: float
+    critical: float
+    false_alarm: float
+    change: CaliperChange | None
+
+
+def check_region(registered: Profile, survey: CaliperSurvey, rho_kg_m3: float,
+                 region_m: tuple[float, float], false_alarm: float = CALIPER_FALSE_ALARM
+                 ) -> RegionCheck:
+    """Ask the survey whether it reads a removal over one stretch named beforehand.
+
+    Parameters
+    ----------
+    registered : Profile
+        The registered profile (x from its knob end).
+    survey : CaliperSurvey
+        The re-test's readings.
+    rho_kg_m3 : float
+        The wood's density, kg/m^3 (for the wood removed).
+    region_m : tuple of float
+        The stretch, m from the knob end, named by a measurement independent of the
+        survey (the vibration test's finding).
+    false_alarm : float
+        The check's level.
+
+    Returns
+    -------
+    RegionCheck
+        z of each pattern over the stations inside the stretch, the largest held to
+        ``Phi^-1(1 - false_alarm / P)`` (P patterns: module docstring), and the reading of
+        the stretch when it passes.
+
+    Examples
+    --------
+    A survey that reads nothing anywhere passes no stretch; one short by 0.006 in at one
+    orientation over 6 in, below the whole scan's bound, passes the stretch a vibration
+    test named there.
+    """
+    st = station_table(survey, registered)
+    null, terms, _, _, _ = _scan(st, registered, false_alarm)
+    inside = np.flatnonzero((st.x_m >= region_m[0]) & (st.x_m <= region_m[1]))
+    n_patterns = terms.a.shape[0]
+    critical = float(ndtri(1.0 - false_alarm / n_patterns))
+    if inside.size == 0:
+        return RegionCheck(region_m, float("nan"), critical, false_alarm, None)
+    i0, i1 = int(inside[0]), int(inside[-1]) + 1
+    stats = [window_stats(terms, k, i0, i1) for k in range(n_patterns)]
+    k = int(np.argmax([z for z, _, _ in stats]))
+    z, h, sd = stats[k]
+    change = None
+    if z > critical:
+        change = read_run(st, null, terms, Run(k, i0, i1, z, h, sd), rho_kg_m3,
+                          registered.length_m)
+    return RegionCheck(region_m, float(z), critical, false_alarm, change)
