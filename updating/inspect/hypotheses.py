@@ -46,6 +46,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from updating.inspect.kind_table import FAMILIES
 from updating.inspect.model import E_PER_POINT, MASS_PER_POINT, ChangeParams, ChangePredictor
 from updating.inspect.parallel import fork_map
 from updating.inspect.segments import Segment
@@ -58,7 +59,10 @@ from updating.model.units import IN_TO_M
 
 SigmaRel = float | np.ndarray
 """Relative shape noise: one level, or (m,) one per paired mode (``shape_noise``)."""
-N_NULL, N_CORE = 10, 4
+N_NULL = 10
+N_CORE = len(FAMILIES["core"].names)
+CORE_PLUG, CORE_LENGTH = (N_NULL + FAMILIES["core"].index(n) for n in ("plug_in", "length_in"))
+"""Where the core's plug and filled length (in) sit in x (``kind_table.FAMILIES``)."""
 NULL_NAMES = ("stiffness_beyond_moisture_pct", "density_pct", "sensor_shift_in",
               "knob_end_moisture_pt", "barrel_end_moisture_pt", "sensor_mass_change_g",
               "plane_mix", "handle_substance_g", "handle_substance_to_in",
@@ -696,9 +700,8 @@ def fit_core(
     norms, seeds = position_scan(predict, diff, space, sigma_rel, null)
     starts: list[np.ndarray] = []
     for i in np.argsort(norms):
-        far = all(abs(seeds[i][N_NULL] - s[N_NULL]) + abs(seeds[i][N_NULL + 1]
-                                                         - s[N_NULL + 1]) >= 2.0
-                  for s in starts)
+        far = all(abs(seeds[i][CORE_PLUG] - s[CORE_PLUG])
+                  + abs(seeds[i][CORE_LENGTH] - s[CORE_LENGTH]) >= 2.0 for s in starts)
         if far:
             starts.append(seeds[i])
         if len(starts) == n_starts:
