@@ -30,7 +30,7 @@ import numpy as np
 
 from updating.model.units import IN_TO_M
 
-__all__ = ["model_name", "result_dict", "statement", "with_statement"]
+__all__ = ["model_name", "statement", "with_statement"]
 
 STATISTIC = "F"
 """The statistic a calibration stores and the chance ranks by (the verdict's ``statistic``)."""
@@ -183,10 +183,3 @@ def with_statement(result, conn=None, unmeasured_why: str | None = None):
         calibration = latest_calibration(conn, result.model)
     return replace(result, stated=statement(result.verdict, result.model, calibration,
                                             unmeasured_why))
-
-
-def result_dict(result) -> dict:
-    """Return an inspection result's contract dict, its chance as stated."""
-    from batlab.pipeline.records import contract_dict
-
-    return contract_dict(result.serial, result.verdict, result.stated)

@@ -16,8 +16,8 @@ import numpy as np
 from updating.model.units import IN_TO_M
 
 __all__ = [
-    "FittedTest", "ReportInputs", "contract_dict", "jsonable", "stored_contract_dict",
-    "verdict_record",
+    "FittedTest", "ReportInputs", "contract_dict", "jsonable", "result_dict",
+    "stored_contract_dict", "verdict_record",
 ]
 
 
@@ -201,6 +201,11 @@ def contract_dict(serial: str, verdict: Verdict, stated: dict | None = None) -> 
         "false_alarm_rate": jsonable(stated["false_alarm_rate"]),
         "code": code_version(),
     }
+
+
+def result_dict(result) -> dict:
+    """Return an inspection result's contract dict, its chance as stated (``contract_dict``)."""
+    return contract_dict(result.serial, result.verdict, result.stated)
 
 
 def _spread(verdict: Verdict) -> dict | None:
