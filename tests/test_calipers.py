@@ -20,15 +20,15 @@ from hypothesis import example, given, settings
 from hypothesis import strategies as st
 from scipy.special import ndtri
 
-from updating.inspect.caliper_null import estimate_null, station_basis, station_table
-from updating.inspect.caliper_scan import (
+from updating.inspect.calipers import check_region, compare_profiles, hidden_flat_depth_m
+from updating.inspect.calipers.null import estimate_null, station_basis, station_table
+from updating.inspect.calipers.scan import (
     WINDOW_LENGTHS,
     bonferroni_z,
     critical_z,
     patterns_for,
     station_terms,
 )
-from updating.inspect.calipers import check_region, compare_profiles, hidden_flat_depth_m
 from updating.model.local_change import LocalChange
 from updating.model.profile import Profile
 from updating.model.units import IN_TO_M

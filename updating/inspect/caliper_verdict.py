@@ -30,8 +30,8 @@ from __future__ import annotations
 
 from dataclasses import replace
 
-from updating.inspect.caliper_reading import CaliperChange
-from updating.inspect.calipers import CaliperResult, check_region, compare_profiles
+from updating.inspect.calipers.compare import CaliperResult, check_region, compare_profiles
+from updating.inspect.calipers.reading import CaliperChange
 from updating.inspect.finding import Finding, found
 from updating.inspect.kind_table import HANDLE_SLACK_IN, RULE_MAX_HANDLE_IN, kind
 from updating.inspect.verdict import Verdict

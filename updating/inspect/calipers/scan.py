@@ -3,7 +3,7 @@
 For a run of stations I and a pattern p over the orientations (``uniform``: every
 orientation short by the same h, as shaving and a groove's ring make; ``orientation``:
 only the readings at one orientation short, as a flat facing it makes), the drops' channels
-(``caliper_null``) give, station by station, with the mean channel's variance v_i and the
+(``calipers.null``) give, station by station, with the mean channel's variance v_i and the
 residual's sigma_re^2:
 
     a_i = p_m ybar_i / v_i + (Q_i^T p) . (Q_i^T delta_i) / sigma_re^2
@@ -52,7 +52,7 @@ import numpy as np
 from scipy.optimize import brentq
 from scipy.special import ndtr, ndtri, owens_t, stdtr
 
-from updating.inspect.caliper_null import (
+from updating.inspect.calipers.null import (
     CaliperNull,
     StationBasis,
     Stations,

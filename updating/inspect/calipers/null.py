@@ -6,7 +6,7 @@ the registration read several orientations). At station i, orientation theta_k, 
 
     delta_ik = g_i (1 + s) - r_ik
 
-is, on an unaltered bat (../../docs/inspection.md, "The re-test's caliper profile"):
+is, on an unaltered bat (../../../docs/inspection.md, "The re-test's caliper profile"):
 
 - caliper noise e_ik, independent, ``sigma_re`` (1 sigma; 0.001-0.002 in; taken as at
   least ``NOISE_FLOOR_IN``);
@@ -136,7 +136,7 @@ class CaliperNull:
     dof_retest, dof_registration : float
         Degrees of freedom of the two noise levels: infinite at their floors (or assumed),
         else the estimate's (``trimmed_sigma``); the scan's statistics are read as Student's
-        t with them (``caliper_scan.Terms.dof``).
+        t with them (``calipers.scan.Terms.dof``).
     """
 
     sigma_retest_m: float

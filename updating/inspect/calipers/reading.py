@@ -1,6 +1,6 @@
 """What a run of short caliper readings is: shaving, a flat or grooves, and how much.
 
-A run found by the scan (``caliper_scan``) is read from its drops, orientation by
+A run found by the scan (``calipers.scan``) is read from its drops, orientation by
 orientation: D_k, the mean over the run's stations of ``g (1 + s) - r`` at orientation k,
 with covariance
 
@@ -49,8 +49,8 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.special import ndtri
 
-from updating.inspect.caliper_null import OVALITY_DEFAULT_IN, CaliperNull, Stations, mean_variance
-from updating.inspect.caliper_scan import UNIFORM, Run, Terms, window_stats
+from updating.inspect.calipers.null import OVALITY_DEFAULT_IN, CaliperNull, Stations, mean_variance
+from updating.inspect.calipers.scan import UNIFORM, Run, Terms, window_stats
 from updating.inspect.kind_table import GROOVE_MAX_IN
 from updating.model.calipers import flat_area_m2, width_loss_m
 from updating.model.units import IN_TO_M

@@ -1,17 +1,17 @@
 """The re-test's caliper profile against the registration's: removal measured, not inferred.
 
-``compare_profiles`` is the one entry (../../docs/inspection.md, "The re-test's caliper
+``compare_profiles`` is the one entry (../../../docs/inspection.md, "The re-test's caliper
 profile"):
 
-1. the survey's stations are paired with the registered profile (``caliper_null``);
+1. the survey's stations are paired with the registered profile (``calipers.null``);
 2. the null -- caliper noise, the bat's ovality (free at every station), the
    registration's noise, the caliper's placement, moisture's shrinkage -- is estimated from
    the data;
 3. runs of stations read short, in every orientation (shaving, a groove's ring) or in one
    (a flat facing it), are found by a scan whose false-alarm level is stated
-   (``caliper_scan``: Hunter's bound over every run and pattern, ``CALIPER_FALSE_ALARM``); the
+   (``calipers.scan``: Hunter's bound over every run and pattern, ``CALIPER_FALSE_ALARM``); the
    null is estimated again without the runs found and the scan repeated once;
-4. each run is read (``caliper_reading``): shaving, a flat (depth, normal) or grooves
+4. each run is read (``calipers.reading``): shaving, a flat (depth, normal) or grooves
    (rings, depth), where, and the wood removed, with standard uncertainties;
 5. what the survey cannot see (``blind_spots``): flats whose normal falls between the
    orientations read, grooves between the stations, stretches not surveyed -- and what
@@ -19,7 +19,7 @@ profile"):
 
 ``check_region`` is the second entry: where the vibration test, an independent measurement,
 already reads a removal over a stretch, the survey is asked about that one stretch alone --
-z of each pattern over the stations inside it (``caliper_scan.window_stats``) against
+z of each pattern over the stations inside it (``calipers.scan.window_stats``) against
 Bonferroni's bound over the patterns only, ``Phi^-1(1 - alpha / P)`` (about 3.5 at four
 orientations against the scan's 4.8). The stretch is chosen by data the calipers' null is
 independent of, so an unaltered bat's survey passes it with probability at most alpha
@@ -35,15 +35,15 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.special import ndtri
 
-from updating.inspect.caliper_null import (
+from updating.inspect.calipers.null import (
     CaliperNull,
     Stations,
     estimate_null,
     station_basis,
     station_table,
 )
-from updating.inspect.caliper_reading import CaliperChange, read_grooves, read_run
-from updating.inspect.caliper_scan import (
+from updating.inspect.calipers.reading import CaliperChange, read_grooves, read_run
+from updating.inspect.calipers.scan import (
     CALIPER_FALSE_ALARM,
     Run,
     Terms,
