@@ -20,7 +20,7 @@ from hypothesis import example, given, settings
 from hypothesis import strategies as st
 from scipy.special import ndtri
 
-from updating.inspect.calipers import check_region, compare_profiles, hidden_flat_depth_m
+from updating.inspect.calipers import compare_profiles, hidden_flat_depth_m
 from updating.inspect.calipers.null import estimate_null, station_basis, station_table
 from updating.inspect.calipers.scan import (
     WINDOW_LENGTHS,
@@ -316,10 +316,10 @@ def test_the_scans_bound_holds_its_level_and_is_below_bonferronis(orientations):
 
 
 def test_a_stretch_named_beforehand_holds_its_level_and_finds_what_the_scan_cannot():
-    """``check_region``: on clean and pine-tarred surveys, any stretch of the barrel asked
-    about passes at most about its level (0.001; 0 of 160 here, and its z stays below the
-    bound); a 0.02 in flat over 6 in at 4 deg from an orientation read, which the whole
-    scan's bound misses on some bats (3 of these 8), passes on every bat where the vibration
+    """``compare_profiles(..., region_m)``'s region check: on clean and pine-tarred surveys, any
+    stretch of the barrel asked about passes at most about its level (0.001; 0 of 160 here, and its
+    z stays below the bound); a 0.02 in flat over 6 in at 4 deg from an orientation read, which the
+    whole scan's bound misses on some bats (3 of these 8), passes on every bat where the vibration
     test would name it, its start within 1.5 in."""
     clean_z, found, missed_by_scan = [], 0, 0
     for seed in range(40):
@@ -329,7 +329,8 @@ def test_a_stretch_named_beforehand_holds_its_level_and_finds_what_the_scan_cann
                                       mark_deg=case.baseline.theta_deg)
             n = case.profile.length_m / IN_TO_M
             for a, b in ((n - 8, n - 1), (n - 14, n - 4)):
-                r = check_region(case.profile, survey, rho, (a * IN_TO_M, b * IN_TO_M))
+                r = compare_profiles(case.profile, survey, rho,
+                                     region_m=(a * IN_TO_M, b * IN_TO_M)).region_check
                 assert r.change is None, (seed, kind, r.statistic, r.critical)
                 clean_z.append(r.statistic)
     assert np.isfinite(clean_z).all() and max(clean_z) < ndtri(1 - 1e-3 / 5)
@@ -340,8 +341,10 @@ def test_a_stretch_named_beforehand_holds_its_level_and_finds_what_the_scan_cann
                            flat_angle_deg=case.baseline.theta_deg + 4.0)
         survey, _ = retest_survey(np.random.default_rng(seed), _with(case, [flat]), 4,
                                   mark_deg=case.baseline.theta_deg)
-        missed_by_scan += not compare_profiles(case.profile, survey, rho).changes
-        r = check_region(case.profile, survey, rho, ((n - 8.5) * IN_TO_M, (n - 1.5) * IN_TO_M))
+        result = compare_profiles(case.profile, survey, rho,
+                                  region_m=((n - 8.5) * IN_TO_M, (n - 1.5) * IN_TO_M))
+        missed_by_scan += not result.changes
+        r = result.region_check
         if r.change is not None:
             found += 1
             assert abs(r.change.region_m[0] / IN_TO_M - (n - 8)) <= 1.5

@@ -17,10 +17,10 @@ what the calipers read with the modal verdict (``join_calipers``):
   caliper zeroed wrong; said, and the verdict is left to the vibration test;
 - **no removal the scan finds, but the vibration test reads one** (its finding
   ``material_removed``, whatever its status): the survey is asked about that stretch alone
-  (``calipers.check_region``, a bound over the patterns only, at the same level). Read there,
-  it is the calipers' removal above, and the bat is altered: two independent measurements
-  read it in the same place, and the survey alone passes the check on an unaltered bat at
-  most ``CALIPER_FALSE_ALARM`` of the time;
+  (``compare_profiles``' ``region_m``, a bound over the patterns only, at the same level). Read
+  there, it is the calipers' removal above, and the bat is altered: two independent measurements
+  read it in the same place, and the survey alone passes the check on an unaltered bat at most
+  ``CALIPER_FALSE_ALARM`` of the time;
 - **no removal**: the vibration verdict stands, and its reasons gain what the survey cannot
   see (flats between its orientations, grooves between its stations) and what would measure
   it -- never as evidence of a clean barrel.
@@ -30,7 +30,7 @@ from __future__ import annotations
 
 from dataclasses import replace
 
-from updating.inspect.calipers.compare import CaliperResult, check_region, compare_profiles
+from updating.inspect.calipers.compare import CaliperResult, compare_profiles
 from updating.inspect.calipers.reading import CaliperChange
 from updating.inspect.finding import Finding, found
 from updating.inspect.kind_table import HANDLE_SLACK_IN, RULE_MAX_HANDLE_IN, kind
@@ -204,10 +204,7 @@ def with_calipers(verdict: Verdict, profile: Profile, survey: CaliperSurvey | No
     """
     if survey is None:
         return verdict
-    result = compare_profiles(profile, survey, rho_kg_m3)
     f = verdict.finding
-    if not _removals(result) and f is not None and f.family != "calipers" and \
-            f.kind == kind("flat-surfaced").finding and f.region_m is not None:
-        result = replace(result, region_check=check_region(
-            profile, survey, rho_kg_m3, f.region_m, result.false_alarm))
-    return join_calipers(verdict, result)
+    named = f is not None and f.family != "calipers" and f.kind == kind("flat-surfaced").finding
+    region = f.region_m if named else None
+    return join_calipers(verdict, compare_profiles(profile, survey, rho_kg_m3, region_m=region))

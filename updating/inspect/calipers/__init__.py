@@ -8,7 +8,7 @@ its modules, each with one job:
 - ``scan``: runs of stations read short, found by a scan with a stated false-alarm level;
 - ``reading``: a run read as shaving, a flat or grooves, where and how much;
 - ``compare``: the comparison (``compare_profiles``), the survey asked about one stretch named
-  beforehand (``check_region``), and what it cannot see (``blind_spots``).
+  beforehand (its ``region_m``, ``RegionCheck``), and what it cannot see (``blind_spots``).
 
 What the calipers read is joined with the vibration test's verdict beside this package, in
 ``updating.inspect.caliper_verdict`` (``with_calipers``), as the bending pairs' splits are in
@@ -17,7 +17,7 @@ live below it.
 
 Examples
 --------
->>> from updating.inspect.calipers import compare_profiles, check_region  # doctest: +SKIP
+>>> from updating.inspect.calipers import compare_profiles  # doctest: +SKIP
 
 See Also
 --------
@@ -30,10 +30,9 @@ from updating.inspect.calipers.compare import (
     CaliperResult,
     RegionCheck,
     blind_spots,
-    check_region,
     compare_profiles,
     hidden_flat_depth_m,
 )
 
-__all__ = ["CaliperResult", "RegionCheck", "blind_spots", "check_region", "compare_profiles",
+__all__ = ["CaliperResult", "RegionCheck", "blind_spots", "compare_profiles",
            "hidden_flat_depth_m"]

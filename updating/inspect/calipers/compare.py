@@ -17,8 +17,8 @@ profile"):
    orientations read, grooves between the stations, stretches not surveyed -- and what
    would measure them.
 
-``check_region`` is the second entry: where the vibration test, an independent measurement,
-already reads a removal over a stretch, the survey is asked about that one stretch alone --
+With ``region_m``, where the vibration test, an independent measurement, already reads a
+removal over a stretch, the survey is also asked about that one stretch alone --
 z of each pattern over the stations inside it (``calipers.scan.window_stats``) against
 Bonferroni's bound over the patterns only, ``Phi^-1(1 - alpha / P)`` (about 3.5 at four
 orientations against the scan's 4.8). The stretch is chosen by data the calipers' null is
@@ -98,8 +98,8 @@ class CaliperResult:
     unseen : tuple of str
         What the survey cannot see, each with what would measure it.
     region_check : RegionCheck or None
-        The survey asked about the stretch the vibration test named (``check_region``;
-        None: not asked).
+        The survey asked about the stretch the vibration test named (``region_m``; None:
+        not asked).
     """
 
     changes: tuple[CaliperChange, ...]
@@ -268,46 +268,11 @@ def blind_spots(st: Stations, survey: CaliperSurvey, registered: Profile,
     return tuple(out), hidden, spacing
 
 
-def compare_profiles(registered: Profile, survey: CaliperSurvey, rho_kg_m3: float,
-                     false_alarm: float = CALIPER_FALSE_ALARM) -> CaliperResult:
-    """Compare a re-test's caliper survey with the registered profile (module docstring).
-
-    Parameters
-    ----------
-    registered : Profile
-        The registered profile (x from its knob end).
-    survey : CaliperSurvey
-        The re-test's readings (checked at the door: ``plausible.check_survey``).
-    rho_kg_m3 : float
-        The wood's density, kg/m^3 (for the wood removed).
-    false_alarm : float
-        The scan's false-alarm level.
-
-    Returns
-    -------
-    CaliperResult
-        What the calipers read, where, how much, with uncertainties, and what they cannot
-        see.
-    """
-    st = station_table(survey, registered)
-    if st.n < 2:
-        raise ValueError("the caliper survey has fewer than two stations to compare")
-    null, terms, runs, z_max, z_crit = _scan(st, registered, false_alarm)
-    def read(run: Run) -> CaliperChange:
-        return read_run(st, null, terms, run, rho_kg_m3, registered.length_m)
-
-    runs = sorted(runs, key=lambda r: r.i0)
-    changes = _joined([read(r) for r in runs], runs, read)
-    changes = _groove_sets(sorted(changes, key=lambda c: c.region_m[0]), st, terms, rho_kg_m3)
-    unseen, hidden, spacing = blind_spots(st, survey, registered, null)
-    return CaliperResult(tuple(changes), z_max, z_crit, false_alarm, null,
-                         tuple(float(a) for a in survey.orientations_deg), spacing, hidden,
-                         (float(st.x_m[0]), float(st.x_m[-1])), unseen)
-
-
 @dataclass(frozen=True)
 class RegionCheck:
-    """The survey asked about one stretch another measurement named (``check_region``), SI.
+    """The survey asked about one stretch another measurement named, SI.
+
+    ``compare_profiles``' ``region_m``: module docstring.
 
     Attributes
     ----------
@@ -329,40 +294,14 @@ class RegionCheck:
     change: CaliperChange | None
 
 
-def check_region(registered: Profile, survey: CaliperSurvey, rho_kg_m3: float,
-                 region_m: tuple[float, float], false_alarm: float = CALIPER_FALSE_ALARM
-                 ) -> RegionCheck:
-    """Ask the survey whether it reads a removal over one stretch named beforehand.
+def _check_region(st: Stations, null: CaliperNull, terms: Terms, region_m: tuple[float, float],
+                  rho_kg_m3: float, length_m: float, false_alarm: float) -> RegionCheck:
+    """Test the stations inside ``region_m`` alone, each pattern, at ``Phi^-1(1 - alpha / P)``.
 
-    Parameters
-    ----------
-    registered : Profile
-        The registered profile (x from its knob end).
-    survey : CaliperSurvey
-        The re-test's readings.
-    rho_kg_m3 : float
-        The wood's density, kg/m^3 (for the wood removed).
-    region_m : tuple of float
-        The stretch, m from the knob end, named by a measurement independent of the
-        survey (the vibration test's finding).
-    false_alarm : float
-        The check's level.
-
-    Returns
-    -------
-    RegionCheck
-        z of each pattern over the stations inside the stretch, the largest held to
-        ``Phi^-1(1 - false_alarm / P)`` (P patterns: module docstring), and the reading of
-        the stretch when it passes.
-
-    Examples
-    --------
-    A survey that reads nothing anywhere passes no stretch; one short by 0.006 in at one
-    orientation over 6 in, below the whole scan's bound, passes the stretch a vibration
-    test named there.
+    z of each pattern over the stretch (``calipers.scan.window_stats``), the largest held to
+    Bonferroni's bound over the P patterns (module docstring); the stretch read as a run
+    (``read_run``) when it passes.
     """
-    st = station_table(survey, registered)
-    null, terms, _, _, _ = _scan(st, registered, false_alarm)
     inside = np.flatnonzero((st.x_m >= region_m[0]) & (st.x_m <= region_m[1]))
     n_patterns = terms.a.shape[0]
     critical = float(ndtri(1.0 - false_alarm / n_patterns))
@@ -374,6 +313,55 @@ def check_region(registered: Profile, survey: CaliperSurvey, rho_kg_m3: float,
     z, h, sd = stats[k]
     change = None
     if z > critical:
-        change = read_run(st, null, terms, Run(k, i0, i1, z, h, sd), rho_kg_m3,
-                          registered.length_m)
+        change = read_run(st, null, terms, Run(k, i0, i1, z, h, sd), rho_kg_m3, length_m)
     return RegionCheck(region_m, float(z), critical, false_alarm, change)
+
+
+def compare_profiles(registered: Profile, survey: CaliperSurvey, rho_kg_m3: float,
+                     false_alarm: float = CALIPER_FALSE_ALARM,
+                     region_m: tuple[float, float] | None = None) -> CaliperResult:
+    """Compare a re-test's caliper survey with the registered profile (module docstring).
+
+    Parameters
+    ----------
+    registered : Profile
+        The registered profile (x from its knob end).
+    survey : CaliperSurvey
+        The re-test's readings (checked at the door: ``plausible.check_survey``).
+    rho_kg_m3 : float
+        The wood's density, kg/m^3 (for the wood removed).
+    false_alarm : float
+        The scan's false-alarm level (and the region check's).
+    region_m : tuple of float or None
+        A stretch, m from the knob end, named by a measurement independent of the survey
+        (the vibration test's finding): the survey is also asked about it alone
+        (``CaliperResult.region_check``; module docstring). None: not asked.
+
+    Returns
+    -------
+    CaliperResult
+        What the calipers read, where, how much, with uncertainties, and what they cannot
+        see.
+
+    Examples
+    --------
+    A survey that reads nothing anywhere passes no stretch; one short by 0.02 in over 6 in
+    at 4 deg from an orientation read, which the whole scan misses on some bats, passes the
+    stretch a vibration test named there (tests/test_calipers.py).
+    """
+    st = station_table(survey, registered)
+    if st.n < 2:
+        raise ValueError("the caliper survey has fewer than two stations to compare")
+    null, terms, runs, z_max, z_crit = _scan(st, registered, false_alarm)
+    def read(run: Run) -> CaliperChange:
+        return read_run(st, null, terms, run, rho_kg_m3, registered.length_m)
+
+    runs = sorted(runs, key=lambda r: r.i0)
+    changes = _joined([read(r) for r in runs], runs, read)
+    changes = _groove_sets(sorted(changes, key=lambda c: c.region_m[0]), st, terms, rho_kg_m3)
+    unseen, hidden, spacing = blind_spots(st, survey, registered, null)
+    check = None if region_m is None else _check_region(
+        st, null, terms, region_m, rho_kg_m3, registered.length_m, false_alarm)
+    return CaliperResult(tuple(changes), z_max, z_crit, false_alarm, null,
+                         tuple(float(a) for a in survey.orientations_deg), spacing, hidden,
+                         (float(st.x_m[0]), float(st.x_m[-1])), unseen, check)
