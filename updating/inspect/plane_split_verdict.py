@@ -19,6 +19,7 @@ from __future__ import annotations
 from dataclasses import replace
 
 from updating.correlate.measured import MeasuredModes
+from updating.inspect.kind_table import kind
 from updating.inspect.plane_split import LEVEL, RATIO_DRIFT, PlaneSplit, read_plane_split
 from updating.inspect.verdict import Verdict
 from updating.model.profile import Profile
@@ -66,7 +67,7 @@ def join_plane_split(verdict: Verdict, split: PlaneSplit) -> Verdict:
         return replace(verdict, reasons=(*verdict.reasons, *notes), plane_split=split)
     line = f"the bending planes' splits read {describe_split(split)}"
     f = verdict.finding
-    if f is not None and f.kind == "material_removed" and f.family == "calipers":
+    if f is not None and f.kind == kind("flat-surfaced").finding and f.family == "calipers":
         agree = "agrees with" if _overlap(f.region_m, split.region_m) else "lies apart from"
         return replace(verdict, reasons=(*verdict.reasons, f"{line}; it {agree} the calipers' "
                                          "reading, which stands"), plane_split=split)
