@@ -9,6 +9,7 @@ from hypothesis import strategies as st
 
 from updating.model.assembly import (
     Attachment,
+    add_element_blocks,
     assemble,
     build_model,
     skyline_mask,
@@ -259,3 +260,30 @@ def test_with_core_rebuilds_the_cored_model_bit_for_bit(beam, depth, plug, empty
     np.testing.assert_array_equal(fast.parts.m_trans[away], bare.parts.m_trans[away])
     with pytest.raises(ValueError, match="uncored"):
         with_core(full, core)
+
+
+@settings(max_examples=60, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1), n_el=st.integers(1, 80), k=st.integers(0, 4))
+def test_element_blocks_add_as_add_at_bit_for_bit(seed, n_el, k):
+    """``add_element_blocks`` places element matrices by two strided views instead of
+    ``np.add.at``; into zeros it must give ``np.add.at``'s sums bit for bit, whatever the
+    magnitudes and signs (zeros of either sign included), one matrix or a stack of k."""
+    rng = np.random.default_rng(seed)
+    shape = (k, n_el, 4, 4) if k else (n_el, 4, 4)
+    mats = rng.standard_normal(shape) * 10.0 ** rng.integers(-12, 12, shape[:-2] + (1, 1))
+    mats[rng.random(shape) < 0.2] = -0.0
+    n = 2 * n_el + 2
+    d = 2 * np.arange(n_el)[:, None] + np.arange(4)[None, :]
+    want = np.zeros(shape[:-3] + (n, n))
+    at = (d[:, :, None], d[:, None, :])
+    if k:
+        at = (np.arange(k)[:, None, None, None], *(a[None] for a in at))
+    np.add.at(want, at, mats)
+    got = add_element_blocks(np.zeros_like(want), mats)
+    assert got.tobytes() == want.tobytes()
+
+
+def test_element_blocks_refuse_a_matrix_of_another_mesh():
+    """The blocks of n elements fill a (2n + 2)-square matrix; any other is refused."""
+    with pytest.raises(ValueError, match="3 elements need a \\(8, 8\\) matrix"):
+        add_element_blocks(np.zeros((10, 10)), np.zeros((3, 4, 4)))

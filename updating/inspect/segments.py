@@ -32,7 +32,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from updating.model.assembly import BatModel, gauss_legendre
+from updating.model.assembly import BatModel, add_element_blocks, gauss_legendre
 from updating.model.element import ElementParts, element_parts
 from updating.model.sections import section_props
 from updating.msso.core_elements import CoreFactors, core_element_factors
@@ -225,11 +225,8 @@ def segment_changes(model: BatModel, segments) -> tuple[np.ndarray, np.ndarray, 
     """
     parts, mass = segments_parts(model, segments)
     k, n = mass.size, model.n_dof
-    dK, dM = np.zeros((k, n, n)), np.zeros((k, n, n))
-    d = model.dofs
-    at = (np.arange(k)[:, None, None, None], d[None, :, :, None], d[None, :, None, :])
-    np.add.at(dK, at, parts.k_bend + parts.k_shear)
-    np.add.at(dM, at, parts.m_trans + parts.m_rot)
+    dK = add_element_blocks(np.zeros((k, n, n)), parts.k_bend + parts.k_shear)
+    dM = add_element_blocks(np.zeros((k, n, n)), parts.m_trans + parts.m_rot)
     return dK, dM, mass
 
 

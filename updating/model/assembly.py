@@ -385,13 +385,32 @@ def displacement_at(model: BatModel, shapes: np.ndarray, x_m) -> np.ndarray:
     return np.array(rows)
 
 
+def add_element_blocks(out: np.ndarray, element_mats: np.ndarray) -> np.ndarray:
+    """Add each element's 4 x 4 matrix into ``out`` at its DOFs, in place; return ``out``.
+
+    Element e holds DOFs 2e..2e+3 (``BatModel.dofs``), so the even elements' blocks are
+    disjoint, and so are the odd ones': each set is added by one strided view of ``out``
+    (..., N, N) with (..., e, 4, 4) mats, no per-element indexing. An entry gets at most two
+    elements' terms and floating-point addition is commutative, so into zeros the sum is
+    ``np.add.at``'s over the same terms bit for bit (``tests/test_fe_model.py``).
+    """
+    n_el = element_mats.shape[-3]
+    if out.shape[-1] != 2 * (n_el + 1) or out.shape[-2] != out.shape[-1]:
+        raise ValueError(f"{n_el} elements need a ({2 * n_el + 2}, {2 * n_el + 2}) matrix, "
+                         f"got {out.shape[-2:]}")
+    s = out.strides
+    blocks = np.lib.stride_tricks.as_strided(
+        out, shape=(*out.shape[:-2], n_el, 4, 4),
+        strides=(*s[:-2], 2 * (s[-2] + s[-1]), s[-2], s[-1]), writeable=True)
+    blocks[..., 0::2, :, :] += element_mats[..., 0::2, :, :]
+    blocks[..., 1::2, :, :] += element_mats[..., 1::2, :, :]
+    return out
+
+
 def place(model: BatModel, element_mats: np.ndarray, factors=None) -> np.ndarray:
     """Assemble sum_i f_i c_i^T m_i c_i, n x n dense; factors (e,) or None for all ones."""
-    out = np.zeros((model.n_dof, model.n_dof))
     mats = element_mats if factors is None else element_mats * np.asarray(factors)[:, None, None]
-    d = model.dofs
-    np.add.at(out, (d[:, :, None], d[:, None, :]), mats)
-    return out
+    return add_element_blocks(np.zeros((model.n_dof, model.n_dof)), mats)
 
 
 def assemble(
