@@ -564,7 +564,7 @@ class Residual:
         x = np.asarray(x, dtype=float)
         params = self.space.params(x)
         h = np.where(x + DIFF_STEP <= upper, DIFF_STEP, -DIFF_STEP)
-        xs = [x + h[i] * np.eye(x.size)[i] for i in range(x.size)]
+        xs = list(x + np.diag(h))
         steps = [(self.space.params(xi), float(hi)) for xi, hi in zip(xs, h, strict=True)]
         pc = predicted_change(self.predict, params, steps)
         idx = self.diff.model_index

@@ -193,6 +193,9 @@ class StateMatrices:
 
 LOCAL_CACHE = 64
 """Local-change matrices a predictor keeps (``ChangePredictor.local``)."""
+KEY_CACHE = 4096
+"""Segments' cache keys and wood masses a predictor keeps (``ChangePredictor._local_key``,
+``wood_mass_kg``): small entries, asked for at every state of a fit."""
 DERIVED_CACHE = 256
 """States whose modes or derivatives a predictor keeps (``ChangePredictor.derived``): a
 refit evaluates some 20 states, and the next leave-out starts where the last one did (about
@@ -219,6 +222,8 @@ class ChangePredictor:
         self._local: dict = {}
         self._points: dict = {}
         self._woods: dict = {}
+        self._masses: dict = {}
+        self._keys: dict = {}
         self._derived: dict = {}
 
     def at_sensor(self, sensor_x_m: float) -> ChangePredictor:
@@ -232,7 +237,7 @@ class ChangePredictor:
         out._cache = self._cache
         out._local = self._local
         out._points = self._points
-        out._woods = self._woods
+        out._woods, out._masses, out._keys = self._woods, self._masses, self._keys
         return out
 
     def with_reference(self, reference: BatReference) -> ChangePredictor:
@@ -269,7 +274,8 @@ class ChangePredictor:
         if len(self._cache) + len(missing) > 33:
             for key in [k for k in self._cache if k is not None]:
                 del self._cache[key]
-            self._woods.clear()  # keyed by a system's id: a new one may take a dropped id
+            for kept in (self._woods, self._masses, self._keys):  # keyed by a system's id:
+                kept.clear()  # a new system may take a dropped one's id
         built = cored_systems(self.system(None), self.points_m, missing)
         self._cache.update(zip(missing, built, strict=True))
 
@@ -281,16 +287,22 @@ class ChangePredictor:
         the system through those alone (``segments.segment_parts``; the wood, the mesh and
         the profile are the predictor's), so a core elsewhere on the bat leaves it. A fit's
         Jacobian moves one parameter at a time, so most of its columns share the segments,
-        and a step of one segment, or of the core, leaves the other's.
+        and a step of one segment, or of the core, leaves the other's. The sum of several
+        segments is kept beside them (a Jacobian's segment steps each take the state's
+        sum away again).
         """
         if not segments:
             return None
-        keys = self._keep_local(ws, segments)
-        parts = [self._local[key] for key in keys]
-        if len(parts) == 1:
-            return parts[0]
-        return (sum(p[0] for p in parts), sum(p[1] for p in parts),
-                sum(p[2] for p in parts))
+        keys = tuple(self._keep_local(ws, segments))
+        if len(keys) == 1:
+            return self._local[keys[0]]
+        if keys not in self._local:
+            parts = [self._local[key] for key in keys]
+            if len(self._local) >= LOCAL_CACHE:  # the parts above are held until summed
+                self._local.clear()
+            self._local[keys] = (sum(p[0] for p in parts), sum(p[1] for p in parts),
+                                 sum(p[2] for p in parts))
+        return self._local[keys]
 
     def _keep_local(self, ws: WoodSystem, segments) -> list:
         """Return the cache keys of ``segments`` on ``ws``, integrating the missing ones.
@@ -298,9 +310,7 @@ class ChangePredictor:
         The missing ones are integrated together (``segments.segment_changes``); when they
         would overflow ``LOCAL_CACHE``, the cache is emptied first.
         """
-        nodes, phi = ws.model.node_x_m, ws.model.phi
-        keys = [(seg, phi[np.minimum(nodes[1:], seg.x1_m)
-                          > np.maximum(nodes[:-1], seg.x0_m)].tobytes()) for seg in segments]
+        keys = [self._local_key(ws, seg) for seg in segments]
         missing = list(dict.fromkeys(k for k in keys if k not in self._local))
         if missing:
             if len(self._local) + len(missing) > LOCAL_CACHE:
@@ -311,11 +321,36 @@ class ChangePredictor:
                 self._local[key] = (dK[i], dM[i], float(mass[i]))
         return keys
 
+    def _local_key(self, ws: WoodSystem, seg: Segment) -> tuple:
+        """Return the cache key of ``seg`` on ``ws``: the segment and the phi it covers.
+
+        Kept per system and segment (a fit asks for the same few segments thousands of
+        times); dropped with the systems (``systems``), as the wood's matrices and mass are.
+        """
+        at = (id(ws), seg)
+        if at not in self._keys:
+            if len(self._keys) >= KEY_CACHE:
+                self._keys.clear()
+            nodes, phi = ws.model.node_x_m, ws.model.phi
+            self._keys[at] = (seg, phi[np.minimum(nodes[1:], seg.x1_m)
+                                       > np.maximum(nodes[:-1], seg.x0_m)].tobytes())
+        return self._keys[at]
+
     def wood_mass_kg(self, p: ChangeParams) -> float:
-        """Return the wood's mass with the changes ``p``, kg."""
+        """Return the wood's mass with the changes ``p``, kg.
+
+        The segments' masses are summed alone (``local`` sums their matrices too, in the
+        same order), and the wood's mass is kept per system and end-grain moisture.
+        """
         ws = self.system(p.core)
-        added = self.local(ws, p.segments)[2] if p.segments else 0.0
-        return p.density_scale * ws.mass_kg(p.end_moisture_pt) + added
+        added = sum(self._local[key][2] for key in self._keep_local(ws, p.segments)) \
+            if p.segments else 0.0
+        key = (id(ws), p.end_moisture_pt)
+        if key not in self._masses:
+            if len(self._masses) >= KEY_CACHE:
+                self._masses.clear()
+            self._masses[key] = ws.mass_kg(p.end_moisture_pt)
+        return p.density_scale * self._masses[key] + added
 
     def matrices(self, p: ChangeParams) -> StateMatrices:
         """Return K and M of the bat changed by ``p``, with its accelerometer, and where it is."""
@@ -341,7 +376,7 @@ class ChangePredictor:
         negative mass is kept above 0.9 times that limit, with M the state's matrix without
         the accelerometer (only read for a negative mass).
         """
-        x = float(np.clip(self.sensor_x_m + p.sensor_shift_m, 0.0, self.profile.length_m))
+        x = min(max(self.sensor_x_m + float(p.sensor_shift_m), 0.0), self.profile.length_m)
         dofs, n = self._point(ws, x)
         mass = self.reference.sensor_mass_kg + p.sensor_mass_change_kg
         if mass < 0:
