@@ -193,6 +193,8 @@ class StateMatrices:
 
 LOCAL_CACHE = 64
 """Local-change matrices a predictor keeps (``ChangePredictor.local``)."""
+SUM_CACHE = 8
+"""Sums of several segments' changes a predictor keeps (``ChangePredictor.local``)."""
 KEY_CACHE = 4096
 """Segments' cache keys and wood masses a predictor keeps (``ChangePredictor._local_key``,
 ``wood_mass_kg``): small entries, asked for at every state of a fit."""
@@ -224,6 +226,7 @@ class ChangePredictor:
         self._woods: dict = {}
         self._masses: dict = {}
         self._keys: dict = {}
+        self._sums: dict = {}
         self._derived: dict = {}
 
     def at_sensor(self, sensor_x_m: float) -> ChangePredictor:
@@ -235,7 +238,7 @@ class ChangePredictor:
         out = ChangePredictor(self.profile, self.reference, self.points_m, sensor_x_m,
                               self.n_solve, self.end_decay_m)
         out._cache = self._cache
-        out._local = self._local
+        out._local, out._sums = self._local, self._sums
         out._points = self._points
         out._woods, out._masses, out._keys = self._woods, self._masses, self._keys
         return out
@@ -296,13 +299,13 @@ class ChangePredictor:
         keys = tuple(self._keep_local(ws, segments))
         if len(keys) == 1:
             return self._local[keys[0]]
-        if keys not in self._local:
+        if keys not in self._sums:
             parts = [self._local[key] for key in keys]
-            if len(self._local) >= LOCAL_CACHE:  # the parts above are held until summed
-                self._local.clear()
-            self._local[keys] = (sum(p[0] for p in parts), sum(p[1] for p in parts),
-                                 sum(p[2] for p in parts))
-        return self._local[keys]
+            if len(self._sums) >= SUM_CACHE:
+                del self._sums[next(iter(self._sums))]  # the oldest
+            self._sums[keys] = (sum(p[0] for p in parts), sum(p[1] for p in parts),
+                                sum(p[2] for p in parts))
+        return self._sums[keys]
 
     def _keep_local(self, ws: WoodSystem, segments) -> list:
         """Return the cache keys of ``segments`` on ``ws``, integrating the missing ones.
