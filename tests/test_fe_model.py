@@ -16,7 +16,7 @@ from updating.model.assembly import (
     with_core,
     with_cores,
 )
-from updating.model.element import element_parts
+from updating.model.element import element_parts, shape_functions
 from updating.model.mass_properties import mass_properties
 from updating.model.material import Material, paper_material
 from updating.model.modes import model_modes, rigid_body_shapes, solve_modes
@@ -287,3 +287,26 @@ def test_element_blocks_refuse_a_matrix_of_another_mesh():
     """The blocks of n elements fill a (2n + 2)-square matrix; any other is refused."""
     with pytest.raises(ValueError, match="3 elements need a \\(8, 8\\) matrix"):
         add_element_blocks(np.zeros((10, 10)), np.zeros((3, 4, 4)))
+
+
+@settings(max_examples=40, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1), g=st.integers(1, 8), shuffled=st.booleans())
+def test_element_parts_of_equal_runs_sum_as_add_at(seed, g, shuffled):
+    """Samples in runs of g an element (a segment's Gauss points) are summed run by run
+    instead of by ``np.add.at``; the parts must be add.at's sums bit for bit, and samples in
+    any other order (an element's samples apart) still are."""
+    rng = np.random.default_rng(seed)
+    n_el = int(rng.integers(1, 40))
+    elem = np.repeat(np.sort(rng.choice(n_el, int(rng.integers(1, n_el + 1)), replace=False)), g)
+    if shuffled:
+        elem = rng.permutation(elem)
+    xi, w = rng.random(elem.size), rng.random(elem.size) * 1e-3
+    props = [rng.standard_normal(elem.size) * 10.0 ** rng.integers(-6, 6) for _ in range(4)]
+    L, phi = rng.random(n_el) + 0.01, rng.random(n_el)
+    got = element_parts(elem, xi, w, *props, L, phi)
+    sf = shape_functions(xi, L[elem], phi[elem])
+    for name, coef, b in (("k_bend", props[0], sf.kappa), ("k_shear", props[1], sf.gamma),
+                          ("m_trans", props[2], sf.n_w), ("m_rot", props[3], sf.n_theta)):
+        want = np.zeros((n_el, 4, 4))
+        np.add.at(want, elem, (w * coef)[:, None, None] * b[:, :, None] * b[:, None, :])
+        assert getattr(got, name).tobytes() == want.tobytes(), name

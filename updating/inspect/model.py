@@ -365,7 +365,7 @@ class ChangePredictor:
             K, M = K + local[0], M + local[1]
         dofs, n, mass = self._sensor(ws, p, M)
         if mass:
-            M[np.ix_(dofs, dofs)] += mass * np.outer(n, n)
+            M[element_block(dofs)] += mass * np.outer(n, n)
         return StateMatrices(p.stiffness_scale * K + ws.K_bungees, M, dofs, n, ws.point_rows,
                              mass)
 
@@ -463,12 +463,12 @@ class ChangePredictor:
         if negative:
             bare = base.M + Mi
             if mass0:
-                bare[np.ix_(base.dofs, base.dofs)] -= mass0 * np.outer(base.n, base.n)
+                bare[element_block(base.dofs)] -= mass0 * np.outer(base.n, base.n)
         dofs, n, mass = self._sensor(ws, s, bare)
         if mass:
-            Mi[np.ix_(dofs, dofs)] += mass * np.outer(n, n)
+            Mi[element_block(dofs)] += mass * np.outer(n, n)
         if mass0:
-            Mi[np.ix_(base.dofs, base.dofs)] -= mass0 * np.outer(base.n, base.n)
+            Mi[element_block(base.dofs)] -= mass0 * np.outer(base.n, base.n)
         if moved:
             dvi[dofs] += n
             dvi[base.dofs] -= base.n
@@ -536,6 +536,16 @@ class ChangePredictor:
                     a.flags.writeable = False
         self._derived[key] = out
         return out
+
+
+def element_block(dofs: np.ndarray) -> tuple[slice, slice]:
+    """Return the (rows, columns) slices of one element's 4 x 4 block of a global matrix.
+
+    An element's DOFs are consecutive (2e..2e+3, ``BatModel.dofs``), so its block is a
+    view: the same entries ``np.ix_(dofs, dofs)`` picks, without an index array a state.
+    """
+    first = int(dofs[0])
+    return slice(first, first + 4), slice(first, first + 4)
 
 
 def make_predictor(

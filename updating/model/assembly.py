@@ -15,7 +15,7 @@ from typing import Literal
 
 import numpy as np
 
-from updating.model.element import ElementParts, element_parts
+from updating.model.element import ElementParts, displacement_shape, element_parts
 from updating.model.material import Material
 from updating.model.profile import Profile
 from updating.model.sections import Core, SectionProps, section_props
@@ -354,15 +354,13 @@ def element_at(model: BatModel, x_m: float) -> int:
 
 def point_vector(model: BatModel, x_m: float) -> tuple[np.ndarray, np.ndarray]:
     """(dofs, N_w) of the element containing x: a point load's consistent distribution."""
-    from updating.model.element import shape_functions
-
     if not model.node_x_m[0] - 1e-9 <= x_m <= model.node_x_m[-1] + 1e-9:
         raise ValueError(f"attachment at x = {x_m:.4f} m lies outside the bat")
     e = element_at(model, x_m)
     L = model.element_length_m[e]
-    sf = shape_functions(np.array([(x_m - model.node_x_m[e]) / L]), np.array([L]),
-                         np.array([model.phi[e]]))
-    return model.dofs[e], sf.n_w[0]
+    n_w = displacement_shape(np.array([(x_m - model.node_x_m[e]) / L]), np.array([L]),
+                             np.array([model.phi[e]]))
+    return model.dofs[e], n_w[0]
 
 
 def attachment_matrices(model: BatModel) -> tuple[np.ndarray, np.ndarray]:

@@ -37,17 +37,31 @@ class ShapeFunctions:
     gamma: np.ndarray
 
 
-def shape_functions(xi: np.ndarray, length_m: np.ndarray, phi: np.ndarray) -> ShapeFunctions:
-    """Shape functions of the element at local coordinates xi in [0, 1] (arrays of one shape)."""
+def displacement_shape(xi: np.ndarray, length_m: np.ndarray, phi: np.ndarray) -> np.ndarray:
+    """Return N_w, the displacement's shape functions at xi in [0, 1], (..., 4).
+
+    ``shape_functions(...).n_w`` alone: a point's consistent vector needs no more.
+    """
     x, L, p = (np.asarray(a, dtype=float) for a in np.broadcast_arrays(xi, length_m, phi))
-    c = 1.0 / (1.0 + p)
-    x2, x3 = x * x, x * x * x
-    n_w = np.stack([
+    return _n_w(x, L, p, 1.0 / (1.0 + p), x * x, x * x * x)
+
+
+def _n_w(x, L, p, c, x2, x3) -> np.ndarray:
+    """N_w from the local coordinate's powers (``shape_functions``)."""
+    return np.stack([
         2 * x3 - 3 * x2 - p * x + 1 + p,
         L * (x3 - (2 + p / 2) * x2 + (1 + p / 2) * x),
         -2 * x3 + 3 * x2 + p * x,
         L * (x3 - (1 - p / 2) * x2 - (p / 2) * x),
     ], axis=-1) * c[..., None]
+
+
+def shape_functions(xi: np.ndarray, length_m: np.ndarray, phi: np.ndarray) -> ShapeFunctions:
+    """Shape functions of the element at local coordinates xi in [0, 1] (arrays of one shape)."""
+    x, L, p = (np.asarray(a, dtype=float) for a in np.broadcast_arrays(xi, length_m, phi))
+    c = 1.0 / (1.0 + p)
+    x2, x3 = x * x, x * x * x
+    n_w = _n_w(x, L, p, c, x2, x3)
     n_theta = np.stack([
         6 * (x2 - x) / L, 3 * x2 - (4 + p) * x + 1 + p, -6 * (x2 - x) / L, 3 * x2 - (2 - p) * x,
     ], axis=-1) * c[..., None]
@@ -66,6 +80,23 @@ class ElementParts:
     k_shear: np.ndarray
     m_trans: np.ndarray
     m_rot: np.ndarray
+
+
+def _equal_runs(elem: np.ndarray) -> int | None:
+    """Return g when ``elem`` is runs of g equal entries, no two runs of one element; else None.
+
+    A segment's Gauss points (``updating.inspect.segments``): g samples an element, each
+    element once.
+    """
+    if elem.size == 0:
+        return None
+    g = int(np.argmax(elem != elem[0])) or elem.size
+    if elem.size % g:
+        return None
+    first = elem[::g]
+    if np.any(elem.reshape(-1, g) != first[:, None]) or np.unique(first).size != first.size:
+        return None
+    return g
 
 
 def element_parts(
@@ -89,10 +120,20 @@ def element_parts(
     """
     sf = shape_functions(xi, length_m[elem], phi[elem])
     n_el = length_m.size
+    runs = _equal_runs(elem)
 
     def integrate(coef: np.ndarray, b: np.ndarray) -> np.ndarray:
         out = np.zeros((n_el, 4, 4))
-        np.add.at(out, elem, (weight_m * coef)[:, None, None] * b[:, :, None] * b[:, None, :])
+        terms = (weight_m * coef)[:, None, None] * b[:, :, None] * b[:, None, :]
+        if runs is None:
+            np.add.at(out, elem, terms)
+            return out
+        # each element's samples in one run of g: the same sums as add.at's, in its order
+        terms = terms.reshape(-1, runs, 4, 4)
+        acc = np.zeros(terms.shape[:1] + (4, 4))
+        for j in range(runs):
+            acc += terms[:, j]
+        out[elem[::runs]] = acc
         return out
 
     return ElementParts(
