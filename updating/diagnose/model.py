@@ -53,6 +53,7 @@ from updating.model.assembly import (
     BatModel,
     assemble,
     build_model,
+    element_block,
     place,
     point_vector,
     scale_sections,
@@ -355,13 +356,13 @@ def derivative_matrices(
         elif name == "sensor_g":
             dofs, nw = point_vector(model, setup.sensor_x_m)
             dM = np.zeros((n, n))
-            dM[np.ix_(dofs, dofs)] = 1e-3 * np.outer(nw, nw)
+            dM[element_block(dofs)] = 1e-3 * np.outer(nw, nw)
             out.append((None, dM))
         else:
             dK = np.zeros((n, n))
             for x in (BUNGEE_FROM_END_M, setup.profile.length_m - BUNGEE_FROM_END_M):
                 dofs, nw = point_vector(model, x)
-                dK[np.ix_(dofs, dofs)] += 1e3 * np.outer(nw, nw)
+                dK[element_block(dofs)] += 1e3 * np.outer(nw, nw)
             out.append((dK, None))
     return out
 

@@ -33,6 +33,7 @@ from updating.model.assembly import (
     assemble,
     attachment_matrices,
     element_at,
+    element_block,
     place,
     point_vector,
     with_core,
@@ -536,16 +537,6 @@ class ChangePredictor:
                     a.flags.writeable = False
         self._derived[key] = out
         return out
-
-
-def element_block(dofs: np.ndarray) -> tuple[slice, slice]:
-    """Return the (rows, columns) slices of one element's 4 x 4 block of a global matrix.
-
-    An element's DOFs are consecutive (2e..2e+3, ``BatModel.dofs``), so its block is a
-    view: the same entries ``np.ix_(dofs, dofs)`` picks, without an index array a state.
-    """
-    first = int(dofs[0])
-    return slice(first, first + 4), slice(first, first + 4)
 
 
 def make_predictor(

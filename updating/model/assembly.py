@@ -369,8 +369,8 @@ def attachment_matrices(model: BatModel) -> tuple[np.ndarray, np.ndarray]:
     Ma = np.zeros_like(Ka)
     for a in model.attachments:
         dofs, n = point_vector(model, a.x_m)
-        Ka[np.ix_(dofs, dofs)] += a.k_n_per_m * np.outer(n, n)
-        Ma[np.ix_(dofs, dofs)] += a.mass_kg * np.outer(n, n)
+        Ka[element_block(dofs)] += a.k_n_per_m * np.outer(n, n)
+        Ma[element_block(dofs)] += a.mass_kg * np.outer(n, n)
     return Ka, Ma
 
 
@@ -381,6 +381,16 @@ def displacement_at(model: BatModel, shapes: np.ndarray, x_m) -> np.ndarray:
         dofs, n = point_vector(model, float(x))
         rows.append(n @ shapes[dofs])
     return np.array(rows)
+
+
+def element_block(dofs: np.ndarray) -> tuple[slice, slice]:
+    """Return the (rows, columns) slices of one element's 4 x 4 block of a global matrix.
+
+    An element's DOFs are consecutive (2e..2e+3, ``BatModel.dofs``), so its block is a
+    view: the same entries ``np.ix_(dofs, dofs)`` picks, without an index array.
+    """
+    first = int(dofs[0])
+    return slice(first, first + 4), slice(first, first + 4)
 
 
 def add_element_blocks(out: np.ndarray, element_mats: np.ndarray) -> np.ndarray:

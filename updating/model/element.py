@@ -43,11 +43,8 @@ def displacement_shape(xi: np.ndarray, length_m: np.ndarray, phi: np.ndarray) ->
     ``shape_functions(...).n_w`` alone: a point's consistent vector needs no more.
     """
     x, L, p = (np.asarray(a, dtype=float) for a in np.broadcast_arrays(xi, length_m, phi))
-    return _n_w(x, L, p, 1.0 / (1.0 + p), x * x, x * x * x)
-
-
-def _n_w(x, L, p, c, x2, x3) -> np.ndarray:
-    """N_w from the local coordinate's powers (``shape_functions``)."""
+    c = 1.0 / (1.0 + p)
+    x2, x3 = x * x, x * x * x
     return np.stack([
         2 * x3 - 3 * x2 - p * x + 1 + p,
         L * (x3 - (2 + p / 2) * x2 + (1 + p / 2) * x),
@@ -60,8 +57,8 @@ def shape_functions(xi: np.ndarray, length_m: np.ndarray, phi: np.ndarray) -> Sh
     """Shape functions of the element at local coordinates xi in [0, 1] (arrays of one shape)."""
     x, L, p = (np.asarray(a, dtype=float) for a in np.broadcast_arrays(xi, length_m, phi))
     c = 1.0 / (1.0 + p)
-    x2, x3 = x * x, x * x * x
-    n_w = _n_w(x, L, p, c, x2, x3)
+    x2 = x * x
+    n_w = displacement_shape(x, L, p)
     n_theta = np.stack([
         6 * (x2 - x) / L, 3 * x2 - (4 + p) * x + 1 + p, -6 * (x2 - x) / L, 3 * x2 - (2 - p) * x,
     ], axis=-1) * c[..., None]
