@@ -67,6 +67,7 @@ from ema.shapes.mass_line import (
     rigid_body_from_mass_line,
     rigid_body_from_modes,
 )
+from ema.shapes.noise import shape_noise_from_coherence
 from ema.shapes.scaling import fix_sign, mass_normalised_shapes, unscaled_shapes
 
 METHODS = ("lscf", "peak")
@@ -149,6 +150,9 @@ class ModalFit:
         fit-level notes (band clipped, no driving point, why nothing was found).
     decisions
         per mode, why it was kept (its support, ``_support_decisions``).
+    shape_noise_rel
+        (m,) relative standard deviation of a shape entry per mode from the test's coherence
+        and averages (``ema.shapes.noise``); None when the test carries no coherence.
     """
 
     freq_hz: np.ndarray
@@ -188,6 +192,7 @@ class ModalFit:
     close_pairs: tuple[ClosePair, ...] = ()
     notes: tuple[str, ...] = ()
     decisions: tuple[str, ...] = ()
+    shape_noise_rel: np.ndarray | None = None
 
 
 @dataclass(frozen=True)
@@ -581,6 +586,24 @@ def _shapes(
     return shapes, fix_sign(real_modes(shapes), lay.d_index)
 
 
+def _shape_noise(test: FrfTest, lay: _Layout, sel: np.ndarray, p: _Poles) -> np.ndarray | None:
+    """Each mode's relative shape noise from the coherence of the shapes' FRFs (step 4).
+
+    The FRFs the shapes come from (``_shapes``' row), their coherence on the fitted lines and
+    the test's averages (``meta["n_averages"]``) in ``ema.shapes.noise``; None without
+    coherence.
+    """
+    if test.coherence is None:
+        return None
+    coh = test.coherence[sel]
+    i_d, j_d = (0, 0) if lay.driving is None else lay.driving
+    row = coh[:, i_d, :] if lay.row_layout else coh[:, :, j_d]
+    col = None if lay.driving is None else lay.d_index
+    n_avg = test.meta.get("n_averages")
+    return shape_noise_from_coherence(test.freq_hz[sel], row, None if n_avg is None
+                                      else int(n_avg), p.freq_hz, p.damping_ratio, col)
+
+
 def _rigid(
     lay: _Layout, real_susp: np.ndarray, mass_line: np.ndarray, x_m: np.ndarray,
     known_mass_kg: float | None,
@@ -747,6 +770,7 @@ def fit_test(
     el = ~susp
     if not el.any():
         notes += _empty_notes(p, peaks, method)
+    noise = _shape_noise(test, lay, sel, p)
     return ModalFit(
         freq_hz=p.freq_hz[el], damping_ratio=zr[el],
         shapes=shapes[:, el], real_shapes=real[:, el],
@@ -775,4 +799,5 @@ def fit_test(
         close_pairs=tuple(close_pairs(p.freq_hz[el], zr[el], real[:, el])),
         notes=tuple(notes),
         decisions=tuple(w for w, e in zip(p.why, el, strict=True) if e),
+        shape_noise_rel=None if noise is None else noise[el],
     )

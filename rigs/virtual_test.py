@@ -81,3 +81,41 @@ def add_noise(
     rms = np.sqrt(np.mean(np.abs(h) ** 2, axis=0, keepdims=True))
     return (h * (1 + rel_noise * complex_noise(rng, h.shape))
             + floor_noise * rms * complex_noise(rng, h.shape))
+
+
+def noise_coherence(
+    h: np.ndarray, rel_noise: float, floor_noise: float, n_averages: int,
+) -> np.ndarray:
+    """Return the ordinary coherence an H1 estimate with ``add_noise``'s noise would show.
+
+    ``add_noise`` gives the averaged estimate a relative complex variance
+    v = e_rel^2 + e_floor^2 s^2 / |H|^2; an H1 estimate from n_d hits has
+    v = (1 - gamma^2) / (gamma^2 n_d) (Bendat and Piersol 9.90), so
+
+        gamma^2 = 1 / (1 + n_d v).
+
+    Parameters
+    ----------
+    h : np.ndarray
+        (F, ...) noise-free FRFs, frequency on the first axis.
+    rel_noise, floor_noise : float
+        e_rel and e_floor of ``add_noise``.
+    n_averages : int
+        Hits averaged (n_d).
+
+    Returns
+    -------
+    np.ndarray
+        gamma^2, the shape of ``h``, in (0, 1].
+
+    Examples
+    --------
+    >>> h = np.ones((4, 1, 2), dtype=complex)
+    >>> float(noise_coherence(h, 0.1, 0.0, 5)[0, 0, 0])
+    0.9523809523809523
+    """
+    h = np.asarray(h, dtype=complex)
+    rms = np.sqrt(np.mean(np.abs(h) ** 2, axis=0, keepdims=True))
+    power = np.maximum(np.abs(h) ** 2, 1e-300)
+    v = rel_noise**2 + floor_noise**2 * rms**2 / power
+    return 1.0 / (1.0 + n_averages * v)

@@ -107,6 +107,8 @@ def encode_modes(m) -> dict:
     """
     import numpy as np
 
+    noise = {} if m.shape_noise_rel is None else {
+        "shape_noise_rel": np.asarray(m.shape_noise_rel).tolist()}
     return {"freq_hz": np.asarray(m.freq_hz).tolist(),
             "damping_ratio": np.asarray(m.damping_ratio).tolist(),
             "shapes": np.asarray(m.shapes).tolist(), "x_m": np.asarray(m.x_m).tolist(),
@@ -115,7 +117,7 @@ def encode_modes(m) -> dict:
             "band_top_hz": None if m.band_top_hz is None else float(m.band_top_hz),
             "members": None if m.members is None else np.asarray(m.members).tolist(),
             "plane_pair_hz": _pairs(m.plane_pair_hz),
-            "plane_pair_std_hz": _pairs(m.plane_pair_std_hz)}
+            "plane_pair_std_hz": _pairs(m.plane_pair_std_hz), **noise}
 
 
 def _pairs(a: np.ndarray | None) -> list | None:
@@ -140,14 +142,14 @@ def _unpairs(v: list | None) -> np.ndarray | None:
 def decode_modes(d: dict):
     """Return the stored modes as ``MeasuredModes`` (shapes points x modes).
 
-    Records stored before the band's top, the merged pairs or the pairs' members were kept
-    read them as unknown (None).
+    Records stored before the band's top, the merged pairs, the pairs' members or the
+    measured shape noise were kept read them as unknown (None).
     """
     import numpy as np
 
     from updating.correlate.measured import MeasuredModes
 
-    std, members = d.get("freq_std_hz"), d.get("members")
+    std, members, noise = d.get("freq_std_hz"), d.get("members"), d.get("shape_noise_rel")
     return MeasuredModes(np.asarray(d["freq_hz"], float),
                          np.asarray(d["shapes"], float).reshape(len(d["x_m"]), -1),
                          np.asarray(d["x_m"], float), np.asarray(d["damping_ratio"], float),
@@ -155,7 +157,8 @@ def decode_modes(d: dict):
                          band_top_hz=d.get("band_top_hz"),
                          members=None if members is None else np.asarray(members, int),
                          plane_pair_hz=_unpairs(d.get("plane_pair_hz")),
-                         plane_pair_std_hz=_unpairs(d.get("plane_pair_std_hz")))
+                         plane_pair_std_hz=_unpairs(d.get("plane_pair_std_hz")),
+                         shape_noise_rel=None if noise is None else np.asarray(noise, float))
 
 
 def has_file(conn: sa.Connection, sha256: str) -> bool:

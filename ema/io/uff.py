@@ -12,6 +12,8 @@ batlab's key=value tokens in the 58 ID lines (read from any ID line):
     estimator=H1             FRF estimator (H1, H2, Hv); bare words H1/H2 are recognised too
     exp_window_tau_s=0.0625  time constant (s) of an exponential window on the response
     f0_hz=0.0 df_hz=0.5      the frequency axis to full precision (record 7 keeps 6 digits)
+    averages=5               hits averaged into the FRF and its coherence (also n_averages=,
+                             navg=); the coherence's variance needs it (ema.shapes.noise)
 
 The 58 data block is parsed by one whitespace split of the block (ASCII) or one
 ``np.frombuffer`` (binary); anything that defeats the fast path (fields run together,
@@ -66,6 +68,7 @@ class Function58:
     quantity: str | None
     estimator: str | None
     tau_s: float | None
+    averages: int | None = None
 
 
 def _int_fields(line: bytes, widths: list[int], names: list[str], where: str) -> dict[str, int]:
@@ -223,8 +226,24 @@ def _decode_58(
             raise ValueError(f"{where}: coherence outside 0..1")
     return Function58(
         where, r6["func_type"], r6["rsp_node"], r6["ref_node"], axis, y, quantity,
-        estimator, _float_token(toks, "exp_window_tau_s", where),
+        estimator, _float_token(toks, "exp_window_tau_s", where), _averages(toks, where),
     )
+
+
+AVERAGES_TOKENS = ("averages", "n_averages", "navg")
+"""ID-line tokens naming the hits averaged into an FRF (``averages=5``): the coherence's
+variance needs them (``ema.shapes.noise``)."""
+
+
+def _averages(toks: dict[str, str], where: str) -> int | None:
+    """Return the hits averaged, from the first of ``AVERAGES_TOKENS`` present."""
+    for key in AVERAGES_TOKENS:
+        v = _float_token(toks, key, where)
+        if v is not None:
+            if v != int(v):
+                raise ValueError(f"{where}: token {key}={toks[key]!r} is not a whole number")
+            return int(v)
+    return None
 
 
 def read_uff(path: str | os.PathLike) -> FrfTest:
@@ -290,6 +309,9 @@ def read_uff(path: str | os.PathLike) -> FrfTest:
             "units": system}
     if estimators:
         meta["estimator"] = estimators.pop() if len(estimators) == 1 else "mixed"
+    averages = {fn.averages for fn in frfs} - {None}
+    if averages:
+        meta["n_averages"] = min(averages)  # differing counts: the fewest, the noisiest
     return FrfTest(
         freq_hz=f0 + np.arange(n) * df, frf=frf, response_nodes=resp, reference_nodes=ref,
         node_x_m=nodes, quantity=first.quantity, coherence=coherence,
@@ -391,9 +413,11 @@ def _write_checked(tmp: Path, dsets: list[dict], test: FrfTest, path: Path,
 def _id_lines(test: FrfTest, f0: float, df: float) -> list[str]:
     est = test.meta.get("estimator")
     tau = test.exp_window_tau_s
+    n_avg = test.meta.get("n_averages")
     line4 = " ".join(
         ([f"estimator={est}"] if est else [])
         + ([f"exp_window_tau_s={float(tau)!r}"] if tau is not None else [])
+        + ([f"averages={int(n_avg)}"] if n_avg is not None else [])
     )
     return [
         "batlab " + test.quantity,

@@ -44,6 +44,9 @@ class MeasuredModes:
             re-test's change of their split reads a flat (``updating.inspect.plane_split``).
         plane_pair_std_hz: (m, 2) their standard uncertainties (NaN where the fit gave
             none), or None.
+        shape_noise_rel: (m,) relative standard deviation of a shape entry per mode, measured
+            from the test's coherence and averages (``ema.shapes.noise``), or None (no
+            coherence: the inspection estimates it from its fits' residuals).
     """
 
     freq_hz: np.ndarray
@@ -57,6 +60,7 @@ class MeasuredModes:
     members: np.ndarray | None = None
     plane_pair_hz: np.ndarray | None = None
     plane_pair_std_hz: np.ndarray | None = None
+    shape_noise_rel: np.ndarray | None = None
 
     @property
     def omega2(self) -> np.ndarray:
@@ -70,9 +74,10 @@ class MeasuredModes:
         members = None if self.members is None else self.members[idx]
         pair = None if self.plane_pair_hz is None else self.plane_pair_hz[idx]
         pair_std = None if self.plane_pair_std_hz is None else self.plane_pair_std_hz[idx]
+        noise = None if self.shape_noise_rel is None else self.shape_noise_rel[idx]
         return MeasuredModes(self.freq_hz[idx], self.shapes[:, idx], self.x_m,
                              self.damping_ratio[idx], self.sensor_x_m, std, self.mass_line,
-                             self.band_top_hz, members, pair, pair_std)
+                             self.band_top_hz, members, pair, pair_std, noise)
 
 
 def from_fit(fit, sensor_x_m: float, min_hz: float = 20.0) -> MeasuredModes:
@@ -84,11 +89,13 @@ def from_fit(fit, sensor_x_m: float, min_hz: float = 20.0) -> MeasuredModes:
     keep = np.flatnonzero(np.asarray(fit.freq_hz) >= min_hz)
     std = getattr(fit, "freq_std_hz", None)
     band = getattr(fit, "band_hz", None)
+    noise = getattr(fit, "shape_noise_rel", None)
     return MeasuredModes(
         np.asarray(fit.freq_hz)[keep], np.asarray(fit.real_shapes)[:, keep],
         np.asarray(fit.x_m), np.asarray(fit.damping_ratio)[keep], float(sensor_x_m),
         None if std is None else np.asarray(std)[keep], driving_mass_line(fit),
-        None if band is None else float(band[1]), np.ones(keep.size, dtype=int))
+        None if band is None else float(band[1]), np.ones(keep.size, dtype=int),
+        shape_noise_rel=None if noise is None else np.asarray(noise, dtype=float)[keep])
 
 
 def driving_mass_line(fit) -> np.ndarray | None:

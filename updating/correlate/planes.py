@@ -47,7 +47,8 @@ def merge_plane_pairs(modes: MeasuredModes) -> MeasuredModes:
     f, psi = np.asarray(modes.freq_hz, float), np.asarray(modes.shapes, float)
     std = None if modes.freq_std_hz is None else np.asarray(modes.freq_std_hz, float)
     was = np.ones(f.size, int) if modes.members is None else np.asarray(modes.members, int)
-    out_f, out_psi, out_z, out_std, out_members = [], [], [], [], []
+    noise = None if modes.shape_noise_rel is None else np.asarray(modes.shape_noise_rel, float)
+    out_f, out_psi, out_z, out_std, out_members, out_noise = [], [], [], [], [], []
     nan2 = np.full(2, np.nan)
     pair_hz, pair_std = [], []
     k = 0
@@ -63,6 +64,8 @@ def merge_plane_pairs(modes: MeasuredModes) -> MeasuredModes:
             out_z.append(w1 * modes.damping_ratio[k] + w2 * modes.damping_ratio[k + 1])
             if std is not None:
                 out_std.append(max(std[k], std[k + 1]))
+            if noise is not None:  # the merged shape's entries: weights a_i / hypot(a1, a2)
+                out_noise.append(np.sqrt(w1 * noise[k] ** 2 + w2 * noise[k + 1] ** 2))
             out_members.append(was[k] + was[k + 1])
             pair_hz.append(f[k:k + 2])
             pair_std.append(nan2 if std is None else std[k:k + 2])
@@ -73,6 +76,8 @@ def merge_plane_pairs(modes: MeasuredModes) -> MeasuredModes:
             out_z.append(modes.damping_ratio[k])
             if std is not None:
                 out_std.append(std[k])
+            if noise is not None:
+                out_noise.append(noise[k])
             out_members.append(was[k])
             pair_hz.append(nan2)
             pair_std.append(nan2)
@@ -83,4 +88,5 @@ def merge_plane_pairs(modes: MeasuredModes) -> MeasuredModes:
                          band_top_hz=modes.band_top_hz,
                          members=np.array(out_members, dtype=int),
                          plane_pair_hz=np.array(pair_hz, dtype=float).reshape(-1, 2),
-                         plane_pair_std_hz=np.array(pair_std, dtype=float).reshape(-1, 2))
+                         plane_pair_std_hz=np.array(pair_std, dtype=float).reshape(-1, 2),
+                         shape_noise_rel=None if noise is None else np.array(out_noise))

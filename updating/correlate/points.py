@@ -149,4 +149,5 @@ def reorder(modes: MeasuredModes, order: np.ndarray) -> MeasuredModes:
                          modes.damping_ratio, modes.sensor_x_m, modes.freq_std_hz,
                          band_top_hz=modes.band_top_hz, members=modes.members,
                          plane_pair_hz=modes.plane_pair_hz,
-                         plane_pair_std_hz=modes.plane_pair_std_hz)
+                         plane_pair_std_hz=modes.plane_pair_std_hz,
+                         shape_noise_rel=modes.shape_noise_rel)

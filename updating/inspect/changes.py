@@ -23,6 +23,7 @@ from updating.inspect.checks import (
 )
 from updating.inspect.hypotheses import (
     FREQ_MODEL_ERROR_REL,
+    SHAPE_NOISE_FLOOR,
     Differences,
     plane_sigma,
     shape_noise_profile,
@@ -35,6 +36,10 @@ ELASTIC_MIN_HZ = 20.0
 FALLBACK_FREQ_STD_PER_ZETA = 0.05
 """Without the fitter's frequency uncertainty: sigma_f / f = 0.05 zeta (1/20 of the
 half-power half-bandwidth)."""
+MODEL_SHAPE_ERROR = SHAPE_NOISE_FLOOR
+"""Relative error of a predicted shape change that the change model itself makes (caliper
+noise of the profile, mesh, calibration; ``hypotheses.SHAPE_NOISE_FLOOR``), added to the
+measured noise in quadrature (``measured_shape_noise``)."""
 SHAPE_NOISE_FLOOR_SHARE = 0.5
 """Shape noise per point: ~ sqrt(phi_jr^2 + k^2 rms_r^2). An averaged FRF's random error is
 relative to |H| (var H / |H|^2 = (1 - gamma^2) / (2 n gamma^2)) and near a resonance
@@ -140,7 +145,32 @@ def differences(predict: ChangePredictor, baseline: MeasuredModes, retest: Measu
     return Differences(jmod, np.log(retest.freq_hz[ir] / baseline.freq_hz[ib]), sig,
                        psi_r - psi_b, scale, f_mod[jmod], phi0, dlnw,
                        predict.wood_mass_kg(ChangeParams()), s_f[jmod],
-                       s_phi[:, jmod] * np.sign(np.einsum("ij,ij->j", phi_mod[:, jmod], phi0)))
+                       s_phi[:, jmod] * np.sign(np.einsum("ij,ij->j", phi_mod[:, jmod], phi0)),
+                       sigma_meas=measured_shape_noise(baseline, retest, ib, ir, psi_b, psi_r))
+
+
+def measured_shape_noise(baseline: MeasuredModes, retest: MeasuredModes, ib: np.ndarray,
+                         ir: np.ndarray, psi_b: np.ndarray, psi_r: np.ndarray
+                         ) -> np.ndarray | None:
+    """Return each paired mode's relative shape noise as the two tests measured it.
+
+    The weights' ``psi_scale`` carries hypot(rms_b, rms_r) of each mode, so the level that
+    gives each entry of psi_r - psi_b the variance (s_b rms_b)^2 + (s_r rms_r)^2 is
+
+        sigma_r = sqrt((s_b^2 rms_b^2 + s_r^2 rms_r^2) / (rms_b^2 + rms_r^2)),
+
+    with the change model's own error ``MODEL_SHAPE_ERROR`` added in quadrature; s_b, s_r
+    each test's ``MeasuredModes.shape_noise_rel`` (its coherence). None when either test has
+    none.
+    """
+    if baseline.shape_noise_rel is None or retest.shape_noise_rel is None:
+        return None
+    s_b, s_r = baseline.shape_noise_rel[ib], retest.shape_noise_rel[ir]
+    if not (np.all(np.isfinite(s_b)) and np.all(np.isfinite(s_r))):
+        return None
+    rb2, rr2 = np.mean(psi_b**2, axis=0), np.mean(psi_r**2, axis=0)
+    level2 = (s_b**2 * rb2 + s_r**2 * rr2) / (rb2 + rr2)
+    return np.sqrt(level2 + MODEL_SHAPE_ERROR**2)
 
 
 def shear_sensitivity(predict: ChangePredictor,

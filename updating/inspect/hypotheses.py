@@ -287,6 +287,10 @@ class Differences:
     rows
         (n_points,) which of the predictor's test points the shape rows are, or None (all,
         in order): a point left out (``without_point``).
+    sigma_meas
+        (m,) relative shape noise of each paired mode as both tests measured it (their
+        coherence: ``ema.shapes.noise``; ``changes.measured_shape_noise``), not below
+        ``SHAPE_NOISE_FLOOR``; None when either test carries no coherence.
     """
 
     model_index: np.ndarray
@@ -301,6 +305,7 @@ class Differences:
     plane_sens: np.ndarray | None = None
     plane_shape_sens: np.ndarray | None = None
     rows: np.ndarray | None = None
+    sigma_meas: np.ndarray | None = None
 
     def without_mode(self, k: int) -> Differences:
         """Return the changes with paired mode ``k`` left out."""
@@ -311,7 +316,8 @@ class Differences:
                        phi0=self.phi0[:, keep],
                        plane_sens=None if self.plane_sens is None else self.plane_sens[keep],
                        plane_shape_sens=None if self.plane_shape_sens is None
-                       else self.plane_shape_sens[:, keep])
+                       else self.plane_shape_sens[:, keep],
+                       sigma_meas=None if self.sigma_meas is None else self.sigma_meas[keep])
 
     def without_point(self, j: int) -> Differences:
         """Return the changes with the shape row of test point ``j`` (a row here) left out."""

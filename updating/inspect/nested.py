@@ -65,10 +65,12 @@ class Hypotheses:
     family : str
         The family ``full`` belongs to.
     null_h0, full_h0 : ChangeFit
-        H0 and ``full``'s family refitted with the shape noise H0 leaves (``sigma_h0``):
-        the test whose chance the verdict states (``nested_test``).
+        H0 and ``full``'s family refitted with the test's noise (``sigma_h0``): the test
+        whose chance the verdict states (``nested_test``).
     sigma_h0 : numpy.ndarray
-        (m,) relative shape noise per paired mode estimated from H0's residual.
+        (m,) relative shape noise per paired mode of the stated chance's test: as the two
+        tests measured it (``Differences.sigma_meas``, their coherence) when they did,
+        else estimated from H0's residual.
     """
 
     null: ChangeFit
@@ -93,6 +95,12 @@ def fit_hypotheses(predict: ChangePredictor, diff: Differences, space: ParamSpac
     change) and H0 and that family refitted: ``null``, ``full``, ``sigma_rel``, what the
     finding is read from. Last, the best family refitted with H0's noise (``full_h0``):
     the test whose chance is stated (``nested_test``, docs/inspection.md, "Two noises").
+
+    When both tests measured their noise (``Differences.sigma_meas``), the stated chance's
+    test is weighted with it instead of H0's residual (docs/noise.md): neither hypothesis
+    then sets the noise it is judged against, and an alteration's own misfit no longer
+    inflates it; the overall level is still H1's residual when that exceeds the measured
+    noise (``nested_f``'s denominator), which a model lacking something raises.
     """
     sigma: SigmaRel = INITIAL_SHAPE_NOISE
     null = fit_null(predict, diff, space, sigma)
@@ -100,6 +108,9 @@ def fit_hypotheses(predict: ChangePredictor, diff: Differences, space: ParamSpac
         sigma = shape_noise(null, diff, sigma, N_NULL)
         null = fit_null(predict, diff, space, sigma, x0=null.x)
     null_h0, sigma_h0 = null, sigma
+    if diff.sigma_meas is not None:
+        sigma_h0 = diff.sigma_meas
+        null_h0 = fit_null(predict, diff, space, sigma_h0, x0=null.x)
     gspace = segment_space(space, "local_change")
     generic = fit_segment(predict, diff, gspace, sigma, null, n_starts)
     sigma = shape_noise(generic, diff, sigma, N_NULL + N_SEGMENT)

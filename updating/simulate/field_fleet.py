@@ -351,7 +351,8 @@ def draw_case(
     species, wood = random_wood(rng)
     nominal = material_from_imperial(*SPECIES[species])
     points_in, fmax, noise = _draw_test_setup(rng, on, profile, nominal, integrity, rec)
-    base = VirtualBat(truth_profile, wood, points_in * IN_TO_M, rel_noise=noise)
+    base = VirtualBat(truth_profile, wood, points_in * IN_TO_M, rel_noise=noise,
+                      n_averages=nz.COHERENCE_AVERAGES if "coherence" in on else None)
     base, re_changes = _draw_rig(rng, on, base, rec)
     base_field, re_changes["wood"] = _draw_wood_fields(rng, on, length_m, rec)
     base = replace(base, wood=base_field)

@@ -37,8 +37,13 @@ from updating.simulate.wood import (
 NUISANCES = ("moisture", "temperature", "billet", "planes", "cup", "noise", "points", "band",
              "accelerometer", "bungees")
 """Every nuisance of the default nuisance-rich fleet."""
-OPTIONAL_NUISANCES = ("uniform_drift", "model_points")
-"""Drawn only when asked for."""
+OPTIONAL_NUISANCES = ("uniform_drift", "model_points", "coherence")
+"""Drawn only when asked for. ``coherence`` is not a nuisance but what the lab's files hold:
+each test's coherence beside its FRFs, from ``COHERENCE_AVERAGES`` hits a point (its noise
+measured, ``ema.shapes.noise``); it draws nothing, so a seed gives the same bat with or
+without it."""
+COHERENCE_AVERAGES = 5
+"""Hits averaged a point when the files carry their coherence."""
 
 
 def signed(rng: np.random.Generator, lo: float, hi: float) -> float:

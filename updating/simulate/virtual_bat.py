@@ -27,7 +27,7 @@ import numpy as np
 
 from ema.io.frf_data import FrfTest
 from rigs.modal_model import ModalModel
-from rigs.virtual_test import add_noise, simulate_frf
+from rigs.virtual_test import add_noise, noise_coherence, simulate_frf
 from updating.model.assembly import Attachment, Beam, build_model, displacement_at
 from updating.model.local_change import LocalChange, apply_local_changes, change_stations_m
 from updating.model.material import Material
@@ -78,6 +78,10 @@ class VirtualBat:
         Damping ratio of mode r is zeta1 (f_r / f_1) ** zeta_exponent.
     rel_noise, floor_noise : float
         Measurement noise (see rigs.virtual_test.simulate_frf).
+    n_averages : int or None
+        Hits averaged per point: the test then carries the coherence its noise implies
+        (``rigs.virtual_test.noise_coherence``) and says how many hits (``n_averages``);
+        None: FRFs alone, as before.
     element_length_m : float
         Mesh of the truth model.
     wood : WoodField | None
@@ -113,6 +117,7 @@ class VirtualBat:
     e_over_g_t: float | None = None
     theta_deg: float = 0.0
     local_changes: tuple[LocalChange, ...] = ()
+    n_averages: int | None = None
 
     def planes(self) -> tuple[tuple[str, float], ...]:
         """Return the (plane, weight) pairs of the measured FRF.
@@ -219,13 +224,17 @@ def simulate_test(
         modal, sensor_shape = modal_model(bat, max_mode_hz, plane)
         h = h + weight * simulate_frf(modal, freq_hz, np.array([s]), np.arange(points.size),
                                       0.0, 0.0, resp_shapes=sensor_shape)
+    coherence, meta = None, {"source": "batlab virtual rig", "seed": seed}
+    if bat.n_averages is not None:
+        coherence = noise_coherence(h, bat.rel_noise, bat.floor_noise, bat.n_averages)
+        meta["n_averages"] = int(bat.n_averages)
     h = add_noise(h, bat.rel_noise, bat.floor_noise, seed)
     nodes = np.arange(1, points.size + 1)
     return FrfTest(
         freq_hz=np.asarray(freq_hz, dtype=float), frf=h, response_nodes=nodes[[s]],
         reference_nodes=nodes, node_x_m={int(n): float(x) for n, x in zip(nodes, points,
                                                                          strict=True)},
-        meta={"source": "batlab virtual rig", "seed": seed},
+        coherence=coherence, meta=meta,
     )
 
 
