@@ -240,7 +240,7 @@ def test_schema6_migration_on_postgresql(pg_url):
     calibrations table, no bats.code) is upgraded in place and takes calibrations."""
     import sqlalchemy as sa
 
-    with reg.open_registry(pg_url) as conn:  # created at 6, then taken back to 5's layout
+    with reg.open_registry(pg_url) as conn:  # created at 7, then taken back to 5's layout
         conn.exec_driver_sql("DROP TABLE calibrations")
         conn.exec_driver_sql("ALTER TABLE bats DROP COLUMN code")
         conn.exec_driver_sql("ALTER TABLE custody DROP CONSTRAINT custody_kind")
@@ -249,7 +249,7 @@ def test_schema6_migration_on_postgresql(pg_url):
         conn.exec_driver_sql("UPDATE alembic_version SET version_num = '0005'")
         conn.commit()
     with reg.open_registry(pg_url) as conn:
-        assert reg.schema_version(conn) == 6
+        assert reg.schema_version(conn) == 7
         assert "code" in {c["name"] for c in sa.inspect(conn).get_columns("bats")}
     stored = store(pg_url, [1.0, 2.0])
     with reg.open_registry(pg_url, create=False) as conn:

@@ -1,0 +1,61 @@
+"""The statistic's version follows its definition: changing the code that defines F without
+bumping ``STATISTIC_VERSION`` (and recording the code's new hash beside it) fails here."""
+
+from __future__ import annotations
+
+import ast
+import hashlib
+import importlib
+import inspect
+import textwrap
+
+from updating.inspect import nested
+
+
+def _without_docstrings(tree: ast.AST) -> ast.AST:
+    for node in ast.walk(tree):
+        body = getattr(node, "body", None)
+        if (isinstance(body, list) and body and isinstance(body[0], ast.Expr)
+                and isinstance(body[0].value, ast.Constant)
+                and isinstance(body[0].value.value, str)):
+            node.body = body[1:] or [ast.Pass()]
+    return tree
+
+
+def definition_text(name: str) -> str:
+    """The code named ``module.attr``: its syntax tree without docstrings (comments and
+    layout never reach it), or a constant's value."""
+    module, _, attr = name.rpartition(".")
+    obj = getattr(importlib.import_module(module), attr)
+    if inspect.isfunction(obj) or inspect.isclass(obj):
+        tree = ast.parse(textwrap.dedent(inspect.getsource(obj)))
+        return ast.dump(_without_docstrings(tree), include_attributes=False)
+    return repr(obj)
+
+
+def definition_sha256(names=nested.STATISTIC_DEFINITION) -> str:
+    text = "\n".join(f"{name}\n{definition_text(name)}" for name in names)
+    return hashlib.sha256(text.encode("utf-8")).hexdigest()
+
+
+def test_the_statistics_version_was_bumped_when_its_code_changed():
+    now = definition_sha256()
+    assert now == nested.STATISTIC_SOURCE_SHA256, (
+        f"the code defining F changed (sha256 {now}); if F's definition changed, bump "
+        f"updating.inspect.nested.STATISTIC_VERSION (now {nested.STATISTIC_VERSION}) and "
+        f"set STATISTIC_SOURCE_SHA256 = \"{now}\" beside it")
+
+
+def test_a_change_to_the_definition_changes_the_hash(monkeypatch):
+    """The check can fail: F computed another way hashes differently, a docstring does not."""
+    before = definition_sha256()
+    source = inspect.getsource(nested.nested_f)
+    changed = source.replace("max(rss_core / dof, 1.0)", "max(rss_core / dof, 0.5)")
+    assert changed != source
+    reworded = source.replace("Return F and p", "Return the F and p")
+    assert reworded != source
+    for text, same in ((changed, False), (reworded, True)):
+        monkeypatch.setattr(inspect, "getsource",
+                            lambda obj, text=text, real=inspect.getsource:
+                            text if obj is nested.nested_f else real(obj))
+        assert (definition_sha256() == before) is same
