@@ -129,12 +129,14 @@ def origin_problems(conn: sa.Connection) -> list[str]:
     return out
 
 
-def shipped_calibration(model: str, directory: Path = SHIPPED_DIR) -> StoredCalibration | None:
+def shipped_calibration(model: str, directory: Path | None = None) -> StoredCalibration | None:
     """Return batlab's own calibration of bat model ``model`` (None when none is shipped).
 
     ``directory/MODEL.json`` must verify and be signed by a key listed in
-    ``directory/signers.keys``; else ValueError naming the file (a broken install).
+    ``directory/signers.keys`` (default ``SHIPPED_DIR``); else ValueError naming the file
+    (a broken install).
     """
+    directory = SHIPPED_DIR if directory is None else Path(directory)
     path = directory / f"{model}.json"
     if "/" in model or not path.is_file():
         return None
