@@ -20,6 +20,7 @@ from batlab import registry as reg
 from batlab.fleet.calibrate import BatSpec, check_resumed, store_calibration, summary, upper95
 from batlab.version import code_version
 from tests.inspect_standins import SAMPLE, run_cli, stand_in_lab
+from updating.inspect.nested import STATISTIC_VERSION
 from updating.tails import measured_chance, pareto_tail
 
 SPEC = BatSpec(str(SAMPLE / "profile.csv"), str(SAMPLE / "meta.json"), 1)
@@ -122,7 +123,8 @@ def test_the_printed_chance_is_one_plus_b_over_n_plus_one(lab, capsys, data):
         assert ch["calibration"] == {
             "model": sample_model(), "n": n, "exceeding": b, "false_alarms": k,
             "false_alarm_upper95": upper95(k, n), "record_seq": stored.record_seq,
-            "statistic": "F", "code": code_version()}
+            "statistic": "F", "statistic_version": STATISTIC_VERSION, "code": code_version(),
+            "signer": None, "shipped": False}
         fa = json.loads(out)["false_alarm_rate"]
         assert fa["source"] == "calibration" and fa["measured"] == k / n
     code, out, _ = run_cli(stateless(lab, "--db", db), capsys)
