@@ -108,7 +108,7 @@ def run(args: argparse.Namespace) -> int:
     with open_registry(path, create=False, readonly=True, warn=warn) as conn:
         if args.action == "head":
             return _head(conn, path, args.json)
-        from batlab.registry.witness import read_witnessed
+        from batlab.registry import read_witnessed
 
         trusted = signing.trusted_keys(args.trust, args.trust_own)
         witnessed = [read_witnessed(f) for f in args.witnessed or []]
@@ -123,8 +123,7 @@ def run(args: argparse.Namespace) -> int:
 
 def _head(conn, path, as_json: bool) -> int:
     """Print the chain's head: ``SEQ:SHA256``, or with ``as_json`` the head statement."""
-    from batlab.registry import custody_rows, head, now_utc, shown
-    from batlab.registry.witness import head_statement
+    from batlab.registry import custody_rows, head, head_statement, now_utc, shown
 
     text = head(conn)
     if text is None:
@@ -142,12 +141,11 @@ def _key(args: argparse.Namespace) -> int:
     if not args.rotate and not args.revoke:
         print(signing.key_id(signing.signing_key(create=True).public_key()))
         return 0
-    from batlab.registry import open_registry, shown
-    from batlab.registry.keys import revoke, rotate
+    from batlab.registry import open_registry, revoke_key, rotate_key, shown
 
     path = db_path(args)
     with open_registry(path, create=False) as conn:
-        change = rotate(conn) if args.rotate else revoke(conn, args.revoke)
+        change = rotate_key(conn) if args.rotate else revoke_key(conn, args.revoke)
     if args.rotate:
         print(change.new)
         print(f"batlab registry: {shown(path)}: key {change.old} handed over to {change.new} "
@@ -165,8 +163,7 @@ def _witness(args: argparse.Namespace) -> int:
 
     from batlab import signing
     from batlab.pipeline.files import atomic_write
-    from batlab.registry import now_utc
-    from batlab.registry.witness import witness
+    from batlab.registry import now_utc, witness_head
 
     if not args.statement or not args.witness_key:
         raise ValueError("witness needs HEAD.json (`registry head --json` on the lab's "
@@ -177,7 +174,7 @@ def _witness(args: argparse.Namespace) -> int:
         raise ValueError(f"{args.statement}: cannot read the head statement ({exc})") from None
     if not isinstance(stmt, dict):
         raise ValueError(f"{args.statement}: not a batlab head statement")
-    done = json.dumps(witness(stmt, signing.load_key(args.witness_key), now_utc(),
+    done = json.dumps(witness_head(stmt, signing.load_key(args.witness_key), now_utc(),
                               args.statement))
     if args.out is None:
         print(done)
@@ -295,9 +292,12 @@ def _export(conn, args: argparse.Namespace) -> int:
     from pathlib import Path
 
     from batlab.pipeline.files import atomic_write
-    from batlab.registry import latest_calibration, list_calibrations
-    from batlab.registry.calibration_files import export_calibration
-    from batlab.registry.chain import lab_key
+    from batlab.registry import (
+        export_calibration,
+        lab_key,
+        latest_calibration,
+        list_calibrations,
+    )
 
     models = sorted({c.model for c in list_calibrations(conn, args.model)})
     if len(models) != 1:
@@ -315,7 +315,7 @@ def _export(conn, args: argparse.Namespace) -> int:
 def _import(conn, args: argparse.Namespace) -> int:
     """Store a signed calibration file's calibration (its signer must be trusted)."""
     from batlab import signing
-    from batlab.registry.calibration_files import import_calibration
+    from batlab.registry import import_calibration
 
     c = import_calibration(conn, args.import_file,
                            signing.trusted_keys(args.trust, args.trust_own))

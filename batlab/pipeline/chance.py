@@ -218,13 +218,10 @@ def _calibration_of(conn, model: str):
     The registry's latest, else batlab's shipped one; the first of them that is usable
     (``unusable``, and not signed by a key the registry's key records ended).
     """
-    from batlab.registry.calibration_files import shipped_calibration
+    from batlab.registry import ended_keys, latest_calibration, shipped_calibration
 
     why = None
     if conn is not None:
-        from batlab.registry import latest_calibration
-        from batlab.registry.keys import ended_keys
-
         calibration = latest_calibration(conn, model)
         signer = (calibration.origin or {}).get("signer") if calibration else None
         ended = ended_keys(conn) if signer else {}

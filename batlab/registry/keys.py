@@ -31,7 +31,7 @@ class KeyChange:
     retired_path: str | None = None
 
 
-def rotate(conn: sa.Connection) -> KeyChange:
+def rotate_key(conn: sa.Connection) -> KeyChange:
     """Make a new lab key and record the handover from the current one.
 
     Returns
@@ -85,7 +85,7 @@ def resolve(conn: sa.Connection, fingerprint: str) -> str:
     return hits.pop()
 
 
-def revoke(conn: sa.Connection, fingerprint: str) -> KeyChange:
+def revoke_key(conn: sa.Connection, fingerprint: str) -> KeyChange:
     """Record a key as revoked from the next record on, signed by the lab's current key.
 
     Raises

@@ -84,7 +84,7 @@ def _witness_bytes(head: dict, witness_key: str, witnessed_at: str) -> bytes:
                               "witnessed_at": witnessed_at}).encode("utf-8")
 
 
-def witness(stmt: dict, key, now: str, where: str = "head") -> dict:
+def witness_head(stmt: dict, key, now: str, where: str = "head") -> dict:
     """Countersign a lab's head statement with a league's key (``registry witness``).
 
     Parameters
