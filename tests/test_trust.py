@@ -102,8 +102,12 @@ def test_a_registry_resigned_whole_with_a_second_key_fails_against_the_lab_keys(
         "no --trust given: the signatures were checked for consistency only")
     assert f"signed by {other} (fingerprint {signing.fingerprint(other)}, records #1..#6)" \
         in res["notes"][-1]
+    assert res["signers_checked"] is False and check(db, "--trust", trust)[1]["signers_checked"]
     code, out, _ = cli("registry", "check", "--db", db)
     assert code == 0 and "consistency only" in out and "not who signed" in out
+    assert out.splitlines()[0].endswith(": intact (signatures consistent; who signed was not "
+                                        "checked: give --trust KEYS or --trust-own): 6 custody "
+                                        "records, 3 files")
     assert check(db, "--trust-own")[0] == 0  # asked for: the machine's own key
     assert check(db, "--trust-own", "--trust", trust)[0] == 0
 

@@ -117,7 +117,7 @@ def run(args: argparse.Namespace) -> int:
             from batlab.report_check import check_page
 
             res = replace(res, problems=res.problems + check_page(conn, args.report, trusted))
-    _print(res, shown(path), args.json)
+    _print(res, shown(path), args.json, trusted is not None)
     return 0 if res.ok else 1
 
 
@@ -183,12 +183,19 @@ def _witness(args: argparse.Namespace) -> int:
     return 0
 
 
-def _print(res, path, as_json: bool) -> None:
-    """Print a check's result: JSON, or a summary line and one line per problem and note."""
+def _print(res, path, as_json: bool, signers_checked: bool) -> None:
+    """Print a check's result: JSON, or a summary line and one line per problem and note.
+
+    ``signers_checked`` False (no ``--trust``, no ``--trust-own``): the summary says that
+    the signatures were checked for consistency only (JSON: ``signers_checked``).
+    """
     if as_json:
-        print(json.dumps({**asdict(res), "ok": res.ok}))
+        print(json.dumps({**asdict(res), "ok": res.ok, "signers_checked": signers_checked}))
         return
     state = "intact" if res.ok else "DAMAGED OR CHANGED"
+    if res.ok and not signers_checked:
+        state += (" (signatures consistent; who signed was not checked: give --trust KEYS "
+                  "or --trust-own)")
     print(f"{path}: {state}: {res.n_records} custody records, {res.n_files} files")
     if res.head:
         print(f"  chain head {res.head}")
