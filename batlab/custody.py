@@ -21,7 +21,7 @@ import json
 from dataclasses import dataclass
 
 from batlab import signing
-from batlab.custody_keys import KeyState
+from batlab.custody_keys import KeyState, predecessors
 
 GENESIS_SHA256 = "0" * 64
 KINDS = ("file", "reference", "verdict", "seal", "calibration", "key")
@@ -161,8 +161,9 @@ def check_chain(rows: list[Row], trusted: set[str] | None) -> ChainCheck:
     rows : list of Row
         The custody table ordered by ``seq``.
     trusted : set of str or None
-        Key ids (``ed25519:<base64>``) whose signatures are accepted, and every key one of
-        them handed over to (``custody_keys``); None: any key's, as long as it verifies and
+        Key ids (``ed25519:<base64>``) whose signatures are accepted, every key one of them
+        handed over to, and every key one of them took over from, for its records before the
+        handover (``custody_keys``); None: any key's, as long as it verifies and
         was not retired or revoked before (the signatures' consistency, not who signed).
 
     Returns
@@ -175,6 +176,9 @@ def check_chain(rows: list[Row], trusted: set[str] | None) -> ChainCheck:
     if n_legacy:
         notes.append(f"records #1..#{n_legacy} are unsigned legacy records (written before "
                      f"schema 4), sealed by signed record #{n_legacy + 1}")
+    if trusted is not None:
+        trusted = predecessors([(r.seq, r.prev_sha256, r.signer or "", r.payload)
+                                for r in rows if r.kind == "key"], trusted)
     keys = KeyState(None if trusted is None else set(trusted))
     prev, expect = GENESIS_SHA256, 1
     for r in rows:

@@ -12,7 +12,9 @@ canonical JSON:
   KEY}``, signed by the lab's current key. From the next record on, a record KEY signs fails,
   trusted or not (a thief's records after the theft was recorded).
 
-``KeyState`` is the fold ``custody.check_chain`` runs over the chain, record by record.
+``KeyState`` is the fold ``custody.check_chain`` runs over the chain, record by record, after
+``predecessors`` has added to the trusted keys every key a trusted key took over from (the
+new key signed the handover: it vouches for the old key's records before it).
 """
 
 from __future__ import annotations
@@ -43,6 +45,44 @@ def handover_payload(seq: int, prev_sha256: str, old: str, new_key) -> dict:
 def revoke_payload(key: str) -> dict:
     """Return a revocation record's payload."""
     return {"action": "revoke", "key": key}
+
+
+def _handover(seq: int, prev_sha256: str, signer: str, payload: str | None) -> tuple | None:
+    """Return (old, new) of a valid handover record (None: not one, or not signed by both)."""
+    try:
+        p = json.loads(payload or "")
+        old, new, sig = p["old"], p["new"], p["new_signature"]
+    except (ValueError, TypeError, KeyError):
+        return None
+    if p.get("action") != "rotate" or old != signer or not isinstance(new, str):
+        return None
+    if not signing.verify(new, handover_bytes(seq, prev_sha256, old, new), str(sig)):
+        return None
+    return old, new
+
+
+def predecessors(key_records: list[tuple], trusted: set[str]) -> set[str]:
+    """Return ``trusted`` with every key a trusted key took over from, back along the chain.
+
+    Parameters
+    ----------
+    key_records : list of tuple
+        The chain's key records in order: (seq, prev_sha256, signer, payload).
+    trusted : set of str
+        The keys given.
+
+    Returns
+    -------
+    set of str
+        Those keys and, for each valid handover OLD -> NEW with NEW in the set (walking
+        from the last handover to the first), OLD: its records before the handover count.
+    """
+    out = set(trusted)
+    for rec in reversed(key_records):
+        pair = _handover(*rec)
+        if pair is not None and pair[1] in out:
+            out.add(pair[0])
+    return out
 
 
 @dataclass
@@ -96,8 +136,7 @@ class KeyState:
         old, new = p.get("old"), p.get("new")
         if old != signer:
             return f"hands over key {old}, but is signed by {signer}"
-        if not isinstance(new, str) or not signing.verify(
-                new, handover_bytes(seq, prev_sha256, old, new), p.get("new_signature") or ""):
+        if _handover(seq, prev_sha256, signer, payload) is None:
             return f"the new key's signature does not verify ({new})"
         self.ended.setdefault(old, f"retired by handover record #{seq}")
         if self.trusted is not None and old in self.trusted:

@@ -133,7 +133,11 @@ def test_after_a_rotation_the_old_key_alone_is_trusted_and_retired(tmp_path, mon
     old_keys = keys_file(tmp_path / "old.keys", old)
     code, res = check(db, "--trust", old_keys)
     assert code == 0, res["problems"]
-    assert check(db, "--trust", keys_file(tmp_path / "new.keys", new))[0] == 1  # before it
+    # the new key signed the handover: trusting it alone covers the old key's records before
+    assert check(db, "--trust", keys_file(tmp_path / "new.keys", new))[0] == 0
+    assert check(db, "--trust-own")[0] == 0  # the lab's machine, holding the new key
+    _, stranger = league_key(tmp_path)  # a key in no handover: nothing it signed
+    assert check(db, "--trust", keys_file(tmp_path / "stranger.keys", stranger))[0] == 1
     # the old key, kept or stolen, signs again: refused from the handover on
     with reg.open_registry(db) as conn, reg.transaction(conn):
         seq = reg.chain.append_record(conn, "seal", "forged", None, "{}",
