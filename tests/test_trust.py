@@ -319,3 +319,27 @@ def test_an_unreadable_witnessed_file_is_one_line(tmp_path, monkeypatch, damage)
     code, out, err = cli("registry", "check", "--db", db, "--witnessed", tmp_path / "w.json")
     assert code == 2 and not out and str(tmp_path / "w.json") in err
     assert len(err.strip().splitlines()) == 1
+
+
+def test_a_postgresql_registry_of_schema_6_takes_key_records(pg_url, tmp_path, monkeypatch):
+    """Taken back to schema 6's layout (custody's kind check without 'key', calibrations
+    without a version or origin), a server registry is upgraded in place, keeps verifying,
+    and takes a handover record."""
+    old = use_key(monkeypatch, tmp_path / "lab.pem")
+    with reg.open_registry(pg_url) as conn:
+        reg.add_bat(conn, make_bat("P1"), "P1.uff", b"base P1")
+        reg.add_calibration(conn, "m", 2, 0, 0.78, "F", {}, {"F": [1.0, 2.0]}, "0.1", None)
+        conn.exec_driver_sql("ALTER TABLE calibrations DROP COLUMN statistic_version")
+        conn.exec_driver_sql("ALTER TABLE calibrations DROP COLUMN origin_json")
+        conn.exec_driver_sql("ALTER TABLE custody DROP CONSTRAINT custody_kind")
+        conn.exec_driver_sql("ALTER TABLE custody ADD CONSTRAINT custody_kind CHECK (kind IN "
+                             "('file', 'reference', 'verdict', 'seal', 'calibration'))")
+        conn.exec_driver_sql("UPDATE alembic_version SET version_num = '0006'")
+        conn.commit()
+    with reg.open_registry(pg_url) as conn:
+        assert reg.schema_version(conn) == 7 and reg.check(conn, {old}).ok
+        change = reg.rotate_key(conn)
+        assert reg.custody_rows(conn)[-1].kind == "key" and change.old == old
+        reg.add_inspection(conn, "P1", {"altered": False}, "r.uff", b"retest P1")
+        res = reg.check(conn, {old})
+        assert res.ok, res.problems
