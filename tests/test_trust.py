@@ -216,6 +216,7 @@ def league_key(tmp_path: Path) -> tuple[Path, str]:
     from cryptography.hazmat.primitives.asymmetric.ed25519 import Ed25519PrivateKey
 
     key = Ed25519PrivateKey.generate()
+    tmp_path.mkdir(exist_ok=True)
     signing.write_key(tmp_path / "league.pem", key)
     return tmp_path / "league.pem", signing.key_id(key.public_key())
 
@@ -238,6 +239,13 @@ def test_the_head_statement_is_signed_by_the_lab(tmp_path, monkeypatch):
     code, _, err = cli("registry", "witness", tmp_path / "bad.json", "--key", pem, "-o",
                        tmp_path / "w.json")
     assert code == 2 and "nothing witnessed" in err and not (tmp_path / "w.json").exists()
+    (tmp_path / "head.json").write_text(out)
+    code, _, err = cli("registry", "witness", tmp_path / "head.json", "--key", pem, "--trust",
+                       keys_file(tmp_path / "other.keys", league_key(tmp_path / "x")[1]))
+    assert code == 2 and f"a head of key {lab}, not one of the lab keys trusted" in err
+    code, out, err = cli("registry", "witness", tmp_path / "head.json", "--key", pem,
+                         "--trust", keys_file(tmp_path / "lab.keys", lab))
+    assert code == 0 and json.loads(out)["head"] == stmt, err
 
 
 def test_a_history_rewritten_after_a_witnessed_head_fails_naming_the_first_record(

@@ -36,12 +36,14 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    help="check: also verify a report page: its seal, what it says (verdict, "
                         "reasons, the head it shows) and its records and files")
     p.add_argument("--trust", default=None, metavar="FILE",
-                   help="check, copy, calibrations --import: trust exactly these keys (one "
-                        "ed25519:<base64> a line) and the keys they handed over to; without "
-                        "--trust or --trust-own a check verifies the signatures' consistency, "
-                        "not who signed")
+                   help="check, copy, calibrations --import, witness: trust exactly these "
+                        "keys (one ed25519:<base64> a line) and the keys they handed over to; "
+                        "without --trust or --trust-own a check verifies the signatures' "
+                        "consistency, not who signed (witness: the lab keys whose heads it "
+                        "countersigns)")
     p.add_argument("--trust-own", action="store_true",
-                   help="check, copy, calibrations --import: trust this machine's own key too")
+                   help="check, copy, calibrations --import, witness: trust this machine's own "
+                        "key too")
     p.add_argument("--witnessed", nargs="+", default=None, metavar="FILE",
                    help="check: witnessed heads (`registry witness`); fails unless the "
                         "registry extends each, and names forks between them")
@@ -162,18 +164,25 @@ def _witness(args: argparse.Namespace) -> int:
     from pathlib import Path
 
     from batlab import signing
+    from batlab.pipeline import check_output
     from batlab.pipeline.files import atomic_write
     from batlab.registry import now_utc, witness_head
 
     if not args.statement or not args.witness_key:
         raise ValueError("witness needs HEAD.json (`registry head --json` on the lab's "
                          "registry) and --key KEY.pem (the witness's private key)")
+    if args.out is not None:
+        check_output(args.out, "-o/--out", "file")
     try:
         stmt = json.loads(Path(args.statement).read_text(encoding="utf-8"))
     except (OSError, UnicodeDecodeError, ValueError) as exc:
         raise ValueError(f"{args.statement}: cannot read the head statement ({exc})") from None
     if not isinstance(stmt, dict):
         raise ValueError(f"{args.statement}: not a batlab head statement")
+    known = signing.trusted_keys(args.trust, args.trust_own)
+    if known is not None and stmt.get("lab_key") not in known:
+        raise ValueError(f"{args.statement}: a head of key {stmt.get('lab_key')}, not one of "
+                         "the lab keys trusted (--trust); nothing witnessed")
     done = json.dumps(witness_head(stmt, signing.load_key(args.witness_key), now_utc(),
                               args.statement))
     if args.out is None:
@@ -298,6 +307,7 @@ def _export(conn, args: argparse.Namespace) -> int:
     """Write the latest calibration (of ``--model``) as a file signed by the lab's key."""
     from pathlib import Path
 
+    from batlab.pipeline import check_output
     from batlab.pipeline.files import atomic_write
     from batlab.registry import (
         export_calibration,
@@ -306,6 +316,7 @@ def _export(conn, args: argparse.Namespace) -> int:
         list_calibrations,
     )
 
+    check_output(args.export, "--export", "file")
     models = sorted({c.model for c in list_calibrations(conn, args.model)})
     if len(models) != 1:
         said = ("no calibration stored" if not models
