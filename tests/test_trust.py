@@ -281,6 +281,7 @@ def test_a_history_rewritten_after_a_witnessed_head_fails_naming_the_first_recor
     assert code == 1 and len(res["problems"]) == 1
     assert f"the registry does not extend it: record #{seq} is the first that differs" in \
         res["problems"][0] and str(seen) in res["problems"][0]
+    assert res["first_changed"] == seq
     # a witness not in --trust, or a witnessed file changed afterwards, is named
     code, res = check(db, "--trust", keys_file(tmp_path / "only.keys", lab), "--witnessed",
                       seen)

@@ -88,13 +88,13 @@ def _check(conn: sa.Connection, trusted: set[str] | None, head_seen: str | None,
     if head_seen is not None:
         problems += custody.check_head(rows, head_seen)
     problems += origin_problems(conn)
-    if witnessed:
-        seen = check_witnessed(rows, witnessed, trusted)
-        problems += seen.problems
-        notes += seen.notes
+    seen = check_witnessed(rows, witnessed, trusted)
+    problems += seen.problems
+    notes += seen.notes
     if trusted is None and rows:
         notes.append(consistency_note(rows))
-    first = min([s for s in (chain.first_changed, *changed) if s is not None], default=None)
+    first = min([s for s in (chain.first_changed, *changed, seen.first_changed)
+                 if s is not None], default=None)
     last = rows[-1] if rows else None
     return CheckResult(len(rows), len(files_by_sha), problems, notes, first,
                        None if last is None else last.record_sha256,

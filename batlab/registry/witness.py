@@ -131,10 +131,15 @@ def read_witnessed(path: str | Path) -> dict:
 
 @dataclass(frozen=True)
 class WitnessCheck:
-    """What ``check_witnessed`` found: problems and notes, one line each."""
+    """What ``check_witnessed`` found.
+
+    Problems and notes, one line each, and the first record that differs from a witnessed
+    head (None: none does).
+    """
 
     problems: list[str]
     notes: list[str]
+    first_changed: int | None = None
 
 
 def _name(w: dict) -> str:
@@ -182,7 +187,7 @@ def check_witnessed(rows: list[custody.Row], witnessed: list[dict],
         A problem per head the chain does not extend (naming the first record that differs)
         and per pair of heads of one key that fork; a note per head it extends.
     """
-    problems, notes = [], []
+    problems, notes, changed = [], [], []
     known = [r.record_sha256 for r in rows]
     good = []
     for w in witnessed:
@@ -201,11 +206,12 @@ def check_witnessed(rows: list[custody.Row], witnessed: list[dict],
             problems.append(f"{_name(w)}: record #{seq} is gone (the chain ends at "
                             f"#{len(known)}: rolled back or truncated)")
         else:
+            changed.append(first or seq)
             problems.append(f"{_name(w)}: the registry does not extend it: record "
                             f"#{first or seq} is the first that differs (history rewritten "
                             "or forked after the head was witnessed)")
     problems += _forks(good)
-    return WitnessCheck(problems, notes)
+    return WitnessCheck(problems, notes, min(changed, default=None))
 
 
 def _forks(good: list[dict]) -> list[str]:
