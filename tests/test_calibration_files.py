@@ -169,6 +169,11 @@ def test_a_shipped_calibration_is_read_from_its_place_under_a_listed_key(
     expected = chance(lab, capsys, db)
     empty = tmp_path / "empty.sqlite"  # a registry holding no calibration
     reg.connect(empty).close()
+    (shipped / "signers.keys").write_text("# nobody\n")  # a broken install: unmeasured, why
+    got = chance(lab, capsys, empty)
+    assert got["source"] == "nominal" and got["unmeasured"].startswith(
+        "batlab's shipped calibration was refused: ") and "not a key in" in got["unmeasured"]
+    (shipped / "signers.keys").write_text(signing.key_id(signing.signing_key().public_key()))
     got = chance(lab, capsys, empty)
     assert got["source"] == "calibration" and got["calibration"]["shipped"]
     assert got["value"] == expected["value"] and got["calibration"]["record_seq"] is None

@@ -232,7 +232,10 @@ def _calibration_of(conn, model: str):
             why = unusable(calibration, model)
             if why is None:
                 return calibration, None
-    shipped = shipped_calibration(model)
+    try:
+        shipped = shipped_calibration(model)
+    except ValueError as exc:  # a changed file, or one signed by an unlisted key
+        return None, why or f"batlab's shipped calibration was refused: {exc}"
     if shipped is not None and unusable(shipped, model) is None:
         return shipped, None
     return None, why or (None if shipped is None else unusable(shipped, model))

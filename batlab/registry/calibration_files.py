@@ -138,7 +138,7 @@ def shipped_calibration(model: str, directory: Path | None = None) -> StoredCali
 
     ``directory/MODEL.json`` must verify and be signed by a key listed in
     ``directory/signers.keys`` (default ``SHIPPED_DIR``); else ValueError naming the file
-    (a broken install).
+    (a broken install; ``inspect`` then states the chance unmeasured, saying why).
     """
     directory = SHIPPED_DIR if directory is None else Path(directory)
     path = directory / f"{model}.json"
