@@ -352,3 +352,28 @@ def test_a_postgresql_registry_of_schema_6_takes_key_records(pg_url, tmp_path, m
         reg.add_inspection(conn, "P1", {"altered": False}, "r.uff", b"retest P1")
         res = reg.check(conn, {old})
         assert res.ok, res.problems
+
+
+def test_a_handover_of_the_lab_key_signed_by_another_fails(tmp_path, monkeypatch):
+    """Without the lab's key, an intruder appends a handover from it to a key of its own
+    (signed by the intruder's key, the new key's signature valid): named, and the intruder's
+    later records stay untrusted."""
+    from batlab import custody_keys
+
+    db = tmp_path / "lab.sqlite"
+    lab = use_key(monkeypatch, tmp_path / "lab.pem")
+    write(db, "T1")
+    intruder = use_key(monkeypatch, tmp_path / "intruder.pem")
+    key = signing.signing_key()
+    with reg.open_registry(db) as conn, reg.transaction(conn):
+        seq, prev = reg.chain.next_record(conn)
+        payload = {**custody_keys.handover_payload(seq, prev, lab, key), "old": lab}
+        reg.chain.append_record(conn, "key", "rotate", None, custody.canonical(payload))
+    write(db, "T1")
+    code, res = check(db, "--trust", keys_file(tmp_path / "lab.keys", lab))
+    assert code == 1 and res["problems"][0] == (
+        f"custody record #{seq} (key rotate): signed by a key not trusted here ({intruder})")
+    code, res = check(db)  # consistency alone: the handover names a key that did not sign it
+    assert code == 1 and res["problems"] == [
+        f"custody record #{seq} (key rotate): hands over key {lab}, but is signed by "
+        f"{intruder}"]
