@@ -50,9 +50,8 @@ def test_a_change_to_the_definition_changes_the_hash(monkeypatch):
     """The check can fail: F computed another way hashes differently, a docstring does not."""
     before = definition_sha256()
     source = inspect.getsource(nested.nested_f)
-    changed = source.replace("max(rss_core / dof, 1.0)", "max(rss_core / dof, 0.5)")
-    assert changed != source
-    reworded = source.replace("Return F and p", "Return the F and p")
+    changed = source + "    F = 2.0 * F\n"  # one more statement in the function's body
+    reworded = source.replace('"""', '"""Reworded. ', 1)  # its docstring alone
     assert reworded != source
     for text, same in ((changed, False), (reworded, True)):
         monkeypatch.setattr(inspect, "getsource",
