@@ -38,12 +38,24 @@ def definition_sha256(names=nested.STATISTIC_DEFINITION) -> str:
     return hashlib.sha256(text.encode("utf-8")).hexdigest()
 
 
+RECORDED = {
+    2: "9c90460e3ecf52108754f59c75ff85010f8ad19b1a795b79e655e22a1618799e",
+}
+"""The hash of F's defining code at each version: add a line for a new version, never edit
+one (so a hash changed in place, the version left as it was, still fails here)."""
+
+
 def test_the_statistics_version_was_bumped_when_its_code_changed():
     now = definition_sha256()
-    assert now == nested.STATISTIC_SOURCE_SHA256, (
-        f"the code defining F changed (sha256 {now}); if F's definition changed, bump "
-        f"updating.inspect.nested.STATISTIC_VERSION (now {nested.STATISTIC_VERSION}) and "
-        f"set STATISTIC_SOURCE_SHA256 = \"{now}\" beside it")
+    version = nested.STATISTIC_VERSION
+    bump = (f"the code defining F changed (sha256 {now}); if F's definition changed, bump "
+            f"updating.inspect.nested.STATISTIC_VERSION (now {version}), set "
+            f"STATISTIC_SOURCE_SHA256 = \"{now}\" beside it and add {version + 1}: \"{now}\" "
+            "to RECORDED here")
+    assert now == RECORDED.get(version, now), bump
+    assert version in RECORDED, f"add {version}: \"{now}\" to RECORDED"
+    assert now == nested.STATISTIC_SOURCE_SHA256, bump
+    assert version == max(RECORDED) and len(set(RECORDED.values())) == len(RECORDED)
 
 
 def test_a_change_to_the_definition_changes_the_hash(monkeypatch):

@@ -370,8 +370,8 @@ F with the noise the best local change leaves; 2: with the noise H0 leaves, ``ne
 A stored calibration is used only by code of the same version (batlab.pipeline.chance).
 Bump it whenever F's definition changes: whenever the code named in ``STATISTIC_DEFINITION``
 changes (its docstrings and comments aside), and then record that code's new
-``STATISTIC_SOURCE_SHA256`` (tests/test_statistic_version.py fails until both are done and
-prints the new hash)."""
+``STATISTIC_SOURCE_SHA256`` here and the new version's line in ``RECORDED`` of
+tests/test_statistic_version.py, which fails until all three are done and prints the hash."""
 
 STATISTIC_DEFINITION = (
     "updating.inspect.nested.nested_f", "updating.inspect.nested.nested_test",
