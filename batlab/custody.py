@@ -21,9 +21,10 @@ import json
 from dataclasses import dataclass
 
 from batlab import signing
+from batlab.custody_keys import KeyState, predecessors
 
 GENESIS_SHA256 = "0" * 64
-KINDS = ("file", "reference", "verdict", "seal", "calibration")
+KINDS = ("file", "reference", "verdict", "seal", "calibration", "key")
 
 
 def canonical(obj) -> str:
@@ -130,15 +131,17 @@ def _why_changed(r: Row, prev: str, expect_seq: int) -> str | None:
     return None
 
 
-def _why_unsigned(r: Row, n_legacy: int, trusted: set[str]) -> str | None:
-    """Return what is wrong with a record's signature (None when a trusted key signed it)."""
+def _why_unsigned(r: Row, n_legacy: int, keys: KeyState) -> str | None:
+    """Return what is wrong with a record's signature (None when it counts here).
+
+    It must verify for the key it names, that key must not have been retired or revoked by
+    an earlier record, and, when ``keys`` trusts a set of keys, be one of them.
+    """
     if r.signer is None:
         return None if r.seq <= n_legacy else "unsigned"
     if not r.signature_ok():
         return f"its signature does not verify for key {r.signer}"
-    if r.signer not in trusted:
-        return f"signed by a key not trusted here ({r.signer})"
-    return None
+    return keys.why_not(r.signer)
 
 
 @dataclass(frozen=True)
@@ -150,15 +153,18 @@ class ChainCheck:
     first_changed: int | None
 
 
-def check_chain(rows: list[Row], trusted: set[str]) -> ChainCheck:
+def check_chain(rows: list[Row], trusted: set[str] | None) -> ChainCheck:
     """Verify every record's sequence, link, hash, content hash and signature.
 
     Parameters
     ----------
     rows : list of Row
         The custody table ordered by ``seq``.
-    trusted : set of str
-        Key ids (``ed25519:<base64>``) whose signatures are accepted.
+    trusted : set of str or None
+        Key ids (``ed25519:<base64>``) whose signatures are accepted, every key one of them
+        handed over to, and every key one of them took over from, for its records before the
+        handover (``custody_keys``); None: any key's, as long as it verifies and
+        was not retired or revoked before (the signatures' consistency, not who signed).
 
     Returns
     -------
@@ -170,14 +176,29 @@ def check_chain(rows: list[Row], trusted: set[str]) -> ChainCheck:
     if n_legacy:
         notes.append(f"records #1..#{n_legacy} are unsigned legacy records (written before "
                      f"schema 4), sealed by signed record #{n_legacy + 1}")
+    if trusted is not None:
+        trusted = predecessors([(r.seq, r.prev_sha256, r.signer or "", r.payload)
+                                for r in rows if r.kind == "key"], trusted)
+    keys = KeyState(None if trusted is None else set(trusted))
     prev, expect = GENESIS_SHA256, 1
     for r in rows:
-        why = _why_changed(r, prev, expect) or _why_unsigned(r, n_legacy, trusted)
+        why = _why_changed(r, prev, expect) or _why_unsigned(r, n_legacy, keys)
+        if why is None and r.kind == "key":
+            why = keys.apply(r.seq, r.prev_sha256, r.signer or "", r.payload)
         if why:
             first = r.seq if first is None else first
             problems.append(f"custody record #{r.seq} ({r.kind} {r.subject[:16]}): {why}")
         prev, expect = r.record_sha256, r.seq + 1
     return ChainCheck(problems, notes, first)
+
+
+def signers(rows: list[Row]) -> dict[str, list[int]]:
+    """Return each key that signed records, with its first and last record's number."""
+    out: dict[str, list[int]] = {}
+    for r in rows:
+        if r.signer:
+            out.setdefault(r.signer, [r.seq, r.seq])[1] = r.seq
+    return out
 
 
 def check_head(rows: list[Row], head: str) -> list[str]:

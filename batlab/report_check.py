@@ -33,7 +33,7 @@ def seal_page(page: str) -> str:
 
 
 def _seal_problems(page: str, where: str, trusted: set[str]) -> list[str]:
-    """Problems with the page's seal (empty: a trusted key signed exactly this page)."""
+    """Problems with the page's seal (empty: a key of ``trusted`` signed exactly this page)."""
     m = _SEAL.search(page)
     if m is None:
         return [f"{where}: carries no seal (not written by batlab, or the seal was removed)"]
@@ -72,7 +72,7 @@ def _content_problems(conn: sa.Connection, page: str, where: str,
 
 
 def check_page(conn: sa.Connection, page_path: str | Path,
-               trusted: set[str]) -> list[str]:
+               trusted: set[str] | None) -> list[str]:
     """Return the problems of a report page against the registry (empty: it verifies).
 
     Parameters
@@ -81,8 +81,9 @@ def check_page(conn: sa.Connection, page_path: str | Path,
         The registry.
     page_path : str or Path
         The report's ``index.html``.
-    trusted : set of str
-        Key ids whose seals are accepted.
+    trusted : set of str or None
+        Key ids whose seals are accepted; None (no ``--trust``): any key that signed records
+        of this registry (consistency, not who signed).
 
     Returns
     -------
@@ -98,6 +99,10 @@ def check_page(conn: sa.Connection, page_path: str | Path,
     hashes = provenance_hashes(page)
     if "verdict_record" not in hashes:
         return [f"{page_path}: carries no verdict record (not a report of a stored inspection)"]
+    if trusted is None:
+        from batlab.registry import custody_rows
+
+        trusted = set(custody.signers(custody_rows(conn)))
     problems = _seal_problems(page, str(page_path), trusted)
     for key in ("verdict_record", "reference_record"):
         if key not in hashes:

@@ -10,6 +10,7 @@ Ed25519 (RFC 8032) over the exact bytes given, written as base64.
 from __future__ import annotations
 
 import base64
+import hashlib
 import os
 import sys
 from pathlib import Path
@@ -45,7 +46,9 @@ def key_path(env: dict | None = None) -> Path:
     return Path(base).expanduser() / "batlab" / "signing-key.pem"
 
 
-def _load(path: Path) -> Ed25519PrivateKey:
+def load_key(path: str | os.PathLike) -> Ed25519PrivateKey:
+    """Load an Ed25519 private key (PKCS#8 PEM); ValueError naming the file otherwise."""
+    path = Path(path)
     try:
         key = serialization.load_pem_private_key(path.read_bytes(), password=None)
     except (OSError, ValueError, TypeError) as exc:
@@ -53,6 +56,15 @@ def _load(path: Path) -> Ed25519PrivateKey:
     if not isinstance(key, Ed25519PrivateKey):
         raise ValueError(f"{path}: not an Ed25519 key")
     return key
+
+
+def write_key(path: str | os.PathLike, key: Ed25519PrivateKey) -> None:
+    """Write ``key`` to a new file ``path`` (PKCS#8 PEM, mode 0600); OSError if it exists."""
+    pem = key.private_bytes(serialization.Encoding.PEM, serialization.PrivateFormat.PKCS8,
+                            serialization.NoEncryption())
+    fd = os.open(path, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o600)
+    with os.fdopen(fd, "wb") as fh:
+        fh.write(pem)
 
 
 def signing_key(create: bool = True) -> Ed25519PrivateKey | None:
@@ -72,21 +84,17 @@ def signing_key(create: bool = True) -> Ed25519PrivateKey | None:
     """
     path = key_path()
     if path.exists():
-        return _load(path)
+        return load_key(path)
     if not create:
         return None
     key = Ed25519PrivateKey.generate()
-    pem = key.private_bytes(serialization.Encoding.PEM, serialization.PrivateFormat.PKCS8,
-                            serialization.NoEncryption())
     try:
         path.parent.mkdir(parents=True, exist_ok=True, mode=0o700)
-        fd = os.open(path, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o600)
+        write_key(path, key)
     except FileExistsError:  # another process made it first
-        return _load(path)
+        return load_key(path)
     except OSError as exc:
         raise ValueError(f"{path}: cannot create the signing key ({exc.strerror})") from None
-    with os.fdopen(fd, "wb") as fh:
-        fh.write(pem)
     print(f"batlab: created the lab's signing key {path} (keep it private; "
           "`batlab registry key` prints its public key)", file=sys.stderr)
     return key
@@ -123,29 +131,31 @@ def verify(key_id_text: str, data: bytes, signature: str) -> bool:
     return True
 
 
-def trusted_keys(trust_file: str | os.PathLike | None = None) -> set[str]:
-    """Return the key ids ``registry check`` trusts: the lab's own and a league's list.
+def fingerprint(key_id_text: str) -> str:
+    """Return a key's short name: the first 16 hex digits of the SHA-256 of its 32 bytes."""
+    raw = public_key(key_id_text).public_bytes(serialization.Encoding.Raw,
+                                               serialization.PublicFormat.Raw)
+    return hashlib.sha256(raw).hexdigest()[:16]
+
+
+def read_trust_file(trust_file: str | os.PathLike) -> set[str]:
+    """Return the key ids listed in a trust file.
 
     Parameters
     ----------
-    trust_file : path, optional
+    trust_file : path
         One ``ed25519:<base64>`` per line; blank lines and ``#`` comments are skipped.
 
     Returns
     -------
     set of str
-        Key ids; the lab's own key only if it exists (checking never creates one).
+        The key ids; ValueError naming the file and line of a malformed one.
     """
-    keys = set()
-    own = signing_key(create=False)
-    if own is not None:
-        keys.add(key_id(own.public_key()))
-    if trust_file is None:
-        return keys
     try:
         lines = Path(trust_file).read_text(encoding="utf-8").splitlines()
     except (OSError, UnicodeDecodeError) as exc:
         raise ValueError(f"{trust_file}: cannot read the trusted keys ({exc})") from None
+    keys = set()
     for n, line in enumerate(lines, 1):
         text = line.split("#", 1)[0].strip()
         if text:
@@ -153,4 +163,33 @@ def trusted_keys(trust_file: str | os.PathLike | None = None) -> set[str]:
                 keys.add(key_id(public_key(text)))
             except ValueError as exc:
                 raise ValueError(f"{trust_file}, line {n}: {exc}") from None
+    return keys
+
+
+def trusted_keys(trust_file: str | os.PathLike | None = None,
+                 own: bool = False) -> set[str] | None:
+    """Return the key ids a check trusts: exactly those it was given.
+
+    Parameters
+    ----------
+    trust_file : path, optional
+        A list of keys (``read_trust_file``).
+    own : bool
+        Trust this machine's own key too (``--trust-own``); it must exist.
+
+    Returns
+    -------
+    set of str or None
+        The keys listed and, if ``own``, the machine's; None when neither was given: the
+        check then verifies the signatures' consistency only, not who signed.
+    """
+    if trust_file is None and not own:
+        return None
+    keys = set() if trust_file is None else read_trust_file(trust_file)
+    if own:
+        mine = signing_key(create=False)
+        if mine is None:
+            raise ValueError(f"{key_path()}: --trust-own, but this machine holds no batlab "
+                             "key")
+        keys.add(key_id(mine.public_key()))
     return keys

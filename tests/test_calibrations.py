@@ -20,6 +20,7 @@ from batlab import registry as reg
 from batlab.fleet.calibrate import BatSpec, check_resumed, store_calibration, summary, upper95
 from batlab.version import code_version
 from tests.inspect_standins import SAMPLE, run_cli, stand_in_lab
+from updating.inspect.nested import STATISTIC_VERSION
 from updating.tails import measured_chance, pareto_tail
 
 SPEC = BatSpec(str(SAMPLE / "profile.csv"), str(SAMPLE / "meta.json"), 1)
@@ -122,7 +123,8 @@ def test_the_printed_chance_is_one_plus_b_over_n_plus_one(lab, capsys, data):
         assert ch["calibration"] == {
             "model": sample_model(), "n": n, "exceeding": b, "false_alarms": k,
             "false_alarm_upper95": upper95(k, n), "record_seq": stored.record_seq,
-            "statistic": "F", "code": code_version()}
+            "statistic": "F", "statistic_version": STATISTIC_VERSION, "code": code_version(),
+            "signer": None, "shipped": False}
         fa = json.loads(out)["false_alarm_rate"]
         assert fa["source"] == "calibration" and fa["measured"] == k / n
     code, out, _ = run_cli(stateless(lab, "--db", db), capsys)
@@ -240,7 +242,7 @@ def test_schema6_migration_on_postgresql(pg_url):
     calibrations table, no bats.code) is upgraded in place and takes calibrations."""
     import sqlalchemy as sa
 
-    with reg.open_registry(pg_url) as conn:  # created at 6, then taken back to 5's layout
+    with reg.open_registry(pg_url) as conn:  # created at 7, then taken back to 5's layout
         conn.exec_driver_sql("DROP TABLE calibrations")
         conn.exec_driver_sql("ALTER TABLE bats DROP COLUMN code")
         conn.exec_driver_sql("ALTER TABLE custody DROP CONSTRAINT custody_kind")
@@ -249,7 +251,7 @@ def test_schema6_migration_on_postgresql(pg_url):
         conn.exec_driver_sql("UPDATE alembic_version SET version_num = '0005'")
         conn.commit()
     with reg.open_registry(pg_url) as conn:
-        assert reg.schema_version(conn) == 6
+        assert reg.schema_version(conn) == 7
         assert "code" in {c["name"] for c in sa.inspect(conn).get_columns("bats")}
     stored = store(pg_url, [1.0, 2.0])
     with reg.open_registry(pg_url, create=False) as conn:

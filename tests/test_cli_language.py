@@ -9,7 +9,8 @@ import pytest
 
 from batlab.cli import COMMANDS, build_parser, main
 
-WRITES = {"acquire", "demo", "export", "fit", "fleet", "inspect", "report", "simulate"}
+WRITES = {"acquire", "demo", "export", "fit", "fleet", "inspect", "registry", "report",
+          "simulate"}
 """Commands that write a file or a folder the user names (``-o/--out``)."""
 PLOTS = {"diagnose", "fit", "inspect", "paper", "report"}
 """Commands that write figures (``--plots DIR``)."""

@@ -24,7 +24,9 @@ def schema4(tmp_path):
 
 
 def trusted() -> set[str]:
-    return signing.trusted_keys(DATA / "registry_schema4.trust")
+    """The schema-4 lab's key and this machine's (which signs the records added here)."""
+    signing.signing_key(create=True)
+    return signing.trusted_keys(DATA / "registry_schema4.trust", own=True)
 
 
 def test_schema4_registry_upgrades_in_place_and_keeps_verifying(schema4):
@@ -32,12 +34,12 @@ def test_schema4_registry_upgrades_in_place_and_keeps_verifying(schema4):
         assert raw.execute("SELECT max(version) FROM schema_version").fetchone()[0] == 4
         before = raw.execute("SELECT * FROM custody ORDER BY seq").fetchall()
     with reg.open_registry(schema4) as conn:
-        assert reg.schema_version(conn) == reg.SCHEMA_VERSION == 6
+        assert reg.schema_version(conn) == reg.SCHEMA_VERSION == 7
         tables = {r[0] for r in conn.exec_driver_sql(
             "SELECT name FROM sqlite_master WHERE type IN ('table', 'index')")}
         assert "schema_version" not in tables and "inspections_by_record" in tables
         assert conn.exec_driver_sql("SELECT version_num FROM alembic_version").all() == [
-            ("0006",)]
+            ("0007",)]
         assert conn.exec_driver_sql("SELECT * FROM custody ORDER BY seq").all() == before
         res = reg.check(conn, trusted(), OLD_HEAD)
         assert res.ok and res.head == OLD_HEAD, res.problems
@@ -70,6 +72,6 @@ def test_reading_a_schema4_registry_upgrades_it_once(schema4):
     """`batlab bats` (a read-only opening) on a writable schema-4 file migrates it first."""
     with reg.open_registry(schema4, create=False, readonly=True) as conn:
         assert [b.serial for b in reg.list_bats(conn)] == ["S4-1", "S4-2"]
-        assert reg.schema_version(conn) == 6
+        assert reg.schema_version(conn) == 7
     with sqlite3.connect(schema4) as raw:
-        assert raw.execute("SELECT version_num FROM alembic_version").fetchall() == [("0006",)]
+        assert raw.execute("SELECT version_num FROM alembic_version").fetchall() == [("0007",)]

@@ -144,7 +144,7 @@ def test_a_record_added_with_batlab_and_another_key_is_found(lab, copy, tmp_path
                        "--db", copy, "--again")
     assert code == 0, err
     monkeypatch.delenv("BATLAB_KEY")
-    code, problems = check(copy)
+    code, problems = check(copy, "--trust-own")
     assert code == 1 and any(f"signed by a key not trusted here ({intruder})" in p
                              for p in problems)
     # a league that trusts only the lab's key finds the same; trusting the intruder passes
@@ -188,7 +188,7 @@ def test_a_second_verdict_record_for_an_inspection_is_found(copy, tmp_path, monk
         seq = reg.chain.append_record(conn, "verdict", "1", None,
                                       reg.chain.canonical({**payload, "status": "not_altered"}))
     monkeypatch.delenv("BATLAB_KEY")
-    code, problems = check(copy)
+    code, problems = check(copy, "--trust-own")
     assert code == 1
     assert any(f"custody record #{seq} (verdict 1): signed by a key not trusted here "
                f"({intruder})" == p for p in problems), problems
@@ -209,12 +209,12 @@ def test_a_chain_recomputed_after_an_edit_is_found(copy, tmp_path, monkeypatch):
     key_id = _other_key(tmp_path, monkeypatch)
     rows = _rechain(copy, signing.signing_key())
     monkeypatch.delenv("BATLAB_KEY")
-    code, problems = check(copy)
+    code, problems = check(copy, "--trust-own")
     assert code == 1 and problems == [
         f"custody record #{s} ({kind} {subject[:16]}): signed by a key not trusted here "
         f"({key_id})" for s, kind, subject, *_ in rows]
     _rechain(copy)
-    code, problems = check(copy)
+    code, problems = check(copy, "--trust-own")
     assert code == 1 and problems == [
         f"custody record #{s} ({kind} {subject[:16]}): unsigned" for s, kind, subject, *_ in rows]
 

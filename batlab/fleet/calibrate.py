@@ -426,10 +426,11 @@ def store_calibration(conn, model: str, rows: list[dict], out: dict):
     """
     from batlab.pipeline.chance import STATISTIC
     from batlab.registry import add_calibration
+    from updating.inspect.nested import STATISTIC_VERSION
 
     keep = ("serial", "seed", "false_alarm", "inconclusive", "refused", "not_altered",
             "alarm_indices", "by_grip", "codes", "cpu_s_per_bat", "core_s_per_bat")
     summary = pipeline.jsonable({k: out.get(k) for k in keep})
     return add_calibration(conn, model, out["n"], out["false_alarms"],
                            out["false_alarm_upper95"], STATISTIC, summary, null_of(rows),
-                           pipeline.code_version())
+                           pipeline.code_version(), STATISTIC_VERSION)

@@ -89,12 +89,35 @@ def null_statistics(calibration) -> np.ndarray:
     return np.array([np.nan if v is None else float(v) for v in values], dtype=float)
 
 
+def unusable(calibration, model: str | None) -> str | None:
+    """Return why a calibration cannot state this release's chance (None: it can).
+
+    It must have measured the same statistic (``STATISTIC``) at the same version
+    (``STATISTIC_VERSION``); a calibration stored before versions were kept measured an
+    unknown one.
+    """
+    from updating.inspect.nested import STATISTIC_VERSION  # heavy: only with a calibration
+
+    if calibration.statistic != STATISTIC:
+        return (f"the calibration of bat model {model} measured {calibration.statistic}, "
+                f"not {STATISTIC}")
+    version = calibration.statistic_version
+    if version != STATISTIC_VERSION:
+        said = (f"version {version}" if version is not None
+                else "an unknown version (stored before versions were kept)")
+        return (f"the stored calibration measured {STATISTIC} {said}, this release computes "
+                f"version {STATISTIC_VERSION}: re-run fleet calibrate")
+    return None
+
+
 def _calibration_dict(calibration, exceeding: int | None) -> dict:
+    origin = calibration.origin or {}
     return {"model": calibration.model, "n": calibration.n, "exceeding": exceeding,
             "false_alarms": calibration.false_alarms,
             "false_alarm_upper95": calibration.false_alarm_upper95,
             "record_seq": calibration.record_seq, "statistic": calibration.statistic,
-            "code": calibration.code}
+            "statistic_version": calibration.statistic_version, "code": calibration.code,
+            "signer": origin.get("signer"), "shipped": bool(origin.get("shipped"))}
 
 
 def statement(verdict, model: str | None, calibration=None,
@@ -120,10 +143,10 @@ def statement(verdict, model: str | None, calibration=None,
     nominal = nominal_p(verdict)
     level = float(verdict.false_alarm_rate)
     stat = float(verdict.statistic) if verdict.statistic is not None else math.nan
-    if calibration is not None and calibration.statistic != STATISTIC:
-        unmeasured_why = (f"the calibration of bat model {model} measured "
-                          f"{calibration.statistic}, not {STATISTIC}")
-        calibration = None
+    if calibration is not None:
+        why_not = unusable(calibration, model)
+        if why_not:
+            unmeasured_why, calibration = why_not, None
     if calibration is None:
         why = unmeasured_why or (f"no calibration of bat model {model} is stored"
                                  if model else "no calibration was looked up")
@@ -161,13 +184,18 @@ def statement(verdict, model: str | None, calibration=None,
 def with_statement(result, conn=None, unmeasured_why: str | None = None):
     """Return an inspection's result with its chance stated (``statement``).
 
+    The calibration is the latest of the bat's model in the registry, unless a key record
+    there revoked or retired the key that signed an imported one; else the one batlab ships
+    (``registry.calibration_files.shipped_calibration``), if any.
+
     Parameters
     ----------
     result : InspectionResult
         The inspection (its ``model`` names the calibration).
     conn : sa.Connection or None
         The registry whose latest calibration of the model is used; None: no registry, the
-        chance is nominal and said unmeasured (``unmeasured_why``).
+        chance is stated from a shipped calibration or is nominal and said unmeasured
+        (``unmeasured_why``).
     unmeasured_why : str or None
         Why no registry was read, in words.
 
@@ -177,9 +205,37 @@ def with_statement(result, conn=None, unmeasured_why: str | None = None):
         The result with ``stated``.
     """
     calibration = None
-    if conn is not None and result.model:
-        from batlab.registry import latest_calibration
-
-        calibration = latest_calibration(conn, result.model)
+    if result.model:
+        calibration, why = _calibration_of(conn, result.model)
+        unmeasured_why = why or unmeasured_why
     return replace(result, stated=statement(result.verdict, result.model, calibration,
                                             unmeasured_why))
+
+
+def _calibration_of(conn, model: str):
+    """Return (the calibration to use, why none is) for bat model ``model``.
+
+    The registry's latest, else batlab's shipped one; the first of them that is usable
+    (``unusable``, and not signed by a key the registry's key records ended).
+    """
+    from batlab.registry import ended_keys, latest_calibration, shipped_calibration
+
+    why = None
+    if conn is not None:
+        calibration = latest_calibration(conn, model)
+        signer = (calibration.origin or {}).get("signer") if calibration else None
+        ended = ended_keys(conn) if signer else {}
+        if signer in ended:
+            why = (f"the calibration of bat model {model} was signed by key {signer}, "
+                   f"{ended[signer]}")
+        elif calibration is not None:
+            why = unusable(calibration, model)
+            if why is None:
+                return calibration, None
+    try:
+        shipped = shipped_calibration(model)
+    except ValueError as exc:  # a changed file, or one signed by an unlisted key
+        return None, why or f"batlab's shipped calibration was refused: {exc}"
+    if shipped is not None and unusable(shipped, model) is None:
+        return shipped, None
+    return None, why or (None if shipped is None else unusable(shipped, model))

@@ -11,11 +11,18 @@ The package, one job a module: ``common`` (where the registry is, hashes, time s
 ``migration`` and ``migrations/`` (Alembic), ``engine`` (opening a file or a server),
 ``health`` (the database's own storage check, run before any write),
 ``chain`` (appending and reading custody records), ``records`` (bats, files, inspections),
-``calibrations`` (bat models' measured nulls),
-``verify`` (``registry check``) and ``copy`` (``registry copy``). Layout, locking and
+``calibrations`` (bat models' measured nulls), ``calibration_files`` (a calibration as a
+signed file; the ones batlab ships), ``keys`` (a key rotated or revoked), ``witness`` (heads
+as statements, witnessed, checked), ``verify`` (``registry check``) and ``copy``
+(``registry copy``). Layout, locking and
 migrations: docs/registry.md.
 """
 
+from batlab.registry.calibration_files import (
+    export_calibration,
+    import_calibration,
+    shipped_calibration,
+)
 from batlab.registry.calibrations import (
     StoredCalibration,
     add_calibration,
@@ -30,6 +37,7 @@ from batlab.registry.chain import (
     custody_record,
     custody_rows,
     head,
+    lab_key,
     record_hash,
 )
 from batlab.registry.common import (
@@ -42,6 +50,7 @@ from batlab.registry.common import (
 )
 from batlab.registry.copy import CopyResult, copy_registry
 from batlab.registry.engine import connect, open_registry
+from batlab.registry.keys import KeyChange, ended_keys, revoke_key, rotate_key
 from batlab.registry.lock import transaction
 from batlab.registry.migration import SCHEMA_VERSION, migrate, schema_version
 from batlab.registry.records import (
@@ -67,6 +76,7 @@ from batlab.registry.records import (
     stored_file,
 )
 from batlab.registry.verify import CheckResult, check
+from batlab.registry.witness import head_statement, read_witnessed, witness_head
 
 __all__ = [
     "BUSY_TIMEOUT_S", "GENESIS_SHA256", "SCHEMA_VERSION", "BatRecord", "BatSummary",
@@ -78,5 +88,7 @@ __all__ = [
     "encode_modes", "get_bat", "get_inspection", "has_bat", "has_file", "head", "history",
     "inspection_by_record", "is_url", "list_bats", "migrate", "now_utc", "open_registry",
     "record_hash", "schema_version", "set_report_path", "sha256_bytes", "shown", "store_file",
-    "stored_file", "transaction",
+    "stored_file", "transaction", "KeyChange", "ended_keys", "export_calibration",
+    "head_statement", "import_calibration", "lab_key", "read_witnessed", "revoke_key",
+    "rotate_key", "shipped_calibration", "witness_head",
 ]

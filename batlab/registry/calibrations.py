@@ -51,6 +51,12 @@ class StoredCalibration:
         UTC time stamp.
     record_seq : int or None
         Its custody record.
+    statistic_version : int or None
+        The version of the statistic it measured (``STATISTIC_VERSION`` of the code that ran
+        it; None: stored before versions were kept, unknown).
+    origin : dict or None
+        An imported calibration's signed file (``signer``, ``signature``, ``file_sha256``,
+        ``batlab.registry.calibration_files``); None for one run here.
     """
 
     id: int
@@ -64,11 +70,15 @@ class StoredCalibration:
     code: str
     calibrated_at: str
     record_seq: int | None = None
+    statistic_version: int | None = None
+    origin: dict | None = None
 
 
 def add_calibration(conn: sa.Connection, model: str, n: int, false_alarms: int,
                     false_alarm_upper95: float, statistic: str, summary: dict, null: dict,
-                    code: str) -> StoredCalibration:
+                    code: str, statistic_version: int | None,
+                    origin: dict | None = None,
+                    calibrated_at: str | None = None) -> StoredCalibration:
     """Store a calibration and append its custody record, in one transaction.
 
     Parameters
@@ -77,6 +87,12 @@ def add_calibration(conn: sa.Connection, model: str, n: int, false_alarms: int,
         The registry.
     model, n, false_alarms, false_alarm_upper95, statistic, summary, null, code
         As ``StoredCalibration`` holds them (JSON types, no NaN: a missing value is None).
+    statistic_version : int or None
+        The version of the statistic the rows measured.
+    origin : dict or None
+        An imported calibration's signer and signature (None: run here).
+    calibrated_at : str or None
+        When it was run (default now; an import keeps the original's).
 
     Returns
     -------
@@ -94,7 +110,8 @@ def add_calibration(conn: sa.Connection, model: str, n: int, false_alarms: int,
            "false_alarm_upper95": float(false_alarm_upper95), "statistic": statistic,
            "summary_json": json.dumps(summary, allow_nan=False),
            "null_json": json.dumps(null, allow_nan=False), "code": code,
-           "calibrated_at": now_utc()}
+           "calibrated_at": calibrated_at or now_utc(), "statistic_version": statistic_version,
+           "origin_json": None if origin is None else json.dumps(origin)}
     with transaction(conn):
         new_id = int(conn.execute(sa.insert(calibrations).values(**row))
                      .inserted_primary_key[0])
@@ -117,7 +134,8 @@ def _calibration(conn: sa.Connection, row) -> StoredCalibration:
                          "registry check`)")
     return StoredCalibration(p["id"], p["model"], p["n"], p["false_alarms"],
                              p["false_alarm_upper95"], p["statistic"], p["summary"], p["null"],
-                             p["code"], p["calibrated_at"], row[1])
+                             p["code"], p["calibrated_at"], row[1], p.get("statistic_version"),
+                             p.get("origin"))
 
 
 def get_calibration(conn: sa.Connection, calibration_id: int) -> StoredCalibration:

@@ -30,6 +30,11 @@ canonical = custody.canonical
 _KEYS: dict[str, object] = {}
 
 
+def forget_keys() -> None:
+    """Forget the keys loaded (after the lab's key file was replaced: a rotation)."""
+    _KEYS.clear()
+
+
 def lab_key():
     """Return the lab's signing key (created on first write), loaded once per key file."""
     path = str(signing.key_path())
@@ -65,18 +70,24 @@ def append_legacy_record(conn: sa.Connection, kind: str, subject: str,
     return seq
 
 
+def next_record(conn: sa.Connection) -> tuple[int, str]:
+    """Return the number and ``prev_sha256`` the next record will have (inside a transaction)."""
+    seq, prev = _last_record(conn)
+    return seq + 1, prev
+
+
 def append_record(conn: sa.Connection, kind: str, subject: str,
-                  content_sha256: str | None, payload: str | None) -> int:
+                  content_sha256: str | None, payload: str | None, key=None) -> int:
     """Append a signed custody record (inside the caller's transaction).
 
-    ``content_sha256`` defaults to the hash of ``payload``; returns the record's number.
+    ``content_sha256`` defaults to the hash of ``payload``; ``key`` (an Ed25519 private key)
+    to the lab's; returns the record's number.
     """
     if content_sha256 is None:
         content_sha256 = sha256_bytes(payload.encode("utf-8"))
-    key = lab_key()
+    key = lab_key() if key is None else key
     signer = signing.key_id(key.public_key())
-    seq, prev = _last_record(conn)
-    seq += 1
+    seq, prev = next_record(conn)
     stamp = now_utc()
     data = custody.record_bytes(seq, kind, subject, content_sha256, prev, stamp, signer)
     conn.execute(sa.insert(custody_table).values(
@@ -131,16 +142,25 @@ def inspection_payload(conn: sa.Connection, inspection_id: int) -> dict:
 def calibration_payload(conn: sa.Connection, calibration_id: int) -> dict:
     """Return what a calibration record holds: the calibration's row as stored now.
 
-    All but ``record_seq``; the row's JSON columns as the objects they hold.
+    All but ``record_seq``; the row's JSON columns as the objects they hold;
+    ``statistic_version`` and ``origin`` (schema 7) only when set.
     """
     c = calibrations.c
     row = conn.execute(sa.select(c.id, c.model, c.n, c.false_alarms, c.false_alarm_upper95,
                                  c.statistic, c.summary_json, c.null_json, c.code,
-                                 c.calibrated_at).where(c.id == calibration_id)).first()
-    return {"id": row[0], "model": row[1], "n": row[2], "false_alarms": row[3],
-            "false_alarm_upper95": row[4], "statistic": row[5],
-            "summary": json.loads(row[6]), "null": json.loads(row[7]), "code": row[8],
-            "calibrated_at": row[9]}
+                                 c.calibrated_at, c.statistic_version, c.origin_json)
+                       .where(c.id == calibration_id)).first()
+    out = {"id": row[0], "model": row[1], "n": row[2], "false_alarms": row[3],
+           "false_alarm_upper95": row[4], "statistic": row[5],
+           "summary": json.loads(row[6]), "null": json.loads(row[7]), "code": row[8],
+           "calibrated_at": row[9]}
+    # schema 7's columns only when they hold a value, so a calibration stored before still
+    # equals its record
+    if row[10] is not None:
+        out["statistic_version"] = row[10]
+    if row[11] is not None:
+        out["origin"] = json.loads(row[11])
+    return out
 
 
 @dataclass(frozen=True)

@@ -73,7 +73,7 @@ def _refuse_unverified(res, where: str, when: str) -> None:
                          "`batlab registry check` lists all); nothing copied")
 
 
-def copy_registry(src: sa.Connection, dst: sa.Connection, trusted: set[str],
+def copy_registry(src: sa.Connection, dst: sa.Connection, trusted: set[str] | None,
                   source: str = "source", destination: str = "destination") -> CopyResult:
     """Copy registry ``src`` into ``dst`` (verbatim into an empty one, else appended).
 
@@ -81,9 +81,10 @@ def copy_registry(src: sa.Connection, dst: sa.Connection, trusted: set[str],
     ----------
     src, dst : sqlalchemy.Connection
         Open registries (either dialect); ``src`` is only read.
-    trusted : set of str
+    trusted : set of str or None
         Key ids accepted as signers on both sides (the copying lab's own is added for
-        the destination: it signs the closing seal).
+        the destination: it signs the closing seal); None: the signatures' consistency
+        only (``registry check`` without ``--trust``).
     source, destination : str
         How messages name the two registries.
 
@@ -110,8 +111,8 @@ def copy_registry(src: sa.Connection, dst: sa.Connection, trusted: set[str],
             append_record(dst, "seal", "copy", None, canonical({
                 "copied_from": before.head, "source_signers": signers,
                 "source_records": before.n_records, "mode": mode, "code": code_version()}))
-            _refuse_unverified(check(dst, trusted | {lab_key_id()}), destination,
-                               "after the copy")
+            after = None if trusted is None else trusted | {lab_key_id()}
+            _refuse_unverified(check(dst, after), destination, "after the copy")
             counts = (_count(src, bats), _count(src, files), _count(src, inspections))
             return CopyResult(mode, *counts, before.n_records, before.head, head(dst))
 

@@ -1,6 +1,6 @@
 """The registry's schema version and its migrations (Alembic; scripts in ``migrations/``).
 
-Revisions are numbered ``0001``..``0006``: revision N brings a registry to schema version N.
+Revisions are numbered ``0001``..``0007``: revision N brings a registry to schema version N.
 A new registry is created at the head from ``schema.metadata`` and stamped (Alembic's
 "create_all, then stamp head"); a registry made before Alembic (a ``schema_version`` table
 and no ``alembic_version``) is stamped at the version it names, then upgraded. Every step runs
@@ -16,7 +16,7 @@ import sqlalchemy as sa
 
 from batlab.registry.lock import transaction
 
-SCHEMA_VERSION = 6
+SCHEMA_VERSION = 7
 MIGRATIONS_DIR = Path(__file__).with_name("migrations")
 
 

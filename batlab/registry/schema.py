@@ -1,4 +1,4 @@
-"""The registry's tables, one SQLAlchemy Core metadata for SQLite and PostgreSQL (schema 6).
+"""The registry's tables, one SQLAlchemy Core metadata for SQLite and PostgreSQL (schema 7).
 
 ``files`` keeps every judged file once by its SHA-256; ``bats`` and ``stations`` the
 registered bats; ``inspections`` every stored verdict; ``calibrations`` the measured nulls of
@@ -75,6 +75,8 @@ calibrations = sa.Table(
     sa.Column("code", sa.Text, nullable=False),
     sa.Column("calibrated_at", sa.Text, nullable=False),
     sa.Column("record_seq", sa.Integer),
+    sa.Column("statistic_version", sa.Integer),  # F's version (NULL before schema 7: unknown)
+    sa.Column("origin_json", sa.Text),  # an imported calibration's signer and signature
     sa.Index("calibrations_by_model", "model", "id"),
     sqlite_autoincrement=True,
 )

@@ -8,6 +8,7 @@ from dataclasses import dataclass
 import sqlalchemy as sa
 
 from batlab import custody, signing
+from batlab.registry.calibration_files import origin_problems
 from batlab.registry.chain import (
     bat_payload,
     calibration_payload,
@@ -18,6 +19,7 @@ from batlab.registry.chain import (
 from batlab.registry.common import sha256_bytes
 from batlab.registry.health import storage_problems
 from batlab.registry.schema import bats, calibrations, files, inspections
+from batlab.registry.witness import check_witnessed
 
 
 @dataclass(frozen=True)
@@ -43,25 +45,26 @@ class CheckResult:
 
 
 def check(conn: sa.Connection, trusted: set[str] | None = None,
-          head_seen: str | None = None) -> CheckResult:
+          head_seen: str | None = None, witnessed: list[dict] | None = None) -> CheckResult:
     """Verify the registry.
 
     The database's integrity (``health.storage_problems``, thorough: SQLite's
     ``integrity_check``) and, on SQLite, foreign keys (a PostgreSQL server enforces them),
     every stored file against its SHA-256, every file an inspection or bat names is present,
-    the custody chain (each record's hash, link, content hash and signature by a trusted key:
-    ``trusted``, default the lab's own key), coverage (every bat, file, inspection and calibration
+    the custody chain (each record's hash, link, content hash and signature: by one of the
+    keys ``trusted`` or a key one of them handed over to; with ``trusted`` None by any key
+    not retired or revoked before it, said in a note: consistency, not who signed), every
+    imported calibration's signature, coverage (every bat, file, inspection and calibration
     row has its one custody record, every record's row exists) and, with ``head_seen``
-    (``SEQ:SHA256`` noted earlier), that the chain still holds that record. Names the first
-    changed record; a registry too damaged to read is one problem naming the database's
-    complaint.
+    (``SEQ:SHA256`` noted earlier), that the chain still holds that record; with
+    ``witnessed`` (countersigned heads, ``registry.witness``), that the chain extends each
+    and that no two of one key fork. Names the first changed record; a registry too damaged
+    to read is one problem naming the database's complaint.
     """
-    if trusted is None:
-        trusted = signing.trusted_keys()
     if head_seen is not None:
         custody.parse_head(head_seen)
     try:
-        return _check(conn, trusted, head_seen)
+        return _check(conn, trusted, head_seen, witnessed or [])
     except (sa.exc.DBAPIError, sqlite3.DatabaseError) as exc:
         reason = " ".join(str(getattr(exc, "orig", None) or exc).split())
         try:
@@ -72,7 +75,8 @@ def check(conn: sa.Connection, trusted: set[str] | None = None,
                            None, None)
 
 
-def _check(conn: sa.Connection, trusted: set[str], head_seen: str | None) -> CheckResult:
+def _check(conn: sa.Connection, trusted: set[str] | None, head_seen: str | None,
+           witnessed: list[dict]) -> CheckResult:
     problems: list[str] = []
     notes: list[str] = []
     files_by_sha = _check_files(conn, problems, notes)
@@ -83,12 +87,35 @@ def _check(conn: sa.Connection, trusted: set[str], head_seen: str | None) -> Che
     changed = _check_coverage(conn, rows, files_by_sha, problems)
     if head_seen is not None:
         problems += custody.check_head(rows, head_seen)
-    first = min([s for s in (chain.first_changed, *changed) if s is not None], default=None)
+    problems += origin_problems(conn)
+    seen = check_witnessed(rows, witnessed, trusted)
+    problems += seen.problems
+    notes += seen.notes
+    if trusted is None and rows:
+        notes.append(consistency_note(rows))
+    first = min([s for s in (chain.first_changed, *changed, seen.first_changed)
+                 if s is not None], default=None)
     last = rows[-1] if rows else None
     return CheckResult(len(rows), len(files_by_sha), problems, notes, first,
                        None if last is None else last.record_sha256,
                        None if last is None else custody.head_text(last.seq,
                                                                    last.record_sha256))
+
+
+def _fingerprint(key: str) -> str:
+    try:
+        return f"fingerprint {signing.fingerprint(key)}, "
+    except ValueError:  # a malformed signer: its records fail already
+        return ""
+
+
+def consistency_note(rows: list[custody.Row]) -> str:
+    """Say that no key was trusted: the signatures were checked for consistency only."""
+    who = "; ".join(f"{k} ({_fingerprint(k)}records #{a}..#{b})"
+                    for k, (a, b) in custody.signers(rows).items())
+    return ("no --trust given: the signatures were checked for consistency only (each "
+            "verifies for the key it names, none by a retired or revoked key), not who signed; "
+            f"signed by {who or 'no key'}")
 
 
 def _check_files(conn: sa.Connection, problems: list[str], notes: list[str]) -> dict:

@@ -373,3 +373,28 @@ def weigh_evidence(predict: ChangePredictor, diff: Differences, space: ParamSpac
         evidence = replace(evidence, drift_beyond_bounds=_bounds_matter(
             predict, diff, space, hyp, test.n))
     return evidence, kinds
+
+
+STATISTIC_VERSION = 2
+"""The version of the statistic F the verdict states and a calibration measures (version 1:
+F with the noise the best local change leaves; 2: with the noise H0 leaves, ``nested_test``).
+A stored calibration is used only by code of the same version (batlab.pipeline.chance).
+Bump it whenever F's definition changes: whenever the code named in ``STATISTIC_DEFINITION``
+changes (its docstrings and comments aside), and then record that code's new
+``STATISTIC_SOURCE_SHA256`` here and the new version's line in ``RECORDED`` of
+tests/test_statistic_version.py, which fails until all three are done and prints the hash."""
+
+STATISTIC_DEFINITION = (
+    "updating.inspect.nested.nested_f", "updating.inspect.nested.nested_test",
+    "updating.inspect.nested.fit_hypotheses", "updating.inspect.nested.NOISE_PASSES",
+    "updating.inspect.nested.INITIAL_SHAPE_NOISE", "updating.inspect.hypotheses.shape_noise",
+    "updating.inspect.hypotheses.fit_null", "updating.inspect.hypotheses.Residual",
+    "updating.inspect.hypotheses.SHAPE_NOISE_FLOOR",
+    "updating.inspect.hypotheses.SHAPE_NOISE_PRIOR_POINTS", "updating.inspect.hypotheses.N_NULL",
+    "updating.inspect.local_change.N_SEGMENT",
+)
+"""The code that defines F: the test, the fits it compares and their weights and noise."""
+
+STATISTIC_SOURCE_SHA256 = "9c90460e3ecf52108754f59c75ff85010f8ad19b1a795b79e655e22a1618799e"
+"""SHA-256 of ``STATISTIC_DEFINITION``'s code (tests/test_statistic_version.py), recorded
+with ``STATISTIC_VERSION``."""
