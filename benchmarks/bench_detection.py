@@ -3,7 +3,7 @@
     python benchmarks/bench_detection.py [--bats 6] [--diameters 0.5,0.75,1.0,1.25]
         [--lengths 3,6,9,12] [--ratio 0.3] [--kinds deep,empty,end_plug,partial,small,neutral]
         [--lab-clean 100] [--lab-bats 0] [--seed 2] [--workers 2] [--scheduler ADDR]
-        [--no-retest-meta]
+        [--no-retest-meta] [--coherence]
         [--out rows.json]
 
 Paired design on nuisance-rich virtual bats (``updating.simulate.field_fleet``, every
@@ -73,6 +73,9 @@ def main(argv=None) -> int:
     ap.add_argument("--scheduler", default=None, metavar="ADDRESS",
                     help="a running Dask scheduler (tcp://HOST:PORT) instead of a local cluster")
     ap.add_argument("--no-retest-meta", action="store_true")
+    ap.add_argument("--coherence", action="store_true",
+                    help="the tests' files carry their coherence (5 hits a point): the "
+                         "noise measured (docs/noise.md)")
     ap.add_argument("--out", default=None, help="write the result rows (JSON) here")
     args = ap.parse_args(argv)
 
@@ -82,7 +85,8 @@ def main(argv=None) -> int:
         limit = clean_balance_limit_in(args.lab_clean, args.seed)
         print(lab_only_report(args.lab_bats, args.seed + 1, grid, args.ratio, kinds, limit))
         return 0
-    jobs = detection_jobs(args.bats, args.seed, grid, args.ratio, kinds, args.no_retest_meta)
+    jobs = detection_jobs(args.bats, args.seed, grid, args.ratio, kinds, args.no_retest_meta,
+                          args.coherence)
     rows = [r for bat in fleet_map(detection_rows, jobs, args.workers, "bat", args.scheduler)
             for r in bat]
     save_rows(args.out, rows)

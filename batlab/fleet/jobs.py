@@ -82,7 +82,8 @@ def false_alarm_row_without_meta(job: dict) -> dict:
 
 
 def detection_jobs(n_bats: int, seed: int, grid: list[tuple[float, float]], ratio: float,
-                   kinds: list[str], no_retest_meta: bool) -> list[dict]:
+                   kinds: list[str], no_retest_meta: bool, coherence: bool = False
+                   ) -> list[dict]:
     """Plan the detection study's bats: bat b has serial DET-b and seed ``seed * 100019 + b``.
 
     Parameters
@@ -95,15 +96,19 @@ def detection_jobs(n_bats: int, seed: int, grid: list[tuple[float, float]], rati
         As ``updating.simulate.detection.retests`` takes them.
     no_retest_meta : bool
         Do not pass retest.json.
+    coherence : bool
+        The tests' files carry their coherence (``nuisances.OPTIONAL_NUISANCES``): the noise
+        measured, not estimated (docs/noise.md). The same bats either way.
 
     Returns
     -------
     list of dict
         One job per bat.
     """
+    nuisances = NUISANCES + (("coherence",) if coherence else ())
     return [{"serial": f"DET-{b + 1:03d}", "seed": seed * 100019 + b, "grid": grid,
-             "ratio": ratio, "kinds": kinds, "no_retest_meta": no_retest_meta}
-            for b in range(n_bats)]
+             "ratio": ratio, "kinds": kinds, "no_retest_meta": no_retest_meta,
+             "nuisances": nuisances} for b in range(n_bats)]
 
 
 def register_and_inspect(job: dict) -> list[dict]:
@@ -121,7 +126,7 @@ def register_and_inspect(job: dict) -> list[dict]:
         ``truth["grid"]`` true.
     """
     rng = np.random.default_rng(job["seed"])
-    case = draw_case(rng, "none", NUISANCES, None, job["serial"])
+    case = draw_case(rng, "none", job.get("nuisances", NUISANCES), None, job["serial"])
     rows = []
     n_grid = len(job["grid"])
     with tempfile.TemporaryDirectory(prefix="batlab-det-") as tmp:

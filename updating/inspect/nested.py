@@ -375,9 +375,10 @@ def weigh_evidence(predict: ChangePredictor, diff: Differences, space: ParamSpac
     return evidence, kinds
 
 
-STATISTIC_VERSION = 2
+STATISTIC_VERSION = 3
 """The version of the statistic F the verdict states and a calibration measures (version 1:
-F with the noise the best local change leaves; 2: with the noise H0 leaves, ``nested_test``).
+F with the noise the best local change leaves; 2: with the noise H0 leaves, ``nested_test``;
+3: with the noise both tests measured when their files carry coherence, docs/noise.md).
 A stored calibration is used only by code of the same version (batlab.pipeline.chance).
 Bump it whenever F's definition changes: whenever the code named in ``STATISTIC_DEFINITION``
 changes (its docstrings and comments aside), and then record that code's new
@@ -392,9 +393,12 @@ STATISTIC_DEFINITION = (
     "updating.inspect.hypotheses.SHAPE_NOISE_FLOOR",
     "updating.inspect.hypotheses.SHAPE_NOISE_PRIOR_POINTS", "updating.inspect.hypotheses.N_NULL",
     "updating.inspect.local_change.N_SEGMENT",
+    "updating.inspect.changes.measured_shape_noise", "updating.inspect.changes.MODEL_SHAPE_ERROR",
+    "ema.shapes.noise.shape_noise_from_coherence", "ema.shapes.noise.line_variance",
+    "ema.shapes.noise.UNKNOWN_AVERAGES",
 )
 """The code that defines F: the test, the fits it compares and their weights and noise."""
 
-STATISTIC_SOURCE_SHA256 = "9c90460e3ecf52108754f59c75ff85010f8ad19b1a795b79e655e22a1618799e"
+STATISTIC_SOURCE_SHA256 = "6f795621ddb74cdf0c7ccf3159e34d28a3bc8e26eeae89826a328f4d5d127d0b"
 """SHA-256 of ``STATISTIC_DEFINITION``'s code (tests/test_statistic_version.py), recorded
 with ``STATISTIC_VERSION``."""

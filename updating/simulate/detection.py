@@ -19,7 +19,10 @@ from updating.simulate.lab_methods import lab_statistics, lab_verdicts
 from updating.simulate.nuisances import NUISANCES
 from updating.simulate.scoring import roc_auc
 
-METHODS = ("batlab", "scale", "scale+balance")
+METHODS = ("batlab", "batlab screen", "scale", "scale+balance")
+"""The methods compared: batlab's verdict (``altered``), batlab's screen (``altered`` or
+``inconclusive``: the bat goes to the X-ray), a scale, a scale and a balance point."""
+LAB_METHODS = METHODS[2:]
 
 
 def retests(case: FieldCase, grid: list[tuple[float, float]], ratio: float, kinds: list[str],
@@ -187,7 +190,8 @@ def _roc_lines(clean: list[dict], altered: list[dict]) -> list[str]:
 def detection_report(rows: list[dict], balance_limit_in: float) -> str:
     """Report the detection study in markdown.
 
-    Adds to every row ``said``: each method's call (batlab: ``status`` == "altered").
+    Adds to every row ``said``: each method's call (batlab: ``status`` == "altered"; its
+    screen: "altered" or "inconclusive").
 
     Parameters
     ----------
@@ -204,8 +208,9 @@ def detection_report(rows: list[dict], balance_limit_in: float) -> str:
         the readings table, ROC areas and inspect times.
     """
     for r in rows:
-        r["said"] = {"batlab": r["status"] == "altered", **lab_verdicts(r["truth"],
-                                                                        balance_limit_in)}
+        r["said"] = {"batlab": r["status"] == "altered",
+                     "batlab screen": r["status"] in ("altered", "inconclusive"),
+                     **lab_verdicts(r["truth"], balance_limit_in)}
     clean = [r for r in rows if r["kind"] == "none"]
     grid = [r for r in rows if r["truth"].get("grid")]
     lines = _false_alarm_lines(clean, balance_limit_in)
@@ -261,5 +266,5 @@ def lab_only_report(n: int, seed: int, grid: list[tuple[float, float]], ratio: f
     lines = [f"| re-test ({n} bats, readings only) | scale | scale+balance |", "|---|---|---|"]
     for key, vs in said.items():
         lines.append(f"| {key} | " + " | ".join(
-            f"{100 * np.mean([v[m] for v in vs]):.0f} %" for m in METHODS[1:]) + " |")
+            f"{100 * np.mean([v[m] for v in vs]):.0f} %" for m in LAB_METHODS) + " |")
     return "\n".join(lines)
