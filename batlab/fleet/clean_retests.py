@@ -129,7 +129,7 @@ def draw_bat(rng: np.random.Generator, profile, nominal, meta: dict) -> CleanBat
                       sensor_mass_kg=rng.uniform(0.002, 0.006),
                       bungee_k_n_per_m=rng.uniform(100.0, 400.0), rel_noise=rec["noise"],
                       wood=nz.combine(billet, t_field), cavities=(cup,), e_over_g_t=eg_t,
-                      theta_deg=theta)
+                      theta_deg=theta, n_averages=nz.COHERENCE_AVERAGES)
     base = _weighed(base, meta.get("weight_lb"), rng)
     rec["rho_scale"] = base.material.rho_kg_m3 / nominal.rho_kg_m3
     registered = dict(meta)
