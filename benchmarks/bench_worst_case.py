@@ -24,8 +24,10 @@ several joined by +, "none", "all"; default: none, each alone, all); "all" gives
 handle in turn (bare, legal grip, bare, legal grip, bare, tar past 18 in), as ``search``
 does. ``--cache DIR`` keeps the modal fits and calibration of each bat and vector, so a run
 after a change of the inspection alone re-scores in about a third of the time.
-``--no-retest-meta`` inspects without retest.json. Rows (JSON lines) go to ``--out`` (the
-search's also to ``<out>.log`` as they are made), tables to stdout, progress to stderr.
+``--no-retest-meta`` inspects without retest.json; ``--coherence`` gives the tests' files
+their coherence (5 hits a point: the noise measured, docs/noise.md). Rows (JSON lines) go to
+``--out`` (the search's also to ``<out>.log`` as they are made), tables to stdout, progress
+to stderr.
 """
 
 from __future__ import annotations
@@ -61,7 +63,8 @@ def ablation_jobs(args) -> list[dict]:
     groups = args.groups.split(",") if args.groups else ["none", *wide.WIDE_NUISANCES, "all"]
     seeds = wide.fleet_seeds(args.bats, args.purpose, args.offset)
     return [{"group": g, "seed": s, "nuisances": group_nuisances(g, i),
-             "with_meta": not args.no_retest_meta, "cache": args.cache}
+             "with_meta": not args.no_retest_meta, "coherence": args.coherence,
+             "cache": args.cache}
             for g in groups for i, s in enumerate(seeds)]
 
 
@@ -71,6 +74,7 @@ def search_jobs(args) -> list[dict]:
     return [{"seed": s, "handle": wide.HANDLES[i % len(wide.HANDLES)],
              "nuisances": wide.fleet_nuisances(i), "budget": args.budget,
              "starts": args.starts, "with_meta": not args.no_retest_meta,
+             "coherence": args.coherence,
              "cache": args.cache, "log": log} for i, s in enumerate(seeds)]
 
 
@@ -112,6 +116,9 @@ def main(argv=None) -> int:
     ap.add_argument("--scheduler", default=None, help="a running Dask scheduler's address")
     ap.add_argument("--cache", default=None, help="keep the fits of every bat and vector here")
     ap.add_argument("--no-retest-meta", action="store_true")
+    ap.add_argument("--coherence", action="store_true",
+                    help="the tests' files carry their coherence: the noise measured "
+                         "(docs/noise.md)")
     ap.add_argument("--out", default=None, help="JSON lines of the rows")
     args = ap.parse_args(argv)
     if args.purpose == "validation":
@@ -127,7 +134,8 @@ def main(argv=None) -> int:
             fn, jobs = ablation_row, ablation_jobs(args)
         else:
             fn, jobs = band_edge_row, [
-                {"seed": s, "with_meta": not args.no_retest_meta, "cache": args.cache}
+                {"seed": s, "with_meta": not args.no_retest_meta, "coherence": args.coherence,
+                 "cache": args.cache}
                 for s in wide.fleet_seeds(args.bats, args.purpose, args.offset)]
         rows = fleet_map(fn, jobs, args.workers, "bat", args.scheduler)
         write_rows(args.out, rows)

@@ -29,19 +29,21 @@ KEEP = ("status", "F", "p", "reasons", "finding", "candidate", "weight_change_re
 """The inspection row's keys an evaluation keeps."""
 
 
-def _key(seed: int, settings: dict, with_meta: bool) -> str:
+def _key(seed: int, settings: dict, with_meta: bool, coherence: bool) -> str:
     """Return a cache file's name for a bat under settings."""
-    text = json.dumps([seed, settings, with_meta], sort_keys=True, default=float)
+    text = json.dumps([seed, settings, with_meta] + ([True] if coherence else []),
+                      sort_keys=True, default=float)
     return f"{seed}_{hashlib.sha256(text.encode()).hexdigest()[:16]}.pkl"
 
 
-def _built(seed: int, settings: dict, with_meta: bool, cache: Path | None) -> dict:
+def _built(seed: int, settings: dict, with_meta: bool, cache: Path | None,
+           coherence: bool = False) -> dict:
     """Build a wide bat's inspection inputs (from the cache when there)."""
-    path = None if cache is None else Path(cache) / _key(seed, settings, with_meta)
+    path = None if cache is None else Path(cache) / _key(seed, settings, with_meta, coherence)
     if path is not None and path.exists():
         return pickle.loads(path.read_bytes())
     try:
-        case = wide.wide_case(seed, settings)
+        case = wide.wide_case(seed, settings, coherence=coherence)
     except ValueError as exc:
         return {"seed": seed, "kind": "none", "integrity": None,
                 "error": ("sim_error", str(exc))}
@@ -55,7 +57,8 @@ def _built(seed: int, settings: dict, with_meta: bool, cache: Path | None) -> di
 
 
 def evaluate_wide(seed: int, unit: np.ndarray, nuisances, with_meta: bool = True,
-                  cache: Path | None = None) -> tuple[float | None, str, dict]:
+                  cache: Path | None = None, coherence: bool = False
+                  ) -> tuple[float | None, str, dict]:
     """Inspect the bat of ``seed`` under the nuisance vector ``unit``.
 
     Parameters
@@ -70,6 +73,8 @@ def evaluate_wide(seed: int, unit: np.ndarray, nuisances, with_meta: bool = True
         Write and pass retest.json.
     cache : Path or None
         A folder keeping the built inspection inputs.
+    coherence : bool
+        The tests' files carry their coherence (docs/noise.md).
 
     Returns
     -------
@@ -82,13 +87,15 @@ def evaluate_wide(seed: int, unit: np.ndarray, nuisances, with_meta: bool = True
         The inspection row's main keys (``KEEP``), the settings and what they made (the
         truth's ``drawn``).
     """
-    return evaluate_settings(seed, wide.settings_of(unit, nuisances), with_meta, cache)
+    return evaluate_settings(seed, wide.settings_of(unit, nuisances), with_meta, cache,
+                             coherence)
 
 
 def evaluate_settings(seed: int, settings: dict, with_meta: bool = True,
-                      cache: Path | None = None) -> tuple[float | None, str, dict]:
+                      cache: Path | None = None, coherence: bool = False
+                      ) -> tuple[float | None, str, dict]:
     """Inspect the bat of ``seed`` under physical ``settings`` (``evaluate_wide``'s result)."""
-    bat = _built(seed, settings, with_meta, cache)
+    bat = _built(seed, settings, with_meta, cache, coherence)
     full = score_one(bat, with_map=False)
     row = {k: full[k] for k in KEEP if k in full}
     row["settings"] = settings
@@ -110,7 +117,8 @@ def band_edge_row(job: dict) -> dict:
     except ValueError as exc:
         return {**out, "status": "sim_error", "F": None, "reasons": [str(exc)]}
     F, status, row = evaluate_settings(seed, case.truth["drawn"]["wide"],
-                                       job.get("with_meta", True), job.get("cache"))
+                                       job.get("with_meta", True), job.get("cache"),
+                                       job.get("coherence", False))
     return {**out, **row, "F": F, "status": status}
 
 
@@ -131,7 +139,7 @@ def ablation_row(job: dict) -> dict:
     nuis = tuple(job["nuisances"])
     unit = wide.fleet_start(job["seed"], nuis)
     F, status, row = evaluate_wide(job["seed"], unit, nuis, job.get("with_meta", True),
-                                   job.get("cache"))
+                                   job.get("cache"), job.get("coherence", False))
     return {"group": job["group"], "seed": job["seed"], "nuisances": list(nuis),
             "unit": [float(v) for v in unit], **row, "F": F, "status": status}
 
@@ -159,7 +167,8 @@ def search_bat(job: dict) -> dict:
     log = job.get("log")
 
     def evaluate(u):
-        return evaluate_wide(seed, u, nuis, job.get("with_meta", True), job.get("cache"))
+        return evaluate_wide(seed, u, nuis, job.get("with_meta", True), job.get("cache"),
+                             job.get("coherence", False))
 
     def note(ev: Evaluation) -> None:
         F = "-" if not np.isfinite(ev.F) else f"{ev.F:.2f}"

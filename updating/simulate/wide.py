@@ -360,7 +360,8 @@ def band_edge_top(base: VirtualBat, retest: VirtualBat, s: dict) -> tuple[float,
     return fmax, rec
 
 
-def wide_case(seed: int, settings: dict, serial: str | None = None) -> FieldCase:
+def wide_case(seed: int, settings: dict, serial: str | None = None,
+              coherence: bool = False) -> FieldCase:
     """Make a clean (or legally gripped) bat's lab files and truth under wide nuisances.
 
     Parameters
@@ -373,6 +374,9 @@ def wide_case(seed: int, settings: dict, serial: str | None = None) -> FieldCase
         nuisance absent is off.
     serial : str or None
         The serial in meta.json (default W-<seed>).
+    coherence : bool
+        The tests' files carry their coherence (``nuisances.OPTIONAL_NUISANCES``; the same
+        bat either way).
 
     Returns
     -------
@@ -381,7 +385,8 @@ def wide_case(seed: int, settings: dict, serial: str | None = None) -> FieldCase
         what the settings made (moisture's range, the band edge's pairs, the layout).
     """
     _check_settings(settings)
-    case = draw_case(np.random.default_rng(seed), "none", ("planes",),
+    case = draw_case(np.random.default_rng(seed), "none",
+                     ("planes", "coherence") if coherence else ("planes",),
                      serial=serial or f"W-{seed}")
     base = replace(case.baseline, theta_deg=0.0)
     length_m = base.profile.length_m
