@@ -171,8 +171,10 @@ def error_lines(exc: BaseException) -> str:
     str
         The message (the error's type name when it has none).
     """
+    from batlab.safe_text import for_terminal
+
     lines = [" ".join(line.split()) for line in str(exc).splitlines() if line.strip()]
-    return "\n  ".join(lines) or type(exc).__name__
+    return for_terminal("\n  ".join(lines), keep="\n") or type(exc).__name__
 
 
 def main(argv: Sequence[str] | None = None) -> int:
@@ -198,6 +200,11 @@ def main(argv: Sequence[str] | None = None) -> int:
             if not sys.warnoptions:  # python -W / PYTHONWARNINGS: a developer asks for them
                 warnings.simplefilter("ignore")
             return int(args._run(args) or 0)
+    except BrokenPipeError:  # stdout's reader left (`batlab bats | head -1`): no error line
+        from batlab.cli_support import stdout_closed
+
+        stdout_closed()
+        return 141  # as a shell reports a writer killed by SIGPIPE (128 + 13)
     except (ValueError, OSError) as exc:
         print(f"batlab {args.command}: error: {error_lines(exc)}", file=sys.stderr)
         return 2

@@ -133,7 +133,7 @@ def run(args: argparse.Namespace) -> int:
                     raise ValueError(
                         f"the verdict is stored (inspection #{stored.id}) but the report failed "
                         f"({exc}); draw it again with: batlab report {result.serial} "
-                        f"--inspection {stored.id}") from None
+                        f"--inspection {stored.id}{_db_option(args)}") from None
                 if path is not None:
                     pipeline.note_report(conn, stored, path)
     else:
@@ -188,9 +188,21 @@ def _calibrations(args):
         yield conn, None
 
 
+def _db_option(args) -> str:
+    """Return `` --db DB`` (shell-quoted) when the command was given ``--db``, else ``""``."""
+    import shlex
+
+    return f" --db {shlex.quote(str(args.db))}" if args.db else ""
+
+
 def _print(args, out: dict, readable) -> None:
     """Print the verdict on stdout, before anything optional (report, plots) can fail."""
-    print(json.dumps(out) if args.json else readable(out), flush=True)
+    from batlab.cli_support import say
+
+    if args.json:
+        print(json.dumps(out), flush=True)
+    else:
+        say(readable(out))
 
 
 def _report(args, inputs, progress) -> str | None:

@@ -6,7 +6,7 @@ import argparse
 import json
 from dataclasses import asdict, replace
 
-from batlab.cli_support import add_db_argument, db_path, note_printer
+from batlab.cli_support import add_db_argument, db_path, note_printer, say, stdout_closed
 
 EXAMPLE = ("batlab registry check --db lab.sqlite --head 42:<sha256>\n"
            "  batlab registry copy --from lab.sqlite --to postgresql://lab@league/batlab\n"
@@ -86,7 +86,10 @@ def run(args: argparse.Namespace) -> int:
             from batlab.report_check import check_page
 
             res = replace(res, problems=res.problems + check_page(conn, args.report, trusted))
-    _print(res, shown(path), args.json)
+    try:
+        _print(res, shown(path), args.json)
+    except BrokenPipeError:  # `registry check | head -3`: the reader left; the status stands
+        stdout_closed()
     return 0 if res.ok else 1
 
 
@@ -96,15 +99,15 @@ def _print(res, path, as_json: bool) -> None:
         print(json.dumps({**asdict(res), "ok": res.ok}))
         return
     state = "intact" if res.ok else "DAMAGED OR CHANGED"
-    print(f"{path}: {state}: {res.n_records} custody records, {res.n_files} files")
+    say(f"{path}: {state}: {res.n_records} custody records, {res.n_files} files")
     if res.head:
-        print(f"  chain head {res.head}")
+        say(f"  chain head {res.head}")
     for line in res.problems:
-        print(f"  problem: {line}")
+        say(f"  problem: {line}")
     for line in res.notes:
-        print(f"  note: {line}")
+        say(f"  note: {line}")
     if res.first_changed is not None:
-        print(f"  first changed record: #{res.first_changed}")
+        say(f"  first changed record: #{res.first_changed}")
 
 
 def _registry_arg(text: str):

@@ -311,6 +311,9 @@ def file_sha256(path) -> str:
 def write_csv(path, table) -> None:
     """Write a pandas DataFrame as CSV, atomically (temporary name, then rename).
 
+    A text cell that a spreadsheet would run as a formula is neutralised first
+    (``batlab.safe_text.for_csv_cell``, OWASP's rule).
+
     Parameters
     ----------
     path : str or os.PathLike
@@ -318,4 +321,7 @@ def write_csv(path, table) -> None:
     table : pandas.DataFrame
         The table.
     """
-    atomic_write(path, lambda tmp: table.to_csv(tmp, index=False))
+    from batlab.safe_text import for_csv_cell
+
+    text = table.astype(object).map(for_csv_cell) if len(table) else table
+    atomic_write(path, lambda tmp: text.to_csv(tmp, index=False))
