@@ -192,7 +192,7 @@ def test_a_retest_profile_slip_is_refused_before_any_fit_and_nothing_stored(lab,
                     "--baseline", lab / "baseline.uff"], capsys)[0] == 0
     for args in (["--profile", lab / "profile.csv", "--meta", lab / "meta.json", "--baseline",
                   lab / "baseline.uff", "--retest"], ["--serial", "HX-2001"]):
-        code, out, err = run_cli(["inspect", *args, lab / "baseline.uff", "--retest-profile",
+        code, out, err = run_cli(["inspect", *args, lab / "retest_corked.uff", "--retest-profile",
                                   bad, "--json"], capsys)
         assert code == 2 and out == ""
         assert err.strip().splitlines()[-1].endswith("millimetres?")

@@ -1,6 +1,7 @@
-"""The registry under hostile hands and small faults (issue 48): text that attacks its reader
-(a terminal, a spreadsheet, a page), a signing key open to others, a broken pipe, a report's
-stale temporary file, the report hint's --db, and meta.json's model key said and done alike.
+"""The registry under hostile hands and small faults (issue 48): the baseline given as its own
+re-test, the same re-test inspected twice at once, text that attacks its reader (a terminal,
+a spreadsheet, a page), a signing key open to others, a broken pipe, a report's stale
+temporary file, the report hint's --db, and meta.json's model key said and done alike.
 The numerics are the test-only stand-ins."""
 
 from __future__ import annotations
@@ -14,7 +15,7 @@ from pathlib import Path
 import pandas as pd
 import pytest
 
-from tests.inspect_standins import run_cli, stand_in_lab
+from tests.inspect_standins import run_cli, stand_in_lab, unchanged_retest
 
 HOSTILE = "white\x1b[31m ash\x00\u202e\u200f"  # an ANSI colour, a NUL, RTL override and mark
 
@@ -31,6 +32,29 @@ def register(lab: Path, capsys, **meta) -> tuple[int, str, str]:
         (lab / "meta.json").write_text(json.dumps(m))
     return run_cli(["register", "--profile", lab / "profile.csv", "--meta", lab / "meta.json",
                     "--baseline", lab / "baseline.uff"], capsys)
+
+
+def test_the_baseline_as_its_own_retest_is_refused_in_both_forms(lab, capsys):
+    from ema.io.frf_io import read_test, write_test
+
+    write_test(lab / "baseline-again.csv", read_test(lab / "baseline.uff"))  # same FRFs
+    stateless = ["inspect", "--profile", lab / "profile.csv", "--meta", lab / "meta.json",
+                 "--baseline", lab / "baseline.uff", "--retest"]
+    assert register(lab, capsys)[0] == 0
+    for args in (stateless, ["inspect", "--serial", "HX-2001"]):
+        for twin, said in (("baseline.uff", "the same bytes"),
+                           ("baseline-again.csv", "its FRFs equal")):
+            code, out, err = run_cli([*args, lab / twin, "--json"], capsys)
+            assert code == 2 and out == "", err
+            (line,) = err.strip().splitlines()
+            assert said in line and str(lab / twin) in line and "baseline.uff" in line
+            assert "fitting" not in err
+    code, out, _ = run_cli(["history", "HX-2001", "--json"], capsys)
+    assert json.loads(out)["inspections"] == []  # nothing stored
+    unchanged_retest(lab / "baseline.uff", lab / "second.uff")  # a real second test passes
+    for args in (stateless, ["inspect", "--serial", "HX-2001"]):
+        code, out, err = run_cli([*args, lab / "second.uff", "--json"], capsys)
+        assert code == 0 and json.loads(out)["status"] == "not_altered", err
 
 
 def test_terminal_output_escapes_control_characters(lab, capsys):

@@ -12,7 +12,13 @@ from pathlib import Path
 import pytest
 
 from batlab import registry as reg
-from tests.inspect_standins import bat_folders, lab_worker, run_cli, stand_in_lab
+from tests.inspect_standins import (
+    bat_folders,
+    lab_worker,
+    run_cli,
+    stand_in_lab,
+    unchanged_retest,
+)
 
 # the time, the place, and a custody record's hash (it covers the record's time stamp)
 VARIES = ("registered_at", "inspected_at", "last_inspected_at", "db", "record_sha256")
@@ -34,7 +40,8 @@ def session(lab: Path, db, capsys) -> dict:
     registered = cli("register", "--profile", lab / "profile.csv", "--meta", lab / "meta.json",
                      "--baseline", lab / "baseline.uff")
     corked = cli("inspect", "--serial", "HX-2001", lab / "retest_corked.uff")
-    same = cli("inspect", "--serial", "HX-2001", lab / "baseline.uff")
+    same = cli("inspect", "--serial", "HX-2001", unchanged_retest(lab / "baseline.uff",
+                                                                  lab / "second.uff"))
     shown = {"register": registered, "corked": corked, "same": same,
              "bats": cli("bats"), "history": cli("history", "HX-2001")}
     return json.loads(json.dumps(shown), object_hook=lambda d: {

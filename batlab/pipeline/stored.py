@@ -260,7 +260,7 @@ def stored_case(
                                         f"inspection #{stored.id} re-test")
     case = registration_case(bat, serial, (bat.baseline_name or base_name, base_bytes),
                              (stored.retest_name or re_name, re_bytes),
-                             refit_baseline=True, progress=progress)
+                             refit_baseline=True, progress=progress, fresh=False)
     survey = (stored.inputs or {}).get("retest_profile")
     if survey is not None:  # judged with the re-test's caliper profile: judged again with it
         case = replace(case, survey=survey_from_dict(survey))
