@@ -57,6 +57,33 @@ def test_the_baseline_as_its_own_retest_is_refused_in_both_forms(lab, capsys):
         assert code == 0 and json.loads(out)["status"] == "not_altered", err
 
 
+def test_the_same_retest_inspected_twice_at_once_is_stored_once(lab, capsys, monkeypatch):
+    """A second `inspect` of the same re-test runs to its end while the first is between its
+    "already inspected?" question and its store (the modal fit's minutes, in the lab)."""
+    import batlab.pipeline.inspection as inspection
+    from batlab.cli import main
+
+    assert register(lab, capsys)[0] == 0
+    retest = lab / "retest_corked.uff"
+    judge_alone, inner = inspection.inspect, []
+
+    def meanwhile(*args, **kwargs):
+        if not inner:  # the first inspection: the second one runs now, from start to end
+            inner.append(None)
+            inner[0] = main(["inspect", "--serial", "HX-2001", str(retest), "--json"])
+        return judge_alone(*args, **kwargs)
+
+    monkeypatch.setattr(inspection, "inspect", meanwhile)
+    code, out, err = run_cli(["inspect", "--serial", "HX-2001", retest, "--json"], capsys)
+    assert inner == [0] and code == 0, err
+    assert [json.loads(line)["status"] for line in out.splitlines()] == ["altered"] * 2
+    assert "already inspected (inspection #1" in err
+    code, out, _ = run_cli(["history", "HX-2001", "--json"], capsys)
+    assert [i["id"] for i in json.loads(out)["inspections"]] == [1]  # stored once
+    code, out, _ = run_cli(["registry", "check"], capsys)
+    assert code == 0, out
+
+
 def test_terminal_output_escapes_control_characters(lab, capsys):
     code, _, err = register(lab, capsys, species=HOSTILE, note="\x1b]0;pwned\x07")
     assert code == 0, err

@@ -53,7 +53,7 @@ def survey_from_dict(d: dict) -> CaliperSurvey:
 
 def store_inspection(
     conn: sa.Connection, result: InspectionResult, retest_path, false_alarm: float = 0.01,
-    retest_meta: bool = False,
+    retest_meta: bool = False, once: bool = False,
 ) -> reg.Inspection:
     """Record an inspection of a registered bat.
 
@@ -74,6 +74,10 @@ def store_inspection(
         Whether a retest.json gave the re-test's conditions (kept in the inputs, with the
         conditions themselves, SI, so that a report can judge the tests again). A re-test
         profile judged with it (``result.survey``) is kept in them likewise.
+    once : bool
+        Store it unless the same re-test is stored already (``already_inspected``, asked
+        inside the storing transaction): then ``registry.AlreadyStored`` is raised with the
+        stored inspection. Two processes inspecting one re-test at once thus store it once.
 
     Returns
     -------
@@ -90,8 +94,12 @@ def store_inspection(
         inputs["retest_conditions"] = asdict(result.conditions)
     if result.survey is not None:
         inputs["retest_profile"] = survey_dict(result.survey)
+    def same_as(c: sa.Connection) -> reg.Inspection | None:
+        return already_inspected(c, result.serial, path, false_alarm)
+
     return reg.add_inspection(conn, result.serial, record, path.name, content,
-                              reference_seq=result.reference_seq, inputs=inputs)
+                              reference_seq=result.reference_seq, inputs=inputs,
+                              same_as=same_as if once else None)
 
 
 def already_inspected(

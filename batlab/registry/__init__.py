@@ -45,6 +45,7 @@ from batlab.registry.engine import connect, open_registry
 from batlab.registry.lock import transaction
 from batlab.registry.migration import SCHEMA_VERSION, migrate, schema_version
 from batlab.registry.records import (
+    AlreadyStored,
     BatRecord,
     BatSummary,
     Inspection,
@@ -69,7 +70,8 @@ from batlab.registry.records import (
 from batlab.registry.verify import CheckResult, check
 
 __all__ = [
-    "BUSY_TIMEOUT_S", "GENESIS_SHA256", "SCHEMA_VERSION", "BatRecord", "BatSummary",
+    "AlreadyStored", "BUSY_TIMEOUT_S", "GENESIS_SHA256", "SCHEMA_VERSION", "BatRecord",
+    "BatSummary",
     "CheckResult", "CopyResult", "CustodyRecord", "Inspection", "StoredCalibration", "add_bat",
     "add_calibration", "add_inspection", "get_calibration", "latest_calibration",
     "list_calibrations",

@@ -7,6 +7,7 @@ record in the same transaction, so a row and its record are stored together or n
 from __future__ import annotations
 
 import json
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
@@ -98,6 +99,21 @@ class Inspection:
     inputs: dict | None = None
     record_seq: int | None = None
     record_sha256: str | None = None
+
+
+class AlreadyStored(Exception):
+    """``add_inspection(..., same_as=...)`` found the inspection stored already.
+
+    Attributes
+    ----------
+    inspection : Inspection
+        The stored inspection it repeats (nothing new was written).
+    """
+
+    def __init__(self, inspection: Inspection):
+        super().__init__(f"inspection #{inspection.id} of {inspection.serial!r} is stored "
+                         "already")
+        self.inspection = inspection
 
 
 def encode_modes(m) -> dict:
@@ -291,17 +307,25 @@ def add_inspection(
     conn: sa.Connection, serial: str, verdict: dict, retest_name: str, retest: bytes,
     reference_seq: int | None = None, inputs: dict | None = None,
     report_path: str | None = None,
+    same_as: Callable[[sa.Connection], Inspection | None] | None = None,
 ) -> Inspection:
     """Store one inspection of a registered bat.
 
     With its re-test file, the registration (custody record ``reference_seq``, default: the
     bat's current one) it was judged against and the report's other inputs; appends its verdict
-    record to the custody chain. ``verdict`` holds ``status`` or ``altered``.
+    record to the custody chain. ``verdict`` holds ``status`` or ``altered``. ``same_as(conn)``,
+    when given, runs inside the write transaction before anything is stored and returns an
+    inspection already stored that this one repeats (None if none): then nothing is stored
+    and ``AlreadyStored`` is raised with it, so two processes storing the same inspection at
+    once store it once (the check and the store are one transaction).
     """
     stamp = now_utc()
     with transaction(conn):
         if not has_bat(conn, serial):
             raise ValueError(f"unknown serial {serial!r}: no such bat in the registry")
+        done = None if same_as is None else same_as(conn)
+        if done is not None:
+            raise AlreadyStored(done)
         if reference_seq is None:
             reference_seq = get_bat(conn, serial).reference_seq
         ref = bat_as_registered(conn, reference_seq)
