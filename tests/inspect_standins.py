@@ -184,3 +184,14 @@ def judged(out: dict) -> dict:
     rest["reasons"] = [r.replace(said, "<chance>") if said else r for r in out["reasons"]]
     rest["chance_value"] = (out.get("chance") or {}).get("value")
     return rest
+
+
+def main_with_standins(argv: list[str]) -> int:
+    """``batlab argv`` with the stand-in numerics, for a test's subprocess (``python -c``)."""
+    import batlab.pipeline.inspection as pipeline
+    from batlab.cli import main
+    from updating.correlate import fitted
+
+    fitted.fit_test, pipeline.calibrate = fake_fit, fake_calibrate
+    pipeline.inspect = fake_inspect
+    return main(argv)

@@ -276,6 +276,14 @@ def check_output(path, option: str, kind: str) -> None:
         _writable_dir(p, str(p), f"{option} destination")
 
 
+def _read_only_mount(path: Path) -> bool:
+    """Return whether ``path`` lies on a file system mounted read-only."""
+    try:
+        return bool(os.statvfs(path).f_flag & os.ST_RDONLY)
+    except (OSError, AttributeError):  # (no statvfs on Windows)
+        return False
+
+
 def check_registry(db: Path | str, create: bool) -> None:
     """Check, creating nothing, that the registry can be opened for writing.
 
@@ -300,6 +308,9 @@ def check_registry(db: Path | str, create: bool) -> None:
     if db.is_dir():
         raise ValueError(f"{db}: registry path is a directory (--db)")
     if db.exists():
+        if _read_only_mount(db):
+            raise ValueError(f"{db}: registry is read-only (on a read-only file system): "
+                             "nothing can be stored in it; reading it works")
         if not os.access(db, os.W_OK) or not os.access(db.parent, os.W_OK | os.X_OK):
             raise ValueError(f"{db}: registry not writable (permission denied)")
     elif create:
