@@ -84,6 +84,60 @@ def test_the_same_retest_inspected_twice_at_once_is_stored_once(lab, capsys, mon
     assert code == 0, out
 
 
+def _edit(db: Path, sql: str) -> None:
+    import sqlite3
+
+    raw = sqlite3.connect(db)
+    raw.execute(sql)
+    raw.commit()
+    raw.close()
+
+
+def _problems(capsys, db: Path) -> list[str]:
+    code, out, _ = run_cli(["registry", "check", "--db", db, "--json"], capsys)
+    res = json.loads(out)
+    assert (code == 0) == res["ok"]
+    return res["problems"]
+
+
+@pytest.mark.parametrize("edit", [
+    "UPDATE files SET name = 'retest_clean.uff' WHERE name = 'retest_corked.uff'",
+    "UPDATE files SET size = size + 1 WHERE name = 'retest_corked.uff'",
+    "UPDATE files SET size = 7 WHERE name = 'baseline.uff'",
+])
+def test_every_column_of_a_stored_file_is_under_custody(lab, capsys, tmp_path, edit):
+    import shutil
+
+    assert register(lab, capsys)[0] == 0
+    assert run_cli(["inspect", "--serial", "HX-2001", lab / "retest_corked.uff"], capsys)[0] == 0
+    db = tmp_path / "edited.sqlite"
+    shutil.copyfile(lab / "reg.sqlite", db)
+    assert _problems(capsys, db) == []
+    _edit(db, edit)
+    problems = _problems(capsys, db)
+    assert any("stored row (name, size) differs from custody record" in p for p in problems), \
+        problems
+
+
+def test_file_records_of_an_older_registry_still_verify(tmp_path, capsys, monkeypatch):
+    """A registry written before file records covered name and size (the schema-4 file,
+    migrated) verifies, says what its older file records cannot cover, and takes new ones."""
+    import shutil
+
+    db = tmp_path / "old.sqlite"
+    shutil.copyfile(Path("tests/data/registry_schema4.sqlite"), db)
+    trust = ["--trust", "tests/data/registry_schema4.trust"]
+    code, out, _ = run_cli(["registry", "check", "--db", db, "--json", *trust], capsys)
+    res = json.loads(out)
+    assert code == 0 and res["ok"], res["problems"]
+    assert any("were written before file records covered a file's name and size" in n
+               for n in res["notes"])
+    _edit(db, "UPDATE files SET name = 'renamed.uff'")  # still checked against its payload
+    code, out, _ = run_cli(["registry", "check", "--db", db, "--json", *trust], capsys)
+    assert code == 1 and any("stored row (name, size) differs" in p
+                             for p in json.loads(out)["problems"])
+
+
 def test_terminal_output_escapes_control_characters(lab, capsys):
     code, _, err = register(lab, capsys, species=HOSTILE, note="\x1b]0;pwned\x07")
     assert code == 0, err

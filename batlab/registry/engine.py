@@ -186,10 +186,8 @@ def _connect_file(path: Path, target: int, create: bool, readonly: bool,
         if conn is not None:
             _judge_storage(conn, path, not readonly, warn)
             return conn
-    elif not create and path.exists():  # a command that must not make one: look first,
-        probe = _connect_readonly(path, migratable=True)  # read-only (an empty file: refused)
-        if probe is not None:
-            probe.close()
+    elif not create and path.exists() and _holds_no_registry(path):  # looked at read-only
+        raise ValueError(_empty_text(path))  # a command that must not make one: the file as is
     try:
         path.parent.mkdir(parents=True, exist_ok=True)
     except OSError as exc:
@@ -256,6 +254,33 @@ class _ReadOnlyConnection(sqlite3.Connection):
                 pass  # cannot be removed from here: left as it is
 
 
+class _NoRegistry(ValueError):
+    """A file that holds no registry (schema 0), refused as such."""
+
+
+def _empty_text(path: Path) -> str:
+    """Return the one line refusing a registry file that holds no registry."""
+    size = path.stat().st_size
+    return (f"{path}: holds no registry yet (an empty {'0-byte ' if size == 0 else ''}file: "
+            "a first `batlab register` stopped before it stored anything leaves one); "
+            "register a bat into it first, or give another --db")
+
+
+def _holds_no_registry(path: Path) -> bool:
+    """Return whether the file holds no registry (schema 0), looked at read-only.
+
+    A file that cannot be read so is left to the opening to judge (False).
+    """
+    try:
+        probe = _connect_readonly(path)
+    except _NoRegistry:
+        return True
+    except ValueError:
+        return False
+    probe.close()
+    return False
+
+
 def _connect_readonly(path: Path, migratable: bool = False) -> sa.Connection | None:
     """Open a read-only connection that leaves nothing behind and never reads stale data.
 
@@ -289,11 +314,7 @@ def _connect_readonly(path: Path, migratable: bool = False) -> sa.Connection | N
         return conn
     conn.close()
     if version == 0:
-        size = path.stat().st_size
-        raise ValueError(f"{path}: holds no registry yet (an empty "
-                         f"{'0-byte ' if size == 0 else ''}file: a first `batlab register` "
-                         "stopped before it stored anything leaves one); register a bat "
-                         "into it first, or give another --db")
+        raise _NoRegistry(_empty_text(path))
     if 0 < version < SCHEMA_VERSION and migratable:
         return None
     refuse_newer(version, path)

@@ -13,6 +13,7 @@ from typing import TYPE_CHECKING
 
 import sqlalchemy as sa
 
+from batlab.custody import file_payload
 from batlab.formatting import status_of
 from batlab.registry.chain import (
     append_record,
@@ -187,13 +188,14 @@ def has_bat(conn: sa.Connection, serial: str) -> bool:
 def store_file(conn: sa.Connection, name: str, content: bytes) -> str:
     """Keep a test file (inside the caller's transaction), once per content.
 
-    A new file gets a custody record; returns its SHA-256.
+    A new file gets a custody record covering every column of its row
+    (``custody.file_payload``: name, size and SHA-256 of the content); returns its SHA-256.
     """
     digest = sha256_bytes(content)
     if not has_file(conn, digest):
         conn.execute(sa.insert(files).values(sha256=digest, name=name, size=len(content),
                                              content=content))
-        append_record(conn, "file", digest, digest, canonical({"name": name}))
+        append_record(conn, "file", digest, None, file_payload(name, len(content), digest))
     return digest
 
 
