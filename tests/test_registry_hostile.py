@@ -138,6 +138,20 @@ def test_file_records_of_an_older_registry_still_verify(tmp_path, capsys, monkey
                              for p in json.loads(out)["problems"])
 
 
+def test_report_refuses_a_verdict_changed_after_signing(lab, capsys):
+    assert register(lab, capsys)[0] == 0
+    assert run_cli(["inspect", "--serial", "HX-2001", lab / "retest_corked.uff"], capsys)[0] == 0
+    assert run_cli(["report", "HX-2001", "-o", lab / "before"], capsys)[0] == 0
+    _edit(lab / "reg.sqlite", "UPDATE inspections SET status = 'not_altered', verdict_json = "
+          "replace(verdict_json, '\"altered\": true', '\"altered\": false')")
+    code, out, err = run_cli(["report", "HX-2001", "-o", lab / "after"], capsys)
+    assert code == 2 and out == "" and not (lab / "after" / "index.html").exists(), err
+    (line,) = err.strip().splitlines()[-1:]
+    assert "inspection #1 of 'HX-2001' differs from its signed verdict record #4" in line
+    assert 'status: "altered" in the record, "not_altered" in the row' in line
+    assert "verdict.altered: true in the record, false in the row" in line
+
+
 def test_terminal_output_escapes_control_characters(lab, capsys):
     code, _, err = register(lab, capsys, species=HOSTILE, note="\x1b]0;pwned\x07")
     assert code == 0, err

@@ -19,6 +19,7 @@ from batlab.pipeline.files import Progress, file_sha256, quiet
 from batlab.pipeline.inspection import InspectionCase, InspectionResult, judge
 from batlab.pipeline.records import ReportInputs, same_judgement, verdict_record
 from batlab.pipeline.registered import registration_case
+from batlab.registry.row_check import verdict_differences
 from batlab.version import code_version
 from updating.inspect.retest_meta import RetestConditions
 from updating.model.calipers import CaliperSurvey, make_survey
@@ -236,9 +237,11 @@ def stored_case(
 ) -> tuple[reg.Inspection, reg.BatRecord, InspectionCase]:
     """Read a past inspection's case back from the registry alone.
 
-    The registration it was judged against (custody record, also after ``register
-    --replace``) and both test files read back (checksums verified) and refitted
-    (``registered.registration_case``).
+    Its row is checked against its signed verdict record first
+    (``registry.row_check.verdict_differences``): a verdict changed after it was stored is
+    refused, saying what differs. The registration it was judged against (custody record,
+    also after ``register --replace``) and both test files read back (checksums verified) and
+    refitted (``registered.registration_case``).
 
     Parameters
     ----------
@@ -261,6 +264,12 @@ def stored_case(
         Its case, both tests fitted.
     """
     stored = _stored_inspection(conn, serial, inspection_id)
+    differs = verdict_differences(conn, stored.id, stored.record_seq)
+    if differs:
+        raise ValueError(f"inspection #{stored.id} of {serial!r} differs from its signed "
+                         f"verdict record #{stored.record_seq} ({'; '.join(differs)}): changed "
+                         "after it was stored; no page is drawn from it (`batlab registry "
+                         "check` lists every change)")
     bat = reg.bat_as_registered(conn, stored.reference_seq)
     base_name, base_bytes = reg.stored_file(conn, stored.baseline_sha256,
                                             f"inspection #{stored.id} baseline")
