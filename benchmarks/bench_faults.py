@@ -114,33 +114,41 @@ def syscall_counts(files: dict, what: str, db: Path) -> dict[str, int]:
     return counts
 
 
+NOTHING = {"records": {}, "bats": set(), "inspections": {}}
+
+
 def snapshot(db: Path) -> dict:
     """What the registry holds: custody records, bats, inspections (empty if none)."""
-    if not db.exists() or db.stat().st_size == 0 and not Path(f"{db}-wal").exists():
-        return {"records": {}, "bats": set(), "inspections": {}}
-    with reg.open_registry(db, create=False, readonly=True) as conn:
-        return {"records": {r.seq: r.record_sha256 for r in reg.custody_rows(conn)},
-                "bats": {b.serial for b in reg.list_bats(conn)},
-                "inspections": {i.id: i.record_sha256 for i in reg.all_inspections(conn)}}
+    try:
+        with reg.open_registry(db, create=False, readonly=True) as conn:
+            return {"records": {r.seq: r.record_sha256 for r in reg.custody_rows(conn)},
+                    "bats": {b.serial for b in reg.list_bats(conn)},
+                    "inspections": {i.id: i.record_sha256 for i in reg.all_inspections(conn)}}
+    except ValueError as exc:  # none there, or a file a killed first register left empty
+        if "no registry there" in str(exc) or "holds no registry yet" in str(exc):
+            return NOTHING
+        raise
 
 
 def judge(db: Path, before: dict, what: str, argv: list) -> dict:
     """Check, compare with ``before``, re-run unkilled, count what is broken, lost, doubled."""
     out = {"broken": 0, "lost": 0, "duplicated": 0, "rerun_failed": 0, "why": []}
-    empty = not db.exists() or (db.stat().st_size == 0 and not before["records"])
-    if not empty:
-        try:
-            with reg.open_registry(db, create=False, readonly=True) as conn:
-                res = reg.check(conn)
-        except ValueError as exc:  # e.g. an empty file left by a killed first register
-            if "holds no registry yet" not in str(exc) or before["records"]:
-                out["broken"] += 1
-                out["why"].append(str(exc))
-        else:
-            if not res.ok:
-                out["broken"] += 1
-                out["why"] += res.problems[:2]
-    after = snapshot(db) if not empty else {"records": {}, "bats": set(), "inspections": {}}
+    try:
+        with reg.open_registry(db, create=False, readonly=True) as conn:
+            res = reg.check(conn)
+    except ValueError as exc:  # none, or an empty file left by a killed first register
+        empty = "no registry there" in str(exc) or "holds no registry yet" in str(exc)
+        if not empty or before["records"]:
+            out["broken"] += 1
+            out["why"].append(str(exc))
+    else:
+        if not res.ok:
+            out["broken"] += 1
+            out["why"] += res.problems[:2]
+    try:
+        after = snapshot(db)
+    except ValueError:  # counted above
+        after = NOTHING
     for key in ("records", "inspections"):
         gone = [k for k, v in before[key].items() if after[key].get(k) != v]
         out["lost"] += len(gone)

@@ -153,3 +153,46 @@ def test_a_registry_on_a_read_only_mount_is_read_without_traceback(lab, capsys):
     assert (lab / "out3").read_text().startswith(f"{db}: intact")
     assert db.read_bytes() == before and sorted(p.name for p in shelf.iterdir()) == \
         ["reg.sqlite"]
+
+
+def _bench_faults():
+    """benchmarks/bench_faults.py as a module (its lab, commands and judgement)."""
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location("bench_faults",
+                                                  ROOT / "benchmarks" / "bench_faults.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def _strace_injects() -> bool:
+    if shutil.which("strace") is None:
+        return False
+    done = subprocess.run(["strace", "-qq", "-o", "/dev/null", "-e", "trace=getppid", "-e",
+                           "inject=getppid:signal=SIGKILL:when=1", sys.executable, "-c",
+                           "import os; os.getppid()"], capture_output=True, timeout=60)
+    return done.returncode in (137, -9)
+
+
+@pytest.mark.skipif(not _strace_injects(), reason="needs strace with fault injection (and "
+                    "ptrace allowed); benchmarks/bench_faults.py runs 200 such kills")
+def test_a_kill_at_a_system_call_loses_and_doubles_nothing(tmp_path):
+    """One of the benchmark's kills (an inspection at its commit's second sync): the registry
+    checks, nothing is lost, and the command run again leaves one inspection."""
+    what, syscall, k = "inspect", "fdatasync", 2
+    bench = _bench_faults()
+    files = bench.lab(tmp_path)
+    db = tmp_path / "reg.sqlite"
+    bench.prepare(files, what, db)
+    before = bench.snapshot(db)
+    argv = [str(a) for a in bench.commands(files, db)[what]]
+    proc = subprocess.run([*bench.strace_argv(db, ["-o", "/dev/null", "-e", f"trace={syscall}",
+                                                   "-e", f"inject={syscall}:signal=SIGKILL:"
+                                                   f"when={k}"]),
+                           sys.executable, "-c", bench.RUNNER.format(root=str(ROOT)), *argv],
+                          capture_output=True, text=True, timeout=300)
+    assert proc.returncode in (137, -9), proc.stderr  # killed there
+    res = bench.judge(db, before, what, argv)
+    assert (res["broken"], res["lost"], res["duplicated"], res["rerun_failed"]) == \
+        (0, 0, 0, 0), res["why"]
