@@ -187,11 +187,16 @@ def judged(out: dict) -> dict:
 
 
 def main_with_standins(argv: list[str]) -> int:
-    """``batlab argv`` with the stand-in numerics, for a test's subprocess (``python -c``)."""
+    """``batlab argv`` with the stand-in numerics (a test's subprocess, ``python -c``, or a
+    benchmark); the real stages are put back after."""
     import batlab.pipeline.inspection as pipeline
     from batlab.cli import main
     from updating.correlate import fitted
 
-    fitted.fit_test, pipeline.calibrate = fake_fit, fake_calibrate
-    pipeline.inspect = fake_inspect
-    return main(argv)
+    real = fitted.fit_test, pipeline.calibrate, pipeline.inspect
+    fitted.fit_test, pipeline.calibrate, pipeline.inspect = fake_fit, fake_calibrate, \
+        fake_inspect
+    try:
+        return main(argv)
+    finally:
+        fitted.fit_test, pipeline.calibrate, pipeline.inspect = real
