@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import sys
 from dataclasses import asdict, replace
 
 from batlab.cli_support import add_db_argument, db_path, note_printer, say, stdout_closed
@@ -88,6 +89,7 @@ def run(args: argparse.Namespace) -> int:
             res = replace(res, problems=res.problems + check_page(conn, args.report, trusted))
     try:
         _print(res, shown(path), args.json)
+        sys.stdout.flush()  # (a pipe's buffer: its reader may have left before the flush)
     except BrokenPipeError:  # `registry check | head -3`: the reader left; the status stands
         stdout_closed()
     return 0 if res.ok else 1
