@@ -171,8 +171,20 @@ def error_lines(exc: BaseException) -> str:
     str
         The message (the error's type name when it has none).
     """
+    from batlab.safe_text import for_terminal
+
     lines = [" ".join(line.split()) for line in str(exc).splitlines() if line.strip()]
-    return "\n  ".join(lines) or type(exc).__name__
+    return for_terminal("\n  ".join(lines), keep="\n") or type(exc).__name__
+
+
+def _registry_of(args: argparse.Namespace):
+    """Return the registry a command was working on (``--db``, else the default)."""
+    from batlab.cli_support import db_path
+
+    try:
+        return db_path(args) if hasattr(args, "db") else None
+    except ValueError:
+        return getattr(args, "db", None)
 
 
 def main(argv: Sequence[str] | None = None) -> int:
@@ -198,6 +210,11 @@ def main(argv: Sequence[str] | None = None) -> int:
             if not sys.warnoptions:  # python -W / PYTHONWARNINGS: a developer asks for them
                 warnings.simplefilter("ignore")
             return int(args._run(args) or 0)
+    except BrokenPipeError:  # stdout's reader left (`batlab bats | head -1`): no error line
+        from batlab.cli_support import stdout_closed
+
+        stdout_closed()
+        return 141  # as a shell reports a writer killed by SIGPIPE (128 + 13)
     except (ValueError, OSError) as exc:
         print(f"batlab {args.command}: error: {error_lines(exc)}", file=sys.stderr)
         return 2
@@ -205,10 +222,10 @@ def main(argv: Sequence[str] | None = None) -> int:
         print(f"batlab {args.command}: error: a computation failed on the inputs' numbers "
               f"({error_lines(exc)}): check their units and scale", file=sys.stderr)
         return 2
-    except sqlite3.DatabaseError as exc:  # damage found after the registry opened
-        db = getattr(args, "db", None) or "the registry"
-        print(f"batlab {args.command}: error: {db}: registry damaged "
-              f"({' '.join(str(exc).split())}); `batlab registry check` says where",
+    except sqlite3.DatabaseError as exc:  # an error after the registry opened: named
+        from batlab.registry.faults import describe
+
+        print(f"batlab {args.command}: error: {describe(_registry_of(args), exc)}",
               file=sys.stderr)
         return 2
     except KeyboardInterrupt:

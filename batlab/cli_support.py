@@ -12,6 +12,34 @@ from pathlib import Path
 from updating.inspect.parallel import QUIET_THREAD_PREFIX
 
 
+def say(text: object = "", file=None) -> None:
+    """Print a line for a person: its control and format characters escaped.
+
+    Serials, species, file names and notes come from lab files and registries; an escape
+    sequence, a NUL or a right-to-left override among them must not reach the terminal
+    (``batlab.safe_text.for_terminal``). ``--json`` output is ``json.dumps``' (escaped).
+    """
+    from batlab.safe_text import for_terminal
+
+    print(for_terminal(text, keep="\n\t"), file=file or sys.stdout, flush=file is sys.stderr)
+
+
+def stdout_closed() -> None:
+    """Point stdout at /dev/null once its reader is gone (``batlab ... | head``).
+
+    Nothing printed after, nor Python's final flush, then raises ``BrokenPipeError``.
+    """
+    import os
+
+    devnull = os.open(os.devnull, os.O_WRONLY)
+    try:
+        os.dup2(devnull, sys.stdout.fileno())
+    except (OSError, ValueError):  # no real stdout (a test's capture): nothing to redirect
+        pass
+    finally:
+        os.close(devnull)
+
+
 def add_db_argument(p: argparse.ArgumentParser) -> None:
     """Add ``--db``, the registry file, to a command's parser."""
     p.add_argument("--db", default=None,
@@ -122,8 +150,8 @@ class Progress:
         self._print(message)
 
     def _print(self, message: str) -> None:
-        print(f"batlab {self.command} [{time.perf_counter() - self.start:5.1f} s]: {message}",
-              file=sys.stderr, flush=True)
+        say(f"batlab {self.command} [{time.perf_counter() - self.start:5.1f} s]: {message}",
+            file=sys.stderr)
 
     def _beat(self) -> None:
         while not self._stop.wait(self.every_s):
@@ -177,7 +205,7 @@ def note_printer(command: str) -> Callable[[str], None]:
     """
 
     def note(message: str) -> None:
-        print(f"batlab {command}: {message}", file=sys.stderr)
+        say(f"batlab {command}: {message}", file=sys.stderr)
 
     return note
 

@@ -9,6 +9,13 @@ signature of them, so the chain is plain text and numbers that any SQL dialect s
 ``prev_sha256`` is the previous record's ``record_sha256`` (64 zeros for the first). The head
 of the chain is written ``SEQ:SHA256`` (RFC 9162's signed tree head, reduced to a hash chain).
 
+A file record's payload covers every column of the stored file's row:
+``{"name", "size", "sha256"}`` (``file_payload``), hashed into ``content_sha256`` like any
+other payload, so an edited name or size fails. File records written before that (issue 48)
+kept the file's own SHA-256 as ``content_sha256`` and a payload ``{"name"}`` that no hash
+covers; they still verify (their content hash is the file's), and their row's name is checked
+against that payload, which ``check_chain`` notes is all it can do for them.
+
 Records written before schema 4 are unsigned and hashed the old way (newline-joined fields,
 ``legacy_record_hash``); they are accepted only as the chain's first records and only when the
 signed ``seal`` record right after them says how many there are.
@@ -42,6 +49,19 @@ def legacy_record_hash(seq: int, kind: str, subject: str, content_sha256: str,
     """Return a schema-3 record's hash: SHA-256 of its fields joined by newlines."""
     return sha256_text("\n".join((str(seq), kind, subject, content_sha256, prev_sha256,
                                   recorded_at)))
+
+
+def file_payload(name: str, size: int, sha256: str) -> str:
+    """Return a file record's payload: canonical JSON of its row's name, size and SHA-256."""
+    return canonical({"name": name, "sha256": sha256, "size": int(size)})
+
+
+def name_only_file_record(r: Row) -> bool:
+    """Return whether a file record is of the first format: its payload (the name) unhashed.
+
+    Its ``content_sha256`` is the file's own hash (its subject) rather than its payload's.
+    """
+    return r.kind == "file" and r.content_sha256 == r.subject
 
 
 def record_bytes(seq: int, kind: str, subject: str, content_sha256: str, prev_sha256: str,
@@ -124,11 +144,22 @@ def _why_changed(r: Row, prev: str, expect_seq: int) -> str | None:
         return "its link to the previous record is broken"
     if r.record_sha256 != r.expected_hash():
         return "its hash does not match its fields"
-    if r.kind != "file" and sha256_text(r.payload or "") != r.content_sha256:
+    if name_only_file_record(r):  # the first file records: the file's own hash
+        return None
+    if sha256_text(r.payload or "") != r.content_sha256:
         return "its content does not match its content hash"
-    if r.kind == "file" and r.subject != r.content_sha256:
+    if r.kind == "file" and _payload_field(r, "sha256") != r.subject:
         return "its file hash was changed"
     return None
+
+
+def _payload_field(r: Row, key: str):
+    """Return one field of a record's JSON payload (None when it has none)."""
+    try:
+        value = json.loads(r.payload or "{}")
+    except ValueError:
+        return None
+    return value.get(key) if isinstance(value, dict) else None
 
 
 def _why_unsigned(r: Row, n_legacy: int, keys: KeyState) -> str | None:
@@ -176,6 +207,12 @@ def check_chain(rows: list[Row], trusted: set[str] | None) -> ChainCheck:
     if n_legacy:
         notes.append(f"records #1..#{n_legacy} are unsigned legacy records (written before "
                      f"schema 4), sealed by signed record #{n_legacy + 1}")
+    old_files = [r.seq for r in rows if name_only_file_record(r)]
+    if old_files:
+        notes.append(f"{len(old_files)} file record(s) (#{old_files[0]}..#{old_files[-1]}) "
+                     "were written before file records covered a file's name and size: "
+                     "their content hash is the file's, their name is checked against the "
+                     "record's payload, which no hash covers")
     if trusted is not None:
         trusted = predecessors([(r.seq, r.prev_sha256, r.signer or "", r.payload)
                                 for r in rows if r.kind == "key"], trusted)

@@ -37,6 +37,7 @@ from batlab.formatting import (
 from batlab.pipeline.records import FORCED_KEY, ReportInputs, jsonable, lab_units
 from batlab.registry import now_utc
 from batlab.report_check import seal_page
+from batlab.safe_text import for_page
 from batlab.version import code_version
 from ema.io.atomic_write import atomic_write
 from updating.inspect.details import InspectionDetails, ModePair
@@ -895,7 +896,7 @@ def write_report(
     if plots_dir is not None:
         plots_dir = check_destination(plots_dir, "plots")
     figures = figures_png(r)
-    page = render_html(r, generated_at or now_utc(), figures)
+    page = for_page(render_html(r, generated_at or now_utc(), figures))  # no NUL on a page
     if r.provenance.get("verdict_record") is not None:
         page = seal_page(page)
     path = out_dir / "index.html"

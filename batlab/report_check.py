@@ -17,6 +17,7 @@ from pathlib import Path
 import sqlalchemy as sa
 
 from batlab import custody, signing
+from batlab.safe_text import for_page
 
 _SEAL = re.compile(r'<meta name="batlab-seal" content="(ed25519:[A-Za-z0-9+/=]+) '
                    r'([A-Za-z0-9+/=]+)">')
@@ -61,7 +62,7 @@ def _content_problems(conn: sa.Connection, page: str, where: str,
                         f"inspection #{stored.id} is {stored.status!r}")
     problems += [f"{where}: reason missing or changed: {reason!r}"
                  for reason in stored.verdict.get("reasons") or []
-                 if html.escape(reason) not in page]
+                 if for_page(html.escape(reason)) not in page]
     head = _HEAD.search(page)
     if head is None:
         problems.append(f"{where}: shows no registry head")

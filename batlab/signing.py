@@ -46,9 +46,28 @@ def key_path(env: dict | None = None) -> Path:
     return Path(base).expanduser() / "batlab" / "signing-key.pem"
 
 
+def _refuse_open_mode(path: Path) -> None:
+    """Refuse a key file that group or others may read or write, as ssh refuses one.
+
+    The mode bits are read (``stat``), not tried: root may read any file, but a key left
+    0644 is readable by every user of the machine all the same.
+    """
+    try:
+        mode = path.stat().st_mode & 0o777
+    except OSError as exc:
+        raise ValueError(f"{path}: cannot read the signing key ({exc.strerror})") from None
+    if mode & 0o077:
+        raise ValueError(f"{path}: signing key is open to group or others (mode {mode:04o}): "
+                         f"refused, as ssh refuses such keys; run `chmod 600 {path}`")
+
+
 def load_key(path: str | os.PathLike) -> Ed25519PrivateKey:
-    """Load an Ed25519 private key (PKCS#8 PEM); ValueError naming the file otherwise."""
+    """Load an Ed25519 private key (PKCS#8 PEM); ValueError naming the file otherwise.
+
+    A key file open to group or others is refused (``_refuse_open_mode``).
+    """
     path = Path(path)
+    _refuse_open_mode(path)
     try:
         key = serialization.load_pem_private_key(path.read_bytes(), password=None)
     except (OSError, ValueError, TypeError) as exc:

@@ -3,13 +3,26 @@
 It plays the technician too: no tap before the first ``POINT n``; then it taps point n
 ``tap_delay_s`` later and every ``tap_interval_s`` until the next POINT, the response coming
 from rigs.hits (exact modal superposition, 24-bit ADC, sensor sensitivities, noise).
-Faults are drawn per tap with probability ``fault_rate``, cycling through ``faults`` so that
-each one occurs: double (a second, weaker tap 8-20 ms later), overload (a tap hard enough to
-clip), weak (35 N, below the usual acceptance level), garbage (random bytes between two
-frames), drop (a DATA frame never sent), bitflip (one payload bit flipped), truncate (a
-frame cut short). Every tap and every wire fault is logged (``tap_log``: JSON lines
-``{"tap", "point", "index", "fault", "peak_n"}`` and ``{"event", "index"}``). ``speed`` is
-stream time per wall time; 0 streams as fast as the host reads (the pty blocks the box).
+Faults are drawn per tap with probability ``fault_rate``, cycling through ``faults`` (from a
+point's place in the session on) so that each one occurs: double (a second, weaker tap
+8-20 ms later), overload (a tap hard enough to clip), weak (35 N, below the usual acceptance
+level), garbage (random bytes between two frames), drop (a DATA frame never sent), bitflip
+(one payload bit flipped), truncate (a frame cut short). Every tap and every wire fault is
+logged (``tap_log``: JSON lines ``{"tap", "point", "index", "fault", "peak_n"}`` and
+``{"event", "index"}``). ``speed`` is stream time per wall time; 0 streams as fast as the
+host reads (the pty blocks the box).
+
+Every random draw comes from a generator keyed to what it is for, never from one stream
+consumed in the order things happen: a tap's fault, force and wire fault from ``(seed,
+POINT command's ordinal, tap's ordinal at that point)``, a frame's noise from ``(seed, POINT
+ordinal, frame's ordinal since that POINT)``. How far the box streams ahead of the host (how
+many frames it makes before the host's next command arrives) depends on the machine's load;
+with one shared stream it shifted every later draw, so one seed gave another session on
+every run: other faults at other points, another set of accepted hits (what made
+``tests/test_serial_rig.py``'s every-fault session fail now and then). Now a seed gives the
+same taps, faults and noise at every point whatever the timing; only the taps the box makes
+after the host has its hits and before its next POINT (their number is the timing's) vary,
+and the host does not use them.
 """
 
 from __future__ import annotations
@@ -71,7 +84,6 @@ class VirtualBox:
         tty.setraw(self._slave)
         os.set_blocking(self.master, False)
         self.device_path = os.ttyname(self._slave)
-        self._rng = np.random.default_rng(config.seed)
         self._tap_log = tap_log
         self._dec = p.FrameDecoder()
         self._out = bytearray()
@@ -82,10 +94,13 @@ class VirtualBox:
         self._point = 1
         self._next_tap: int | None = None
         self._n_taps = 0
-        self._n_faults = 0
+        self._ordinal = 0  # POINT commands so far
+        self._point_start = 0  # sample index of the latest POINT
+        self._taps_here = 0  # taps since the latest POINT
+        self._faults_here = 0  # faults among them
         self._future = np.zeros((0, 2))
         self._fut0 = 0
-        self._events: list[tuple[int, str]] = []  # (sample index, wire fault)
+        self._events: list[tuple] = []  # (sample index, wire fault, the tap's generator)
         self._last_hb = 0.0
         self._overloaded = False
         self.stops = 0
@@ -140,6 +155,8 @@ class VirtualBox:
             if not 1 <= self._point <= self.cfg.model.x_m.size:
                 return self._ack(cmd, p.ACK_BAD_ARGUMENT, self._point)
             self._next_tap = self._n_sent + int(self.cfg.tap_delay_s * self.info.sample_rate_hz)
+            self._ordinal += 1
+            self._point_start, self._taps_here, self._faults_here = self._n_sent, 0, 0
             self._ack(cmd, p.ACK_OK, self._point)
         elif op == p.PING:
             self._ack(cmd, p.ACK_OK)
@@ -147,14 +164,20 @@ class VirtualBox:
             self._ack(cmd, p.ACK_UNSUPPORTED)
 
     # ------------------------------------------------------------ technician
+    def _keyed_rng(self, purpose: int, ordinal: int) -> np.random.Generator:
+        """Return the generator of one draw: (seed, purpose, POINT ordinal, ``ordinal``)."""
+        return np.random.default_rng([self.cfg.seed, purpose, self._ordinal, ordinal])
+
     def _tap(self, index: int) -> None:
         cfg, fs = self.cfg, self.info.sample_rate_hz
         self._n_taps += 1
+        rng = self._keyed_rng(1, self._taps_here)
+        self._taps_here += 1
         fault = None
-        if cfg.faults and self._rng.random() < cfg.fault_rate:
-            fault = cfg.faults[self._n_faults % len(cfg.faults)]
-            self._n_faults += 1
-        peak = cfg.peak_force_n * self._rng.uniform(0.8, 1.2)
+        if cfg.faults and rng.random() < cfg.fault_rate:
+            fault = cfg.faults[(self._ordinal - 1 + self._faults_here) % len(cfg.faults)]
+            self._faults_here += 1
+        peak = cfg.peak_force_n * rng.uniform(0.8, 1.2)
         if fault == "overload":
             fs_force = self.info.adc_full_scale_v / (self.info.channels[0]
                                                      .sensitivity_mv_per_unit * 1e-3)
@@ -163,8 +186,8 @@ class VirtualBox:
             peak = 35.0
         pulses = [Pulse(0.0, cfg.pulse_s, peak)]
         if fault == "double":
-            pulses.append(Pulse(self._rng.uniform(0.008, 0.02), cfg.pulse_s,
-                                peak * self._rng.uniform(0.3, 0.6)))
+            pulses.append(Pulse(rng.uniform(0.008, 0.02), cfg.pulse_s,
+                                peak * rng.uniform(0.3, 0.6)))
         n = int(cfg.hit_length_s * fs)
         t = np.arange(n) / fs
         sig = np.column_stack([
@@ -174,8 +197,8 @@ class VirtualBox:
         ])
         self._add_future(index, sig)
         if fault in ("garbage", "drop", "bitflip", "truncate"):
-            at = index + int(self._rng.uniform(0.05, 1.0) * fs)
-            self._events.append((at, fault))
+            at = index + int(rng.uniform(0.05, 1.0) * fs)
+            self._events.append((at, fault, rng))
         self._log({"tap": self._n_taps, "point": self._point, "index": index, "fault": fault,
                    "peak_n": round(peak, 2)})
 
@@ -212,8 +235,9 @@ class VirtualBox:
         si = self._take(spf)
         volts_per_code = info.adc_full_scale_v / 2 ** (info.bits - 1)
         scale = info.scale_si()
-        codes = np.rint(si / scale + self._rng.normal(0, self.cfg.noise_v / volts_per_code,
-                                                      si.shape))
+        noise = self._keyed_rng(3, (i0 - self._point_start) // spf)
+        codes = np.rint(si / scale + noise.normal(0, self.cfg.noise_v / volts_per_code,
+                                                  si.shape))
         fsc = info.full_scale_code
         over = bool(np.any(np.abs(codes) >= fsc))
         codes = np.clip(codes, -fsc, fsc).astype(np.int32)
@@ -226,20 +250,20 @@ class VirtualBox:
         self._n_sent += spf
         due = [e for e in self._events if e[0] < self._n_sent]
         self._events = [e for e in self._events if e[0] >= self._n_sent]
-        for _, fault in due:
+        for _, fault, rng in due:  # (the generator of the tap that caused it)
             self._log({"event": fault, "index": i0})
             if fault == "garbage":
-                self._out += self._rng.integers(0, 256, int(self._rng.integers(5, 200)),
-                                                dtype=np.uint8).tobytes()
+                self._out += rng.integers(0, 256, int(rng.integers(5, 200)),
+                                          dtype=np.uint8).tobytes()
             elif fault == "drop":
                 frame = b""
             elif fault == "bitflip":
                 b = bytearray(frame)
-                k = int(self._rng.integers(p.HEADER_LEN, len(b) - 4))
-                b[k] ^= 1 << int(self._rng.integers(0, 8))
+                k = int(rng.integers(p.HEADER_LEN, len(b) - 4))
+                b[k] ^= 1 << int(rng.integers(0, 8))
                 frame = bytes(b)
             elif fault == "truncate":
-                frame = frame[:int(self._rng.integers(p.HEADER_LEN, len(frame) - 1))]
+                frame = frame[:int(rng.integers(p.HEADER_LEN, len(frame) - 1))]
         self._out += frame
 
     def _samples_allowed(self) -> float:

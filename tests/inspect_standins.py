@@ -99,6 +99,22 @@ def use_standins(monkeypatch, fit: bool = True, calibrate: bool = True,
 SAMPLE = Path("data_samples/smooth_bat")
 
 
+def unchanged_retest(baseline: Path, out: Path, rel: float = 1e-3, seed: int = 0) -> Path:
+    """A second test of the unaltered bat: the baseline's FRFs plus complex noise of ``rel``
+    of their peak (a copy of the baseline is refused as a re-test: it is not a second test)."""
+    from dataclasses import replace
+
+    from ema.io.frf_io import read_test, write_test
+
+    test = read_test(baseline)
+    rng = np.random.default_rng(seed)
+    scale = rel * float(np.max(np.abs(test.frf)))
+    noise = scale * (rng.standard_normal(test.frf.shape) + 1j * rng.standard_normal(
+        test.frf.shape)) / np.sqrt(2)
+    write_test(out, replace(test, frf=test.frf + noise))
+    return out
+
+
 def stand_in_lab(tmp_path: Path, monkeypatch) -> Path:
     """A lab folder with the sample bat's files and a fresh registry ($BATLAB_DB), stand-in
     numerics."""
@@ -168,3 +184,19 @@ def judged(out: dict) -> dict:
     rest["reasons"] = [r.replace(said, "<chance>") if said else r for r in out["reasons"]]
     rest["chance_value"] = (out.get("chance") or {}).get("value")
     return rest
+
+
+def main_with_standins(argv: list[str]) -> int:
+    """``batlab argv`` with the stand-in numerics (a test's subprocess, ``python -c``, or a
+    benchmark); the real stages are put back after."""
+    import batlab.pipeline.inspection as pipeline
+    from batlab.cli import main
+    from updating.correlate import fitted
+
+    real = fitted.fit_test, pipeline.calibrate, pipeline.inspect
+    fitted.fit_test, pipeline.calibrate, pipeline.inspect = fake_fit, fake_calibrate, \
+        fake_inspect
+    try:
+        return main(argv)
+    finally:
+        fitted.fit_test, pipeline.calibrate, pipeline.inspect = real

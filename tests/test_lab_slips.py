@@ -246,7 +246,11 @@ def test_force_registers_an_odd_baseline_and_every_report_says_so(tmp_path, caps
         why = get_bat(conn, "HX-2001").meta["registered_with_force"]
     assert "says the bat weighs about" in why
     report = tmp_path / "report"
-    assert main(["inspect", "--serial", "HX-2001", str(heavy), "--db", str(db),
+    again = tmp_path / "heavy-again.uff"  # a second test of the same bat (not its baseline)
+    assert main(["simulate", "--profile", str(SAMPLE / "profile.csv"), "--meta",
+                 str(SAMPLE / "meta.json"), "--density-scale", f"{scale:.4f}", "--seed", "5",
+                 "-o", str(again)]) == 0
+    assert main(["inspect", "--serial", "HX-2001", str(again), "--db", str(db),
                  "-o", str(report)]) == 0
     page = (report / "index.html").read_text()
     assert page.index("registered with --force") < page.index("The evidence")

@@ -182,7 +182,10 @@ def test_migration_from_v1(tmp_path):
         assert res.ok and res.notes[:-1] == [
             f"inspection #{insp.id}: re-test file not kept (inspected before schema 3)",
             "records #1..#3 are unsigned legacy records (written before schema 4), sealed by "
-            "signed record #4"]
+            "signed record #4",
+            "1 file record(s) (#1..#1) were written before file records covered a file's name "
+            "and size: their content hash is the file's, their name is checked against the "
+            "record's payload, which no hash covers"]
         assert res.notes[-1].startswith("no --trust given: the signatures were checked for "
                                         "consistency only")
         assert conn.exec_driver_sql("PRAGMA foreign_key_check").fetchall() == []

@@ -13,7 +13,7 @@ import sqlite3
 import pandas as pd
 import pytest
 
-from tests.inspect_standins import SAMPLE, run_cli, stand_in_lab
+from tests.inspect_standins import SAMPLE, run_cli, stand_in_lab, unchanged_retest
 
 DATE_LINE = re.compile(r"<tr><td>Report generated \(UTC\)</td><td>[^<]*</td></tr>")
 # what a rebuilt page may change besides its date: the head it was written at and its seal
@@ -82,7 +82,7 @@ def test_report_of_an_unknown_inspection(lab, capsys):
 
 def test_export_csv(lab, capsys):
     register(lab, capsys)
-    shutil.copyfile(SAMPLE / "baseline.uff", lab / "retest_same.uff")  # an unchanged bat
+    unchanged_retest(SAMPLE / "baseline.uff", lab / "retest_same.uff")  # an unchanged bat
     for name in ("retest_corked.uff", "retest_same.uff"):
         assert run_cli(["inspect", "--serial", "HX-2001", lab / name], capsys)[0] == 0
     code, out, _ = run_cli(["export", "HX-2001", "-o", lab / "h.csv"], capsys)

@@ -10,7 +10,7 @@ import sqlite3
 import pytest
 
 from batlab import registry as reg
-from tests.inspect_standins import run_cli, stand_in_lab
+from tests.inspect_standins import run_cli, stand_in_lab, unchanged_retest
 
 
 @pytest.fixture
@@ -66,9 +66,10 @@ def test_copy_moves_a_registry_in_verbatim_and_out_again(lab, capsys, dest, tmp_
         assert (seal.kind, seal.subject) == ("seal", "copy")
         assert json.loads(seal.payload)["copied_from"] == head
     # the registry works on: a new inspection gets the next id (a server's id sequence too)
-    new = json.loads(cli(capsys, "inspect", "--serial", "HX-2001", lab / "retest_corked.uff",
-                         "--db", dest, "--json", "--again"))
-    assert new["status"] == "not_altered"  # the re-registered baseline, against itself
+    again = unchanged_retest(lab / "retest_corked.uff", lab / "corked_again.uff")
+    new = json.loads(cli(capsys, "inspect", "--serial", "HX-2001", again, "--db", dest,
+                         "--json"))
+    assert new["status"] == "not_altered"  # a second test of the re-registered baseline
     assert history(capsys, dest)[-1]["id"] == 3
     assert "intact" in cli(capsys, "registry", "check", "--db", dest)
     # copied again: refused, nothing written

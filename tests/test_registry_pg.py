@@ -12,7 +12,13 @@ from pathlib import Path
 import pytest
 
 from batlab import registry as reg
-from tests.inspect_standins import bat_folders, lab_worker, run_cli, stand_in_lab
+from tests.inspect_standins import (
+    bat_folders,
+    lab_worker,
+    run_cli,
+    stand_in_lab,
+    unchanged_retest,
+)
 
 # the time, the place, and a custody record's hash (it covers the record's time stamp)
 VARIES = ("registered_at", "inspected_at", "last_inspected_at", "db", "record_sha256")
@@ -34,7 +40,8 @@ def session(lab: Path, db, capsys) -> dict:
     registered = cli("register", "--profile", lab / "profile.csv", "--meta", lab / "meta.json",
                      "--baseline", lab / "baseline.uff")
     corked = cli("inspect", "--serial", "HX-2001", lab / "retest_corked.uff")
-    same = cli("inspect", "--serial", "HX-2001", lab / "baseline.uff")
+    same = cli("inspect", "--serial", "HX-2001", unchanged_retest(lab / "baseline.uff",
+                                                                  lab / "second.uff"))
     shown = {"register": registered, "corked": corked, "same": same,
              "bats": cli("bats"), "history": cli("history", "HX-2001")}
     return json.loads(json.dumps(shown), object_hook=lambda d: {
@@ -49,8 +56,8 @@ def test_postgres_gives_the_verdicts_sqlite_gives(lab, pg_url, capsys):
     assert on_server == on_file  # same verdicts, files, record numbers, payload hashes
     code, out, _ = run_cli(["registry", "check", "--db", pg_url, "--json"], capsys)
     res = json.loads(out)
-    # baseline file, registration, corked file, its verdict, the unchanged verdict
-    assert code == 0 and res["ok"] and res["n_records"] == 5 and res["n_files"] == 2
+    # baseline file, registration, corked file, its verdict, the second file, its verdict
+    assert code == 0 and res["ok"] and res["n_records"] == 6 and res["n_files"] == 3
     code, out, _ = run_cli(["registry", "head", "--db", pg_url], capsys)
     assert code == 0 and out.strip() == res["head"]
 

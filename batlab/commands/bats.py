@@ -6,7 +6,7 @@ import argparse
 import json
 from dataclasses import asdict
 
-from batlab.cli_support import add_db_argument, read_registry
+from batlab.cli_support import add_db_argument, read_registry, say
 from batlab.formatting import STATUS_WORDS
 
 EXAMPLE = "batlab bats --db lab.sqlite"
@@ -40,12 +40,12 @@ def run(args: argparse.Namespace) -> int:
         print(json.dumps([asdict(b) for b in bats]))
         return 0
     if not bats:
-        print("no bats registered")
+        say("no bats registered")
         return 0
-    print(f"{'serial':<16} {'species':<14} {'registered (UTC)':<20} {'tests':>5}  latest")
+    say(f"{'serial':<16} {'species':<14} {'registered (UTC)':<20} {'tests':>5}  latest")
     for b in bats:
         latest = "-" if b.last_status is None else (
             STATUS_WORDS.get(b.last_status, b.last_status) + f" ({b.last_inspected_at[:19]})")
-        print(f"{b.serial:<16} {b.species:<14} {b.registered_at[:19]:<20} "
+        say(f"{b.serial:<16} {b.species:<14} {b.registered_at[:19]:<20} "
               f"{b.n_inspections:>5}  {latest}")
     return 0

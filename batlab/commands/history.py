@@ -6,7 +6,7 @@ import argparse
 import json
 from dataclasses import asdict
 
-from batlab.cli_support import add_db_argument, note_printer, read_registry
+from batlab.cli_support import add_db_argument, note_printer, read_registry, say
 from batlab.formatting import STATUS_WORDS, p_value_words
 
 EXAMPLE = "batlab history HX-1004 --json"
@@ -45,9 +45,9 @@ def run(args: argparse.Namespace) -> int:
                           "baseline_sha256": bat.baseline_sha256,
                           "inspections": [asdict(r) for r in rows]}))
         return 0
-    print(f"{bat.serial}: registered {bat.registered_at[:19]} UTC, baseline {bat.baseline_name}")
+    say(f"{bat.serial}: registered {bat.registered_at[:19]} UTC, baseline {bat.baseline_name}")
     if not rows:
-        print("  no inspections")
+        say("  no inspections")
     for r in rows:
         v = r.verdict
         what = STATUS_WORDS.get(r.status, r.status)
@@ -56,6 +56,6 @@ def run(args: argparse.Namespace) -> int:
         said = p_value_words(v)
         p_s = "" if said is None else f", {said}"
         against = "" if r.reference_seq is None else f", against registration #{r.reference_seq}"
-        print(f"  #{r.id} {r.inspected_at[:19]} {r.retest_name or r.retest_sha256[:12]}: "
+        say(f"  #{r.id} {r.inspected_at[:19]} {r.retest_name or r.retest_sha256[:12]}: "
               f"{what}{p_s}{against}" + (f", report {r.report_path}" if r.report_path else ""))
     return 0

@@ -90,7 +90,7 @@ def run(args: argparse.Namespace) -> int:
     """
     from batlab import pipeline
     from batlab.formatting import readable
-    from batlab.registry import open_registry
+    from batlab.registry import AlreadyStored, open_registry
 
     progress = progress_printer("inspect")
     retest = _retest_path(args)
@@ -108,8 +108,9 @@ def run(args: argparse.Namespace) -> int:
                    registry=db)  # before any work: nothing is made or fitted for bad input
     if args.serial:
         with open_registry(db, create=False) as conn:
-            done = None if args.again or args.retest_meta or args.retest_profile else \
-                pipeline.already_inspected(conn, args.serial, retest, args.false_alarm)
+            once = not (args.again or args.retest_meta or args.retest_profile)
+            done = pipeline.already_inspected(conn, args.serial, retest, args.false_alarm) \
+                if once else None
             if done is not None:
                 return _print_stored(args, conn, done, retest, progress, readable)
             drawn = bool(args.out or args.plots)  # the element map only for a report
@@ -118,8 +119,12 @@ def run(args: argparse.Namespace) -> int:
                                                  retest_meta_path=args.retest_meta,
                                                  with_map=drawn,
                                                  retest_profile_path=args.retest_profile)
-            stored = pipeline.store_inspection(conn, result, retest, args.false_alarm,
-                                               retest_meta=bool(args.retest_meta))
+            try:  # asked again inside the storing transaction: another process may have
+                stored = pipeline.store_inspection(  # stored this re-test meanwhile
+                    conn, result, retest, args.false_alarm,
+                    retest_meta=bool(args.retest_meta), once=once)
+            except AlreadyStored as same:
+                return _print_stored(args, conn, same.inspection, retest, progress, readable)
             progress(f"stored as inspection #{stored.id} of {result.serial} (custody record "
                      f"#{stored.record_seq})")
             _print(args, pipeline.result_dict(result), readable)
@@ -133,7 +138,7 @@ def run(args: argparse.Namespace) -> int:
                     raise ValueError(
                         f"the verdict is stored (inspection #{stored.id}) but the report failed "
                         f"({exc}); draw it again with: batlab report {result.serial} "
-                        f"--inspection {stored.id}") from None
+                        f"--inspection {stored.id}{_db_option(args)}") from None
                 if path is not None:
                     pipeline.note_report(conn, stored, path)
     else:
@@ -188,9 +193,21 @@ def _calibrations(args):
         yield conn, None
 
 
+def _db_option(args) -> str:
+    """Return `` --db DB`` (shell-quoted) when the command was given ``--db``, else ``""``."""
+    import shlex
+
+    return f" --db {shlex.quote(str(args.db))}" if args.db else ""
+
+
 def _print(args, out: dict, readable) -> None:
     """Print the verdict on stdout, before anything optional (report, plots) can fail."""
-    print(json.dumps(out) if args.json else readable(out), flush=True)
+    from batlab.cli_support import say
+
+    if args.json:
+        print(json.dumps(out), flush=True)
+    else:
+        say(readable(out))
 
 
 def _report(args, inputs, progress) -> str | None:

@@ -7,7 +7,7 @@ import json
 import sys
 from dataclasses import asdict, replace
 
-from batlab.cli_support import add_db_argument, db_path, note_printer
+from batlab.cli_support import add_db_argument, db_path, note_printer, say, stdout_closed
 
 EXAMPLE = ("batlab registry check --db lab.sqlite --trust lab.keys --head 42:<sha256>\n"
            "  batlab registry head --json > head.json; batlab registry witness head.json "
@@ -119,7 +119,11 @@ def run(args: argparse.Namespace) -> int:
             from batlab.report_check import check_page
 
             res = replace(res, problems=res.problems + check_page(conn, args.report, trusted))
-    _print(res, shown(path), args.json, trusted is not None)
+    try:
+        _print(res, shown(path), args.json, trusted is not None)
+        sys.stdout.flush()  # (a pipe's buffer: its reader may have left before the flush)
+    except BrokenPipeError:  # `registry check | head -3`: the reader left; the status stands
+        stdout_closed()
     return 0 if res.ok else 1
 
 
@@ -205,15 +209,15 @@ def _print(res, path, as_json: bool, signers_checked: bool) -> None:
     if res.ok and not signers_checked:
         state += (" (signatures consistent; who signed was not checked: give --trust KEYS "
                   "or --trust-own)")
-    print(f"{path}: {state}: {res.n_records} custody records, {res.n_files} files")
+    say(f"{path}: {state}: {res.n_records} custody records, {res.n_files} files")
     if res.head:
-        print(f"  chain head {res.head}")
+        say(f"  chain head {res.head}")
     for line in res.problems:
-        print(f"  problem: {line}")
+        say(f"  problem: {line}")
     for line in res.notes:
-        print(f"  note: {line}")
+        say(f"  note: {line}")
     if res.first_changed is not None:
-        print(f"  first changed record: #{res.first_changed}")
+        say(f"  first changed record: #{res.first_changed}")
 
 
 def _registry_arg(text: str):

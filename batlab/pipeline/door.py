@@ -14,7 +14,8 @@ it has passed, in this order:
    bat can be (``files.check_bat``), meta.json's points_in against the baseline's impact
    points, a baseline an inspection can use (``updating.diagnose.pairing_check.MIN_POINTS``
    points at least, the barrel covered: ``updating.inspect.checks.coverage_reason``), the
-   re-test's points against the baseline's, ``--serial`` against meta.json's serial;
+   re-test's points against the baseline's, a re-test that is the baseline over again
+   (``files.same_test_reason``), ``--serial`` against meta.json's serial;
 4. **what the command writes** (``outputs``, ``registry``): a file's directory exists, a
    directory or the registry's file is what it must be (or can be made), and each is
    writable; nothing is created here.
@@ -39,6 +40,7 @@ from batlab.pipeline.files import (
     read_frf,
     read_meta_file,
     read_profile,
+    same_test_reason,
 )
 from updating.model.bar import read_bar_json
 from updating.model.json_input import read_json_object, shown, unused_keys
@@ -217,8 +219,13 @@ def together(args: argparse.Namespace, read: dict[str, object]) -> None:
             raise ValueError(f"{base_path}: {why}")
     re_dest = next((d for d in ("retest", "retest_file") if d in read), None)
     if base_dest and re_dest:
+        base_path, re_path = Path(getattr(args, base_dest)), Path(getattr(args, re_dest))
+        why = same_test_reason(str(base_path), read[base_dest], base_path.read_bytes(),
+                               str(re_path), read[re_dest], re_path.read_bytes())
+        if why:
+            raise ValueError(why)
         match_points(point_positions_m(read[base_dest]), point_positions_m(read[re_dest]),
-                     str(getattr(args, re_dest)))
+                     str(re_path))
 
 
 def _nearest_existing(path: Path) -> Path:
@@ -269,6 +276,14 @@ def check_output(path, option: str, kind: str) -> None:
         _writable_dir(p, str(p), f"{option} destination")
 
 
+def _read_only_mount(path: Path) -> bool:
+    """Return whether ``path`` lies on a file system mounted read-only."""
+    try:
+        return bool(os.statvfs(path).f_flag & os.ST_RDONLY)
+    except (OSError, AttributeError):  # (no statvfs on Windows)
+        return False
+
+
 def check_registry(db: Path | str, create: bool) -> None:
     """Check, creating nothing, that the registry can be opened for writing.
 
@@ -293,6 +308,9 @@ def check_registry(db: Path | str, create: bool) -> None:
     if db.is_dir():
         raise ValueError(f"{db}: registry path is a directory (--db)")
     if db.exists():
+        if _read_only_mount(db):
+            raise ValueError(f"{db}: registry is read-only (on a read-only file system): "
+                             "nothing can be stored in it; reading it works")
         if not os.access(db, os.W_OK) or not os.access(db.parent, os.W_OK | os.X_OK):
             raise ValueError(f"{db}: registry not writable (permission denied)")
     elif create:

@@ -105,6 +105,57 @@ def numeric_failure(name: str) -> Iterator[None]:
         raise ValueError(f"{name}: {exc}") from None
 
 
+SAME_TEST_REL = 1e-5
+"""FRFs closer than this, relative to the baseline's largest |H|, are one test, not two.
+
+Two impact tests of a bat differ by their noise and by the hammer's and the support's
+repeatability, 1e-3 of the peak and more; a copy differs by nothing, a copy written in
+another format by its text's rounding (a UFF's six significant digits: 5e-7)."""
+
+
+def same_test_reason(baseline_label: str, baseline: FrfTest, baseline_bytes: bytes,
+                     retest_label: str, retest: FrfTest, retest_bytes: bytes) -> str | None:
+    """Say why a re-test is its baseline over again (None when they are two tests).
+
+    The same bytes, or the same frequency lines, points and quantity with FRFs equal within
+    ``SAME_TEST_REL`` of the baseline's largest magnitude. A re-test identical to its
+    baseline would clear any bat, so it is refused, naming both files.
+
+    Parameters
+    ----------
+    baseline_label, retest_label : str
+        The files, as messages name them.
+    baseline, retest : FrfTest
+        Their FRFs.
+    baseline_bytes, retest_bytes : bytes
+        Their content.
+
+    Returns
+    -------
+    str or None
+        One line naming the re-test and the baseline, or None.
+    """
+    end = ("two tests of a bat are never identical, so this one would clear any bat: "
+           "refused (give a new test of the bat)")
+    if baseline_bytes == retest_bytes:
+        return (f"{retest_label}: the re-test is the baseline {baseline_label} itself (the "
+                f"same bytes, sha256 {sha256_bytes(retest_bytes)[:16]}...); {end}")
+    same_shape = (baseline.frf.shape == retest.frf.shape
+                  and baseline.quantity == retest.quantity
+                  and np.array_equal(baseline.freq_hz, retest.freq_hz)
+                  and np.array_equal(baseline.response_nodes, retest.response_nodes)
+                  and np.array_equal(baseline.reference_nodes, retest.reference_nodes))
+    if not same_shape:
+        return None
+    scale = float(np.max(np.abs(baseline.frf))) or 1.0
+    diff = float(np.max(np.abs(retest.frf - baseline.frf))) / scale
+    if diff > SAME_TEST_REL:
+        return None
+    return (f"{retest_label}: its FRFs equal the baseline {baseline_label}'s (largest "
+            f"difference {diff:.1e} of the peak; two tests differ by 1e-3 or more): the "
+            f"baseline under another name or format; {end}")
+
+
 def frf_from_bytes(content: bytes, name: str, label: str | None = None) -> FrfTest:
     """Read an FRF file's bytes, its format from ``name``'s extension.
 
@@ -311,6 +362,9 @@ def file_sha256(path) -> str:
 def write_csv(path, table) -> None:
     """Write a pandas DataFrame as CSV, atomically (temporary name, then rename).
 
+    A text cell that a spreadsheet would run as a formula is neutralised first
+    (``batlab.safe_text.for_csv_cell``, OWASP's rule).
+
     Parameters
     ----------
     path : str or os.PathLike
@@ -318,4 +372,7 @@ def write_csv(path, table) -> None:
     table : pandas.DataFrame
         The table.
     """
-    atomic_write(path, lambda tmp: table.to_csv(tmp, index=False))
+    from batlab.safe_text import for_csv_cell
+
+    text = table.astype(object).map(for_csv_cell) if len(table) else table
+    atomic_write(path, lambda tmp: text.to_csv(tmp, index=False))

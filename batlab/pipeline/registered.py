@@ -21,6 +21,7 @@ from batlab.pipeline.files import (
     read_conditions,
     read_frf,
     read_retest_profile,
+    same_test_reason,
 )
 from batlab.pipeline.inspection import (
     InspectionCase,
@@ -211,6 +212,7 @@ def registration_case(
     bat: reg.BatRecord, serial: str, baseline: tuple[str, bytes], retest: tuple[str, bytes],
     retest_label: str | None = None, refit_baseline: bool = False,
     progress: Progress = quiet, baseline_fit=None, retest_profile_path=None,
+    fresh: bool = True,
 ) -> InspectionCase:
     """Read a registration and the bytes of its two tests into the method's inputs.
 
@@ -239,6 +241,10 @@ def registration_case(
         A fit of that same baseline file already at hand (saves the refit).
     retest_profile_path : path or None
         The re-test's caliper profile (retest_profile.csv), read before any fit.
+    fresh : bool
+        A re-test to judge now: refused (ValueError naming both files) when it is the
+        baseline over again (``files.same_test_reason``). False for a stored inspection read
+        back (it is evidence as it was judged).
 
     Returns
     -------
@@ -248,6 +254,11 @@ def registration_case(
     (base_name, base_bytes), (re_name, re_bytes) = baseline, retest
     base_test = frf_from_bytes(base_bytes, base_name)
     re_test = frf_from_bytes(re_bytes, re_name, retest_label)
+    if fresh:
+        why = same_test_reason(f"{base_name} (bat {serial}'s registered baseline)", base_test,
+                               base_bytes, retest_label or re_name, re_test, re_bytes)
+        if why:
+            raise ValueError(why)
     base_modes = reg.decode_modes(bat.modes)
     order = match_points(base_modes.x_m, point_positions_m(re_test), retest_label or re_name)
     profile = make_profile(bat.profile_x_m, bat.profile_diameter_m, f"registry bat {serial}")

@@ -19,6 +19,7 @@ from batlab.pipeline.files import Progress, file_sha256, quiet
 from batlab.pipeline.inspection import InspectionCase, InspectionResult, judge
 from batlab.pipeline.records import ReportInputs, same_judgement, verdict_record
 from batlab.pipeline.registered import registration_case
+from batlab.registry.row_check import verdict_differences
 from batlab.version import code_version
 from updating.inspect.retest_meta import RetestConditions
 from updating.model.calipers import CaliperSurvey, make_survey
@@ -53,7 +54,7 @@ def survey_from_dict(d: dict) -> CaliperSurvey:
 
 def store_inspection(
     conn: sa.Connection, result: InspectionResult, retest_path, false_alarm: float = 0.01,
-    retest_meta: bool = False,
+    retest_meta: bool = False, once: bool = False,
 ) -> reg.Inspection:
     """Record an inspection of a registered bat.
 
@@ -74,6 +75,10 @@ def store_inspection(
         Whether a retest.json gave the re-test's conditions (kept in the inputs, with the
         conditions themselves, SI, so that a report can judge the tests again). A re-test
         profile judged with it (``result.survey``) is kept in them likewise.
+    once : bool
+        Store it unless the same re-test is stored already (``already_inspected``, asked
+        inside the storing transaction): then ``registry.AlreadyStored`` is raised with the
+        stored inspection. Two processes inspecting one re-test at once thus store it once.
 
     Returns
     -------
@@ -90,8 +95,12 @@ def store_inspection(
         inputs["retest_conditions"] = asdict(result.conditions)
     if result.survey is not None:
         inputs["retest_profile"] = survey_dict(result.survey)
+    def same_as(c: sa.Connection) -> reg.Inspection | None:
+        return already_inspected(c, result.serial, path, false_alarm)
+
     return reg.add_inspection(conn, result.serial, record, path.name, content,
-                              reference_seq=result.reference_seq, inputs=inputs)
+                              reference_seq=result.reference_seq, inputs=inputs,
+                              same_as=same_as if once else None)
 
 
 def already_inspected(
@@ -228,9 +237,11 @@ def stored_case(
 ) -> tuple[reg.Inspection, reg.BatRecord, InspectionCase]:
     """Read a past inspection's case back from the registry alone.
 
-    The registration it was judged against (custody record, also after ``register
-    --replace``) and both test files read back (checksums verified) and refitted
-    (``registered.registration_case``).
+    Its row is checked against its signed verdict record first
+    (``registry.row_check.verdict_differences``): a verdict changed after it was stored is
+    refused, saying what differs. The registration it was judged against (custody record,
+    also after ``register --replace``) and both test files read back (checksums verified) and
+    refitted (``registered.registration_case``).
 
     Parameters
     ----------
@@ -253,6 +264,12 @@ def stored_case(
         Its case, both tests fitted.
     """
     stored = _stored_inspection(conn, serial, inspection_id)
+    differs = verdict_differences(conn, stored.id, stored.record_seq)
+    if differs:
+        raise ValueError(f"inspection #{stored.id} of {serial!r} differs from its signed "
+                         f"verdict record #{stored.record_seq} ({'; '.join(differs)}): changed "
+                         "after it was stored; no page is drawn from it (`batlab registry "
+                         "check` lists every change)")
     bat = reg.bat_as_registered(conn, stored.reference_seq)
     base_name, base_bytes = reg.stored_file(conn, stored.baseline_sha256,
                                             f"inspection #{stored.id} baseline")
@@ -260,7 +277,7 @@ def stored_case(
                                         f"inspection #{stored.id} re-test")
     case = registration_case(bat, serial, (bat.baseline_name or base_name, base_bytes),
                              (stored.retest_name or re_name, re_bytes),
-                             refit_baseline=True, progress=progress)
+                             refit_baseline=True, progress=progress, fresh=False)
     survey = (stored.inputs or {}).get("retest_profile")
     if survey is not None:  # judged with the re-test's caliper profile: judged again with it
         case = replace(case, survey=survey_from_dict(survey))

@@ -54,6 +54,7 @@ from batlab.registry.keys import KeyChange, ended_keys, revoke_key, rotate_key
 from batlab.registry.lock import transaction
 from batlab.registry.migration import SCHEMA_VERSION, migrate, schema_version
 from batlab.registry.records import (
+    AlreadyStored,
     BatRecord,
     BatSummary,
     Inspection,
@@ -79,7 +80,8 @@ from batlab.registry.verify import CheckResult, check
 from batlab.registry.witness import head_statement, read_witnessed, witness_head
 
 __all__ = [
-    "BUSY_TIMEOUT_S", "GENESIS_SHA256", "SCHEMA_VERSION", "BatRecord", "BatSummary",
+    "AlreadyStored", "BUSY_TIMEOUT_S", "GENESIS_SHA256", "SCHEMA_VERSION", "BatRecord",
+    "BatSummary",
     "CheckResult", "CopyResult", "CustodyRecord", "Inspection", "StoredCalibration", "add_bat",
     "add_calibration", "add_inspection", "get_calibration", "latest_calibration",
     "list_calibrations",

@@ -25,6 +25,7 @@ import sqlalchemy as sa
 from sqlalchemy.pool import NullPool
 
 from batlab.registry.common import BUSY_TIMEOUT_S, is_url, shown
+from batlab.registry.faults import fault_text
 from batlab.registry.health import damage_text, storage_problems
 from batlab.registry.migration import (
     SCHEMA_VERSION,
@@ -185,6 +186,8 @@ def _connect_file(path: Path, target: int, create: bool, readonly: bool,
         if conn is not None:
             _judge_storage(conn, path, not readonly, warn)
             return conn
+    elif not create and path.exists() and _holds_no_registry(path):  # looked at read-only
+        raise ValueError(_empty_text(path))  # a command that must not make one: the file as is
     try:
         path.parent.mkdir(parents=True, exist_ok=True)
     except OSError as exc:
@@ -203,7 +206,8 @@ def _connect_file(path: Path, target: int, create: bool, readonly: bool,
     except _UNREADABLE as exc:
         if conn is not None:
             conn.close()
-        raise ValueError(f"{path}: not a usable batlab registry ({_reason(exc)})") from None
+        raise ValueError(fault_text(path, exc) or
+                         f"{path}: not a usable batlab registry ({_reason(exc)})") from None
     except BaseException:
         if conn is not None:
             conn.close()
@@ -242,9 +246,39 @@ class _ReadOnlyConnection(sqlite3.Connection):
     def close(self) -> None:
         super().close()
         for leftover in self.created:
-            if leftover.name.endswith("-shm") or (leftover.exists()
-                                                  and leftover.stat().st_size == 0):
-                leftover.unlink(missing_ok=True)
+            try:  # (on a read-only mount even unlinking a missing file fails: EROFS)
+                if leftover.exists() and (leftover.name.endswith("-shm")
+                                          or leftover.stat().st_size == 0):
+                    leftover.unlink()
+            except OSError:
+                pass  # cannot be removed from here: left as it is
+
+
+class _NoRegistry(ValueError):
+    """A file that holds no registry (schema 0), refused as such."""
+
+
+def _empty_text(path: Path) -> str:
+    """Return the one line refusing a registry file that holds no registry."""
+    size = path.stat().st_size
+    return (f"{path}: holds no registry yet (an empty {'0-byte ' if size == 0 else ''}file: "
+            "a first `batlab register` stopped before it stored anything leaves one); "
+            "register a bat into it first, or give another --db")
+
+
+def _holds_no_registry(path: Path) -> bool:
+    """Return whether the file holds no registry (schema 0), looked at read-only.
+
+    A file that cannot be read so is left to the opening to judge (False).
+    """
+    try:
+        probe = _connect_readonly(path)
+    except _NoRegistry:
+        return True
+    except ValueError:
+        return False
+    probe.close()
+    return False
 
 
 def _connect_readonly(path: Path, migratable: bool = False) -> sa.Connection | None:
@@ -253,7 +287,9 @@ def _connect_readonly(path: Path, migratable: bool = False) -> sa.Connection | N
     With no write-ahead log content the file is opened ``immutable=1`` (no ``-shm`` needed,
     none created); with WAL content ``mode=ro`` reads it through the ``-shm`` index and the
     files that created are removed on close; where that index cannot be made the registry is
-    refused rather than read without its log. Returns None for an older schema when
+    refused rather than read without its log. A file holding no registry (schema 0: empty,
+    as a first ``register`` killed before its commit leaves it) is refused, left as it is.
+    Returns None for an older schema when
     ``migratable`` (the caller then opens it for writing and migrates it).
     """
     wal, shm = Path(f"{path}-wal"), Path(f"{path}-shm")
@@ -277,6 +313,8 @@ def _connect_readonly(path: Path, migratable: bool = False) -> sa.Connection | N
     if version == SCHEMA_VERSION:
         return conn
     conn.close()
+    if version == 0:
+        raise _NoRegistry(_empty_text(path))
     if 0 < version < SCHEMA_VERSION and migratable:
         return None
     refuse_newer(version, path)

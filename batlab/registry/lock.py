@@ -9,6 +9,7 @@ chain never forks (released at ``COMMIT``/``ROLLBACK``). Readers take no lock.
 
 from __future__ import annotations
 
+import time
 from collections.abc import Iterator
 from contextlib import contextmanager
 
@@ -26,26 +27,43 @@ def _begin(conn: sa.Connection) -> None:
         conn.exec_driver_sql("BEGIN IMMEDIATE")
 
 
+def registry_name(conn: sa.Connection) -> str:
+    """Return the registry an open connection is on: its file, or its URL (no password)."""
+    if conn.dialect.name == "sqlite":
+        try:
+            rows = conn.exec_driver_sql("PRAGMA database_list").fetchall()
+        except sa.exc.DBAPIError:
+            return "registry"
+        return next((r[2] for r in rows if r[1] == "main" and r[2]), "registry")
+    return conn.engine.url.render_as_string(hide_password=True)
+
+
 @contextmanager
 def transaction(conn: sa.Connection) -> Iterator[sa.Connection]:
     """Run the block in one write transaction holding the registry's write lock.
 
-    Rolled back on any exception (or never committed if the process dies). A read-only
-    registry is a one-line ValueError.
+    Rolled back on any exception (or never committed if the process dies). A fault that is
+    not damage (busy past the wait, disk full, read-only, permission: ``faults.fault_text``)
+    is a one-line ValueError naming the registry; nothing was stored.
     """
+    started = time.monotonic()
     try:
         _begin(conn)
         try:
             yield conn
         except BaseException:
-            conn.exec_driver_sql("ROLLBACK")
+            try:
+                conn.exec_driver_sql("ROLLBACK")
+            except sa.exc.DBAPIError:  # SQLite rolled back itself (disk full, I/O error)
+                pass
             raise
         conn.exec_driver_sql("COMMIT")
     except sa.exc.DBAPIError as exc:
-        text = str(exc.orig)
-        if "readonly" in text or "read-only" in text:
-            raise ValueError(f"registry is read-only ({text.splitlines()[0]}): nothing can be "
-                             "stored in it") from None
+        from batlab.registry.faults import fault_text
+
+        text = fault_text(registry_name(conn), exc, time.monotonic() - started)
+        if text is not None:
+            raise ValueError(text) from None
         raise
 
 

@@ -7,11 +7,13 @@ record in the same transaction, so a row and its record are stored together or n
 from __future__ import annotations
 
 import json
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 import sqlalchemy as sa
 
+from batlab.custody import file_payload
 from batlab.formatting import status_of
 from batlab.registry.chain import (
     append_record,
@@ -100,6 +102,21 @@ class Inspection:
     record_sha256: str | None = None
 
 
+class AlreadyStored(Exception):
+    """``add_inspection(..., same_as=...)`` found the inspection stored already.
+
+    Attributes
+    ----------
+    inspection : Inspection
+        The stored inspection it repeats (nothing new was written).
+    """
+
+    def __init__(self, inspection: Inspection):
+        super().__init__(f"inspection #{inspection.id} of {inspection.serial!r} is stored "
+                         "already")
+        self.inspection = inspection
+
+
 def encode_modes(m) -> dict:
     """Return fitted modes as the registry stores them (``modes_json``): plain lists, SI.
 
@@ -174,13 +191,14 @@ def has_bat(conn: sa.Connection, serial: str) -> bool:
 def store_file(conn: sa.Connection, name: str, content: bytes) -> str:
     """Keep a test file (inside the caller's transaction), once per content.
 
-    A new file gets a custody record; returns its SHA-256.
+    A new file gets a custody record covering every column of its row
+    (``custody.file_payload``: name, size and SHA-256 of the content); returns its SHA-256.
     """
     digest = sha256_bytes(content)
     if not has_file(conn, digest):
         conn.execute(sa.insert(files).values(sha256=digest, name=name, size=len(content),
                                              content=content))
-        append_record(conn, "file", digest, digest, canonical({"name": name}))
+        append_record(conn, "file", digest, None, file_payload(name, len(content), digest))
     return digest
 
 
@@ -294,17 +312,25 @@ def add_inspection(
     conn: sa.Connection, serial: str, verdict: dict, retest_name: str, retest: bytes,
     reference_seq: int | None = None, inputs: dict | None = None,
     report_path: str | None = None,
+    same_as: Callable[[sa.Connection], Inspection | None] | None = None,
 ) -> Inspection:
     """Store one inspection of a registered bat.
 
     With its re-test file, the registration (custody record ``reference_seq``, default: the
     bat's current one) it was judged against and the report's other inputs; appends its verdict
-    record to the custody chain. ``verdict`` holds ``status`` or ``altered``.
+    record to the custody chain. ``verdict`` holds ``status`` or ``altered``. ``same_as(conn)``,
+    when given, runs inside the write transaction before anything is stored and returns an
+    inspection already stored that this one repeats (None if none): then nothing is stored
+    and ``AlreadyStored`` is raised with it, so two processes storing the same inspection at
+    once store it once (the check and the store are one transaction).
     """
     stamp = now_utc()
     with transaction(conn):
         if not has_bat(conn, serial):
             raise ValueError(f"unknown serial {serial!r}: no such bat in the registry")
+        done = None if same_as is None else same_as(conn)
+        if done is not None:
+            raise AlreadyStored(done)
         if reference_seq is None:
             reference_seq = get_bat(conn, serial).reference_seq
         ref = bat_as_registered(conn, reference_seq)

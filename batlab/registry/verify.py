@@ -127,11 +127,14 @@ def _check_files(conn: sa.Connection, problems: list[str], notes: list[str]) -> 
                                                               ).fetchall():
         problems.append("foreign keys: rows refer to missing rows")
     by_sha = {}
-    for sha, name, content in conn.execute(sa.select(files.c.sha256, files.c.name,
-                                                     files.c.content)):
+    for sha, name, size, content in conn.execute(sa.select(
+            files.c.sha256, files.c.name, files.c.size, files.c.content)):
         by_sha[sha] = name
         if sha256_bytes(bytes(content)) != sha:
             problems.append(f"file {name} ({sha[:12]}): content fails its SHA-256")
+        if size != len(content):
+            problems.append(f"file {name} ({sha[:12]}): size {size} differs from its "
+                            f"content's {len(content)} bytes")
     for serial, sha in conn.execute(sa.select(bats.c.serial, bats.c.baseline_sha256)):
         if sha not in by_sha:
             problems.append(f"bat {serial!r}: baseline file {sha[:12]} missing")
@@ -172,6 +175,10 @@ def _check_coverage(conn: sa.Connection, rows: list[custody.Row], by_sha: dict,
         if len(recs) > 1:
             problems.append(f"file {sha[:12]}: {len(recs)} custody records "
                             f"(#{', #'.join(str(r.seq) for r in recs)}), expected one")
+        if sha in by_sha and not _file_row_matches(conn, recs[0]):
+            problems.append(f"file {by_sha[sha]} ({sha[:12]}): stored row (name, size) "
+                            f"differs from custody record #{recs[0].seq}")
+            changed.append(recs[0].seq)
     file_recs = {r.subject for r in rows if r.kind == "file"}
     problems += [f"file {by_sha[sha]} ({sha[:12]}): no custody record" for sha in by_sha
                  if sha not in file_recs]
@@ -191,6 +198,18 @@ def _check_coverage(conn: sa.Connection, rows: list[custody.Row], by_sha: dict,
     changed += _check_stored(conn, calibrations, "calibration", "calibration",
                              calibration_payload, _by_subject(rows, "calibration"), problems)
     return changed
+
+
+def _file_row_matches(conn: sa.Connection, rec: custody.Row) -> bool:
+    """Return whether a stored file's row equals its record: name, size and SHA-256.
+
+    A record of the first format (``custody.name_only_file_record``) holds the name alone.
+    """
+    name, size = conn.execute(sa.select(files.c.name, files.c.size)
+                              .where(files.c.sha256 == rec.subject)).one()
+    if custody.name_only_file_record(rec):
+        return rec.payload == canonical({"name": name})
+    return rec.payload == custody.file_payload(name, size, rec.subject)
 
 
 def _check_stored(conn: sa.Connection, table: sa.Table, noun: str, kind: str, payload,

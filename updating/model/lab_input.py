@@ -4,8 +4,9 @@ meta.json (docs/contract.md): ``META_KEYS`` says what each key must hold: serial
 ``serial_problem``-free text), species, nominal_E_psi, nominal_weight_density_lbf_in3,
 weight_lb (the bat on a scale: the registration's mass-line check needs it) and points_in
 (the impact points) are required; the baseline's own conditions (``CONDITION_KEYS``:
-accelerometer_mass_g, used by diagnose as a prior, temperature_c, tested_on) are optional;
-other keys are ignored (``json_input.unused_keys`` lists them).
+accelerometer_mass_g, used by diagnose as a prior, temperature_c, tested_on) and model (the
+bat model's name, which its calibrations are stored under) are optional; other keys are
+ignored (``json_input.unused_keys`` lists them).
 """
 
 from __future__ import annotations
@@ -68,6 +69,7 @@ META_KEYS = {  # ranges wider than any bat: plausible.check_meta judges a bat's 
     "nominal_weight_density_lbf_in3": Key("number", "lbf/in^3", 1e-4, 1.0, required=True),
     "weight_lb": Key("number", "lb", 0.05, 50.0, required=True),
     "points_in": Key("numbers", "in from the knob end", -10.0, 100.0, required=True),
+    "model": Key("text"),  # the bat model's name (calibrations: batlab.pipeline.chance)
     **{k: v for k, v in CONDITION_KEYS.items() if k != "weight_lb"},
 }
 """What each key of meta.json must hold."""
