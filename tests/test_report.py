@@ -54,18 +54,21 @@ def test_report_is_self_contained(result, tmp_path):
     page = path.read_text()
     assert "Inspection of bat HX-2001" in page
     assert "Bat HX-2001 has been altered: a bore about 1.00 in across from 24.0 to 33.0 in" in page
-    # no registry to read a calibration from: said unmeasured, the nominal 1 - 0.999 beside
-    assert ("The chance an unaltered bat differs this much: unmeasured, no calibration was"
-            in page and "nominal 0.1 % is not a measured rate." in page)
+    # no registry to read a calibration from: the box says it plainly, the evidence table
+    # says once that the chance is unmeasured and gives the nominal 1 - 0.999 beside it
+    box = page.split("<div class='verdict altered'>")[1].split("</div>")[0]
+    assert "unmeasured" not in box and "nominal" not in box
+    assert page.count("unmeasured <span class='note'>(no calibration was") == 1
+    assert "<span class='n'>0.1 %</span> <span class='note'>(p = <span class='n'>0.001</span>)" in page
     assert "confidence" not in page.lower()
     assert pipeline.file_sha256(SAMPLE / "retest_corked.uff") in page  # provenance
-    assert "<td>Species</td><td>white ash</td>" in page
+    assert "<td>Bat</td><td>HX-2001 (white ash)</td>" in page  # the certificate block
     imgs = re.findall(r'<img src="data:image/png;base64,([A-Za-z0-9+/=]+)"', page)
     assert len(imgs) >= 3  # element bars over the bat, FRF overlay, MAC
     for b64 in imgs:
         assert base64.b64decode(b64)[:8] == b"\x89PNG\r\n\x1a\n"
     assert not re.search(r"(src|href)=\"(?!data:)", page)  # nothing fetched from elsewhere
-    assert "24.00 – 33.00" in page  # region in inches from the knob
+    assert "<span class='n'>24.00</span> – <span class='n'>33.00</span>" in page  # region, in
 
 
 def test_report_with_real_fits_has_stabilisation_diagrams(monkeypatch, tmp_path):
@@ -181,10 +184,10 @@ def test_plain_sentence_for_clean_and_inconclusive(result):
                           fill_density_ratio=None)  # as stored before chances were measured
     text = headline(clean)
     assert text.startswith("Bat HX-2001 shows no sign of alteration")
-    assert "The chance an unaltered bat differs this much: unmeasured" in text
-    assert "the F distribution's nominal 92 % is not a measured rate" in text
-    assert "called altered only when the F test's nominal chance is below 1 %" in text
-    assert "0.075" not in text and "7.5" not in text
+    assert "chance" not in text  # said once, in the evidence table
+    page = render_html(clean, "2026-01-01T00:00:00", figures_png(clean))
+    assert "<span class='n'>92 %</span> <span class='note'>(p = <span class='n'>0.93</span>)" in page
+    assert "0.075" not in page and "7.5 %" not in page
     odd = _with_verdict(result, status="inconclusive", altered=None,
                         reasons=["too few modes pair (2 of 6): re-test with more hits"])
     assert headline(odd) == ("No verdict is possible for bat HX-2001: too few modes pair (2 of "

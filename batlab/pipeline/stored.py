@@ -169,7 +169,9 @@ def provenance(
                     "verdict_record": stored.record_seq, "verdict_record_sha256":
                     stored.record_sha256,
                     "verdict_sha256": reg.custody_record(conn, stored.record_seq).content_sha256,
-                    "chain_head": reg.head(conn)})
+                    "chain_head": reg.head(conn),
+                    "bat_inspection": 1 + [r.id for r in reg.history(conn, stored.serial)]
+                    .index(stored.id)})
         if stored.reference_seq is not None:
             ref = reg.custody_record(conn, stored.reference_seq)
             out.update({"reference_record": ref.seq, "reference_record_sha256":
@@ -198,7 +200,8 @@ def report_inputs(result: InspectionResult, meta: dict, prov: dict) -> ReportInp
     """
     return ReportInputs(result.serial, result.profile, result.reference, result.baseline,
                         result.retest, verdict_record(result.serial, result.verdict,
-                                                      result.stated), meta, prov)
+                                                      result.stated), meta, prov,
+                        None if result.conditions is None else asdict(result.conditions))
 
 
 def _stored_inspection(conn: sa.Connection, serial: str,
@@ -294,7 +297,8 @@ def stored_report_inputs(
     """
     stored, bat, case = stored_case(conn, serial, inspection_id, progress)
     inputs = ReportInputs(serial, case.profile, case.reference, case.baseline, case.retest,
-                          stored.verdict, bat.meta, provenance(conn, stored=stored))
+                          stored.verdict, bat.meta, provenance(conn, stored=stored),
+                          (stored.inputs or {}).get("retest_conditions"))
     return with_element_map(inputs, case, stored.inputs or {}, progress)
 
 
