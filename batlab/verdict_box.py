@@ -178,7 +178,8 @@ def verdict_box(v: dict) -> VerdictBox:
         rule = (f or {}).get("rule") or "altered"
         todo = NEXT_ALTERED.get((f or {}).get("kind", "core"), NEXT_ALTERED["core"])
         sure = _sure(v, status)
-        return VerdictBox("Altered." if rule == "altered" else f"Altered: {rule}.", _what(f), sure[0].upper() + sure[1:],
+        said = "Altered." if rule == "altered" else f"Altered: {rule}."
+        return VerdictBox(said, _what(f), sure[0].upper() + sure[1:],
                           todo[0].upper() + todo[1:])
     sure = _sure(v, status)
     what, todo = "", "none; the bat may be used."

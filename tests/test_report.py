@@ -59,7 +59,8 @@ def test_report_is_self_contained(result, tmp_path):
     box = page.split("<div class='verdict altered'>")[1].split("</div>")[0]
     assert "unmeasured" not in box and "nominal" not in box
     assert page.count("unmeasured <span class='note'>(no calibration was") == 1
-    assert "<span class='n'>0.1 %</span> <span class='note'>(p = <span class='n'>0.001</span>)" in page
+    assert ("<span class='n'>0.1 %</span> <span class='note'>(p = <span class='n'>0.001</span>)"
+            in page)
     assert "confidence" not in page.lower()
     assert pipeline.file_sha256(SAMPLE / "retest_corked.uff") in page  # provenance
     assert "<td>Bat</td><td>HX-2001 (white ash)</td>" in page  # the certificate block
@@ -186,7 +187,8 @@ def test_plain_sentence_for_clean_and_inconclusive(result):
     assert text.startswith("Bat HX-2001 shows no sign of alteration")
     assert "chance" not in text  # said once, in the evidence table
     page = render_html(clean, "2026-01-01T00:00:00", figures_png(clean))
-    assert "<span class='n'>92 %</span> <span class='note'>(p = <span class='n'>0.93</span>)" in page
+    assert ("<span class='n'>92 %</span> <span class='note'>(p = <span class='n'>0.93</span>)"
+            in page)
     assert "0.075" not in page and "7.5 %" not in page
     odd = _with_verdict(result, status="inconclusive", altered=None,
                         reasons=["too few modes pair (2 of 6): re-test with more hits"])
