@@ -286,7 +286,7 @@ def _bar_legends(axes, handles: list, has_map: bool) -> None:
     for ax, key, extra in ((axes[0], "alpha", kinds + handles), (axes[1], "beta", [])):
         signs = [Patch(facecolor=c, edgecolor="k", lw=0.4, label=word)
                  for c, word in zip(SIGN_COLOURS, SIGN_WORDS[key], strict=True)]
-        ax.legend(handles=signs + extra, fontsize=7, loc="lower left", ncol=3,
+        ax.legend(handles=signs + extra, fontsize=8, loc="lower left", ncol=3,
                   bbox_to_anchor=(0.0, 1.0), borderaxespad=0.2, frameon=False)
 
 
@@ -318,13 +318,12 @@ def _profile_panel(ax, r: ReportInputs, f: dict | None, words: str, colour: str)
                             label=f"{words}, {a:.1f}–{b:.1f} in")
             y = 0.6 * d_max
             ax.plot([a, a, b, b], [y - 0.1 * d_max, y, y, y - 0.1 * d_max], color=colour, lw=1.5)
-            ax.text((a + b) / 2, y + 0.04 * d_max, words, ha="center", va="bottom", fontsize=7,
+            ax.text((a + b) / 2, y + 0.04 * d_max, words, ha="center", va="bottom", fontsize=8,
                     color="k")
             top = 1.05 * d_max
     pts = r.baseline.modes.x_m / IN_TO_M
     ax.plot(pts, np.zeros_like(pts), "k+", ms=5, label="test points")
-    ax.legend(fontsize=7, loc="lower left", ncol=2)
-    ax.set_aspect("equal")
+    ax.legend(fontsize=8, loc="lower left", ncol=2)
     ax.set_ylim(-0.75 * d_max, top)
     ax.set_xlim(-0.5, prof.length_m / IN_TO_M + 0.5)
     ax.set_xlabel("x from the knob end (in)")
@@ -358,8 +357,8 @@ def element_figure(r: ReportInputs):
     f = shown_finding(v)
     label, words, colour = finding_label(f, status_of(v)) if f else ("", "", "")
     region = (*f["region_in"], label, colour) if f else None
-    fig, axes = plt.subplots(3, 1, sharex=True, figsize=(10, 7.2),
-                             gridspec_kw={"height_ratios": [2.2, 2.2, 1.2]})
+    fig, axes = plt.subplots(3, 1, sharex=True, figsize=(10, 7.8),
+                             gridspec_kw={"height_ratios": [2.2, 2.2, 1.7]})
     handles = []
     for ax, key, name in ((axes[0], "alpha", "mass change, alpha"),
                           (axes[1], "beta", "stiffness change, beta")):
@@ -376,7 +375,24 @@ def element_figure(r: ReportInputs):
     fig.suptitle("Element changes along the bat (knob at 0)", fontsize=11)
     _profile_panel(axes[2], r, f, words, colour)
     fig.tight_layout()
+    to_scale(fig, axes[2])
     return fig
+
+
+def to_scale(fig, ax) -> None:
+    """Draw ``ax`` to scale (an inch across is an inch up) without narrowing it.
+
+    ``set_aspect("equal")`` shrinks the axes' width and so moves the drawing of the bat off
+    the bar panels it shares its x axis with; here the y limits grow around the drawn ones
+    instead, so every panel keeps one width and one x axis.
+    """
+    fig.canvas.draw()
+    box = ax.get_window_extent()
+    x0, x1 = ax.get_xlim()
+    y0, y1 = ax.get_ylim()
+    span = (x1 - x0) * box.height / box.width
+    pad = max(span - (y1 - y0), 0.0) / 2
+    ax.set_ylim(y0 - pad, y1 + pad)
 
 
 # --- mass properties ---------------------------------------------------------------------------

@@ -261,3 +261,27 @@ def test_report_import_loads_no_stage():
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                          check=True, cwd=Path(__file__).resolve().parents[1])
     assert out.stdout.strip() == "True"  # the check above can fail: a pipeline name loads it
+
+
+def test_bat_drawing_shares_the_panels_x_axis(result):
+    """The to-scale drawing of the bat and the bar panels above it put every inch at the same
+    pixel (within 2 px at the page's resolution), with a finding's label above the bat; and
+    the drawing stays to scale (an inch up is an inch across, within 2 %)."""
+    from batlab.report import element_figure
+
+    finding = {"kind": "inserted_mass", "rule": "nailed", "legal": False,
+               "region_in": [30.8, 33.8], "reading": {"added_mass_g": 18.0}}
+    r = _with_verdict(result, finding=finding)
+    fig = element_figure(r)
+    fig.set_dpi(110)  # as the page's PNG
+    fig.canvas.draw()
+    axes = fig.axes[:3]
+    xs = [ax.transData.transform([(0.0, 0.0), (34.0, 0.0)])[:, 0] for ax in axes]
+    for x in xs[:2]:
+        assert np.abs(x - xs[2]).max() <= 2.0, (x, xs[2])
+    ax = axes[2]
+    (x0, y0), (x1, y1) = ax.transData.transform([(0.0, 0.0), (1.0, 1.0)])
+    assert (y1 - y0) == pytest.approx(x1 - x0, rel=0.02)
+    import matplotlib.pyplot as plt
+
+    plt.close(fig)
