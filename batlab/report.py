@@ -614,7 +614,7 @@ def certificate_rows(r: ReportInputs, lab: dict | None, generated_at: str) -> li
     """Return the certificate block: report number, bat, lab, equipment, conditions, rule."""
     pv, meta = r.provenance, r.meta
     rows: list[list] = [["Report number", _Raw(f"<b>{html.escape(report_number(r))}</b>")],
-                        ["Issued (UTC)", generated_at[:19].replace("T", " ")],
+                        ["Report generated (UTC)", generated_at[:19].replace("T", " ")],
                         ["Bat", f"{r.serial} ({meta.get('species') or 'species not given'})"]]
     if pv.get("bat_inspection") is not None:
         when = pv["inspected_at"][:10]
@@ -944,12 +944,11 @@ def _finding_facts(finding: dict | None) -> list[list]:
     return rows
 
 
-def _provenance(r: ReportInputs, generated_at: str) -> list[list]:
+def _provenance(r: ReportInputs) -> list[list]:
     pv, meta = r.provenance, r.meta
     judged = r.verdict.get("code") or pv.get("batlab_version")
     drawn = code_version()
-    rows: list[list] = [["Report generated (UTC)", generated_at[:19].replace("T", " ")],
-                        ["Code that judged (batlab version)", judged],
+    rows: list[list] = [["Code that judged (batlab version)", judged],
                         ["Code that drew this report", drawn]]
     if judged != drawn:
         rows.append(["Other code", f"judged by batlab {judged}, this report drawn by batlab "
@@ -1054,7 +1053,7 @@ def render_html(r: ReportInputs, generated_at: str, figures: dict[str, bytes],
             parts.append(f"<h3>Stabilisation diagram: {html.escape(name)}</h3>")
             parts.append(_img(_data_uri(figures[key]), f"stabilisation {name}"))
     parts.append("<h2>Provenance</h2>")
-    parts.append(_table(None, _provenance(r, generated_at), "facts"))
+    parts.append(_table(None, _provenance(r), "facts"))
     if r.provenance.get("verdict_record") is not None:
         parts.append("<p class='note'>To verify: <code>batlab registry check --report "
                      "index.html</code> on the registry confirms every record is unchanged and "

@@ -64,6 +64,7 @@ def test_report_regenerated_from_the_registry_alone(lab, capsys):
     code, out, _ = run_cli(["registry", "check", "--report", lab / "again" / "index.html"],
                            capsys)
     assert code == 0 and "intact" in out
+    assert f"{lab / 'again' / 'index.html'}: verified against this registry, checked " in out
     forged = again.replace(insp["record_sha256"], "0" * 64)
     (lab / "forged.html").write_text(forged)
     code, out, _ = run_cli(["registry", "check", "--report", lab / "forged.html"], capsys)

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import argparse
 import json
-from dataclasses import asdict, replace
+from dataclasses import asdict
 
 from batlab.cli_support import add_db_argument, db_path, note_printer
 
@@ -82,18 +82,27 @@ def run(args: argparse.Namespace) -> int:
             return 0
         trusted = signing.trusted_keys(args.trust)
         res = check(conn, trusted, args.head)
+        page = None
         if args.report:
+            from batlab.registry import now_utc
             from batlab.report_check import check_page
 
-            res = replace(res, problems=res.problems + check_page(conn, args.report, trusted))
-    _print(res, shown(path), args.json)
-    return 0 if res.ok else 1
+            page = {"path": str(args.report), "checked_at": now_utc(),
+                    "problems": check_page(conn, args.report, trusted)}
+            page["ok"] = not page["problems"]
+    _print(res, shown(path), args.json, page)
+    return 0 if res.ok and (page is None or page["ok"]) else 1
 
 
-def _print(res, path, as_json: bool) -> None:
-    """Print a check's result: JSON, or a summary line and one line per problem and note."""
+def _print(res, path, as_json: bool, page: dict | None = None) -> None:
+    """Print a check's result: JSON, or a summary line and one line per problem and note.
+
+    A report page checked against the registry (``--report``) gets its own line: its
+    problems are the page's, not the registry's, and it says when it was checked.
+    """
     if as_json:
-        print(json.dumps({**asdict(res), "ok": res.ok}))
+        print(json.dumps({**asdict(res), "ok": res.ok and (page is None or page["ok"]),
+                          "registry_ok": res.ok, **({"report": page} if page else {})}))
         return
     state = "intact" if res.ok else "DAMAGED OR CHANGED"
     print(f"{path}: {state}: {res.n_records} custody records, {res.n_files} files")
@@ -105,6 +114,14 @@ def _print(res, path, as_json: bool) -> None:
         print(f"  note: {line}")
     if res.first_changed is not None:
         print(f"  first changed record: #{res.first_changed}")
+    if page is not None:
+        when = page["checked_at"][:19].replace("T", " ")
+        state = ("verified against this registry" if page["ok"] else
+                 "DOES NOT MATCH this registry (the page is at fault, not the registry)")
+        print(f"{page['path']}: {state}, checked {when} UTC (its seal, verdict, reasons, "
+              "records, files and registry head)")
+        for line in page["problems"]:
+            print(f"  problem: {line}")
 
 
 def _registry_arg(text: str):
