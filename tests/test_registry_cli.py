@@ -56,6 +56,9 @@ def test_report_regenerated_from_the_registry_alone(lab, capsys):
     assert WRITTEN.sub("", DATE_LINE.sub("", again)) == WRITTEN.sub("", DATE_LINE.sub("", original))
     assert again != original or DATE_LINE.search(again)  # only the date may differ
     assert (lab / "plots" / "elements.png").is_file()
+    # the bat's first inspection is its inspection 1, whatever the registry's numbering
+    assert re.search(r"inspection <span class='n'>1</span> of bat HX-2001, \S+ \(registry "
+                     r"inspection #\d+\)", again)
     code, out, _ = run_cli(["history", "HX-2001", "--json"], capsys)
     (insp,) = json.loads(out)["inspections"]
     assert insp["record_sha256"] in again and insp["retest_sha256"] in again

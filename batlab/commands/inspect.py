@@ -120,7 +120,8 @@ def run(args: argparse.Namespace) -> int:
                                                  retest_profile_path=args.retest_profile)
             stored = pipeline.store_inspection(conn, result, retest, args.false_alarm,
                                                retest_meta=bool(args.retest_meta))
-            progress(f"stored as inspection #{stored.id} of {result.serial} (custody record "
+            progress(f"stored as inspection {pipeline.bat_inspection_number(conn, stored)} of "
+                     f"{result.serial} (registry inspection #{stored.id}, custody record "
                      f"#{stored.record_seq})")
             _print(args, pipeline.result_dict(result), readable)
             if args.out or args.plots:

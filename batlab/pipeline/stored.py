@@ -24,8 +24,8 @@ from updating.inspect.retest_meta import RetestConditions
 from updating.model.calipers import CaliperSurvey, make_survey
 
 __all__ = [
-    "already_inspected", "history_table", "note_report", "provenance", "report_inputs",
-    "store_inspection", "stored_bat", "stored_report_inputs",
+    "already_inspected", "bat_inspection_number", "history_table", "note_report",
+    "provenance", "report_inputs", "store_inspection", "stored_bat", "stored_report_inputs",
 ]
 
 
@@ -139,6 +139,15 @@ def note_report(conn: sa.Connection, stored: reg.Inspection, path: str) -> None:
     reg.set_report_path(conn, stored.id, path)
 
 
+def bat_inspection_number(conn: sa.Connection, stored: reg.Inspection) -> int:
+    """Return an inspection's number among its bat's own (1 for its first).
+
+    The registry numbers inspections across all bats (``Inspection.id``); a bat's first
+    inspection is its inspection 1 whatever that id.
+    """
+    return 1 + [r.id for r in reg.history(conn, stored.serial)].index(stored.id)
+
+
 def provenance(
     conn: sa.Connection | None = None, stored: reg.Inspection | None = None,
     baseline_sha256: str | None = None, retest_sha256: str | None = None,
@@ -170,8 +179,7 @@ def provenance(
                     stored.record_sha256,
                     "verdict_sha256": reg.custody_record(conn, stored.record_seq).content_sha256,
                     "chain_head": reg.head(conn),
-                    "bat_inspection": 1 + [r.id for r in reg.history(conn, stored.serial)]
-                    .index(stored.id)})
+                    "bat_inspection": bat_inspection_number(conn, stored)})
         if stored.reference_seq is not None:
             ref = reg.custody_record(conn, stored.reference_seq)
             out.update({"reference_record": ref.seq, "reference_record_sha256":
