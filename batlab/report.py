@@ -679,8 +679,13 @@ def _regions_words(r: ReportInputs, emap) -> str:
         return ("Neither the fit nor the element map finds an alteration: every "
                 "element's map bar stays within its noise band.")
     if fit is None and status_of(v) == "inconclusive":
-        return (f"The element map marks {mreg[0]:.1f}–{mreg[1]:.1f} in; the verdict gives no "
-                "decision (its reason is above), and a map alone never calls a bat altered.")
+        f = v.get("finding") or {}
+        fit_words = "" if not f.get("region_in") else (
+            f" and the possible {f.get('rule')} fit {f['region_in'][0]:.1f}–"
+            f"{f['region_in'][1]:.1f} in")
+        return (f"The element map marks {mreg[0]:.1f}–{mreg[1]:.1f} in{fit_words}; the verdict "
+                "gives no decision (its reason is above), and a map alone never calls a bat "
+                "altered.")
     if fit is None:
         return (f"The element map marks {mreg[0]:.1f}–{mreg[1]:.1f} in, but the decision test, "
                 "which allows for moisture and re-mounting, found the change no larger than an "
@@ -978,11 +983,11 @@ def _provenance(r: ReportInputs) -> list[list]:
     return rows
 
 
-def verdict_box_html(v: dict) -> str:
+def verdict_box_html(v: dict, weighed: bool = False) -> str:
     """Write the first screen (``batlab.verdict_box``) as the coloured verdict box."""
     lines = "".join(
         f"<p>{f'<b>{html.escape(label)}:</b> ' if label else ''}{html.escape(text)}</p>"
-        for label, text in verdict_box(v).lines())
+        for label, text in verdict_box(v, weighed).lines())
     return f"<div class='verdict {status_of(v)}'>{lines}</div>"
 
 
@@ -997,7 +1002,7 @@ def render_html(r: ReportInputs, generated_at: str, figures: dict[str, bytes],
     number = report_number(r)
     parts = [f"<h1>Inspection of bat {html.escape(r.serial)}</h1>",
              f"<p class='note'>Report {html.escape(number)}</p>",
-             verdict_box_html(v),
+             verdict_box_html(v, (r.conditions or {}).get("weight_kg") is not None),
              f"<p class='finding'>{html.escape(headline(r))}</p>",
              *([f"<p class='warn'>This bat was registered with --force although its baseline "
                 f"looked odd: {html.escape(str(r.meta[FORCED_KEY]))}</p>"]

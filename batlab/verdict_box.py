@@ -146,13 +146,16 @@ def _sure(v: dict, status: str) -> str:
     return "no more change than moisture, temperature or the sensor's mounting make."
 
 
-def verdict_box(v: dict) -> VerdictBox:
+def verdict_box(v: dict, weighed: bool = False) -> VerdictBox:
     """Compose the first screen from a stored verdict (module docstring).
 
     Parameters
     ----------
     v : dict
         The verdict as stored (contract JSON).
+    weighed : bool
+        Whether the re-test's weight was given (retest.json): then the bat is not asked to
+        be weighed.
 
     Returns
     -------
@@ -168,6 +171,8 @@ def verdict_box(v: dict) -> VerdictBox:
                          "fill_density_ratio": v.get("fill_density_ratio")}}
     if status == "inconclusive":
         _, sure, todo = reason_kind([str(r) for r in v.get("reasons") or []])
+        if weighed:
+            todo = todo.replace("weigh it, ", "").replace("re-weigh it and ", "")
         what = _what(f)
         if what:
             k = kind_of(f["kind"], f.get("rule")) or kind(UNEXPLAINED)

@@ -285,3 +285,25 @@ def test_bat_drawing_shares_the_panels_x_axis(result):
     import matplotlib.pyplot as plt
 
     plt.close(fig)
+
+
+def test_inconclusive_map_note_does_not_acquit(result):
+    """An inconclusive verdict's map note names both regions and never says the decision
+    found the change no larger than an unaltered bat's (issue 50: a nailed bat's page said
+    both "large against the test's noise" and that)."""
+    from batlab.report import regions_note
+
+    n = len(result.verdict["elements"])
+    msso = {"alpha": [0.0] * n, "beta": [0.0] * n, "alpha_std": [0.01] * n,
+            "beta_std": [0.01] * n, "region_m": [32.1 * IN_TO_M, 33.1 * IN_TO_M]}
+    details = {"p_value": 0.2, "statistic": "F", "n_modes": 6, "msso": msso}
+    finding = {"kind": "inserted_mass", "rule": "nailed", "legal": False,
+               "region_in": [30.9, 32.4], "reading": {"added_mass_g": 9.5}}
+    r = _with_verdict(result, status="inconclusive", altered=None, region_in=None,
+                      finding=finding, reasons=["the change fits nailed and is large"],
+                      details=details)
+    note = regions_note(r)
+    assert "no larger than an unaltered bat's" not in note
+    assert note.startswith("The element map marks 32.1–33.1 in and the possible nailed fit "
+                           "30.9–32.4 in")
+    assert "no decision" in note

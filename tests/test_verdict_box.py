@@ -90,3 +90,11 @@ def test_inconclusive_reason_kinds():
                        "reasons": ["too few modes pair (2 of 6): re-test with more hits"]})
     assert box.verdict == "No verdict: not called altered."
     assert box.next == "Re-test with more hits."
+
+
+def test_a_weighed_bat_is_not_asked_to_be_weighed():
+    """With the re-test's weight given, the next step does not ask for it (issue 50)."""
+    v = {"status": "inconclusive", "reasons": ["the change fits nailed, but also fits the "
+                                               "wood changed as far as it can"]}
+    assert "weigh" in verdict_box(v).next.lower()
+    assert "weigh" not in verdict_box(v, weighed=True).next.lower()
