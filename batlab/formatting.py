@@ -186,7 +186,8 @@ def readable(out: dict) -> str:
         lines.append(f"  reason: {reason}")
     said = p_value_words(out)
     if said:
-        lines.append(f"  {said}")
+        if not any(said in str(r) for r in out.get("reasons") or []):  # said once
+            lines.append(f"  {said}")
         rate = false_alarm_words(out.get("false_alarm_rate"))
         if rate:
             lines.append(f"  {rate}")

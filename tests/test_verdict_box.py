@@ -98,3 +98,15 @@ def test_a_weighed_bat_is_not_asked_to_be_weighed():
                                                "wood changed as far as it can"]}
     assert "weigh" in verdict_box(v).next.lower()
     assert "weigh" not in verdict_box(v, weighed=True).next.lower()
+
+
+def test_terminal_says_the_chance_once():
+    """The terminal's verdict does not repeat a chance clause its reason already holds (the
+    demo printed it three times, issue 50)."""
+    from batlab.formatting import chance_words, readable
+
+    said = chance_words(NOMINAL)
+    out = {"serial": "S", "status": "altered", "chance": NOMINAL,
+           "reasons": [f"the change is not one moisture can make ({said})", "it fits a core"]}
+    assert readable(out).count(said) == 1
+    assert readable({**out, "reasons": ["it fits a core"]}).count(said) == 1
