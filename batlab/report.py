@@ -492,13 +492,13 @@ def weight_rows(r: ReportInputs) -> list[list]:
     rows: list[list] = []
     scale = _scale_change_g(r)
     if scale is not None:
-        rows.append(["Scale", _Raw(nobreak_numbers(gum(scale[0], scale[1], 1))),
+        rows.append(["Scale", _Raw(_num(gum(scale[0], scale[1], 1))),
                      _Raw(nobreak_numbers(f"{100 * scale[0] / w0_g:+.1f}")),
                      "the re-test's weight less the registered weight"])
     found = _finding_change_g(r)
     if found is not None:
         rows.append([found[2].split(":")[0].capitalize(),
-                     _Raw(nobreak_numbers(gum(found[0], found[1], 1))),
+                     _Raw(_num(gum(found[0], found[1], 1))),
                      _Raw(nobreak_numbers(f"{100 * found[0] / w0_g:+.1f}")), found[2]])
     return rows
 
@@ -945,7 +945,7 @@ def _finding_facts(finding: dict | None) -> list[list]:
         u = unc.get(key)
         text = gum(val, float(u) if isinstance(u, (int, float)) else None, decimals)
         rows.append([f"Finding: {name.replace('_', ' ')}" + (f" ({unit})" if unit else ""),
-                     _Raw(text)])
+                     _Raw(_num(text))])
     return rows
 
 

@@ -307,3 +307,43 @@ def test_inconclusive_map_note_does_not_acquit(result):
     assert note.startswith("The element map marks 32.1–33.1 in and the possible nailed fit "
                            "30.9–32.4 in")
     assert "no decision" in note
+
+
+@pytest.mark.parametrize("value, u, text", [
+    (1.003, 0.003, "1.0030 ± 0.0030"), (9.54, 1.6, "9.5 ± 1.6"), (45.44, 1.23, "45.4 ± 1.2"),
+    (18.2, 0.0996, "18.20 ± 0.10"), (1809198.0, 23456.0, "1,809,000 ± 23,000"),
+    (0.074, None, "0.074")])
+def test_gum_rounding(value, u, text):
+    """An uncertainty to two significant digits, the value to the same place (GUM 7.2.6);
+    issue 50's "core diameter 1.003 ± 0.003" and "E 1,809,198 psi"."""
+    from batlab.formatting import gum, significant
+
+    assert gum(value, u) == text
+    assert significant(1809198.0) == "1,810,000"
+
+
+def test_report_states_each_weight_once_with_its_source(result):
+    """The scale's change and the finding's side by side, in g and %, and whether they agree;
+    the re-test's weight in lb in the certificate (issue 50: three weights that disagreed,
+    the re-test's never shown)."""
+    from batlab.report import certificate_rows, weight_rows, weights_agree
+
+    w0_kg = float(result.meta["weight_lb"]) * LB_TO_KG
+    finding = {"kind": "inserted_mass", "rule": "nailed", "legal": False,
+               "region_in": [30.9, 32.4], "reading": {"added_mass_g": 9.5},
+               "uncertainty": {"added_mass_g": 1.6}}
+    r = replace(_with_verdict(result, finding=finding),
+                conditions={"weight_kg": w0_kg + 0.002, "tested_on": "2026-03-14"})
+    rows = [[str(c) for c in row] for row in weight_rows(r)]
+    assert [row[0] for row in rows] == ["Scale", "Vibration"]
+    assert rows[1][1] == "<span class='n'>9.5 ± 1.6</span>"
+    assert rows[0][1].startswith("<span class='n'>2.0 ± 2.4")  # 0.3 % of 809 g
+    assert weights_agree(r).startswith("The scale and the vibration disagree: they differ by "
+                                       "7 g, more than twice")
+    near = replace(r, conditions={"weight_kg": w0_kg + 0.009})
+    assert weights_agree(near).startswith("The scale and the vibration agree: they differ by "
+                                          "0 g")
+    cert = {str(k): str(v) for k, v in certificate_rows(r, None, "2026-03-14T10:00:00")}
+    assert cert["Weight at re-test (lb, scale)"] == \
+        f"<span class='n'>{(w0_kg + 0.002) / LB_TO_KG:.3f}</span>"
+    assert cert["Re-test date"] == "2026-03-14"
