@@ -61,6 +61,8 @@ COMMANDS: dict[str, Command] = {
                                    "against the registry)"),
     "report": _command("report", "regenerate the report of a stored inspection from the "
                                  "registry (files kept there)"),
+    "lab": _command("lab", "set or show the lab profile (name, operator, equipment) that "
+                           "reports print"),
     "export": _command("export", "write the inspection history (one bat or all) as a CSV file"),
     "registry": _command("registry", "check the registry (SQLite integrity, stored files, "
                                      "the signed custody chain); print the lab's public key "

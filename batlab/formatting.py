@@ -186,7 +186,8 @@ def readable(out: dict) -> str:
         lines.append(f"  reason: {reason}")
     said = p_value_words(out)
     if said:
-        lines.append(f"  {said}")
+        if not any(said in str(r) for r in out.get("reasons") or []):  # said once
+            lines.append(f"  {said}")
         rate = false_alarm_words(out.get("false_alarm_rate"))
         if rate:
             lines.append(f"  {rate}")
@@ -237,3 +238,27 @@ def finding_words(finding: dict | None, length_in: float | None = None) -> str |
         where = f"the last {length_in - a:.0f} in of the barrel ({a:.1f}-{b:.1f} in)"
     return say_parts(k.words, {**(finding.get("reading") or {}), "rule": finding["rule"],
                                "where": where, "a": a, "b": b, "length_in": b - a})
+
+
+def gum(value: float, u: float | None, unit_decimals: int = 3) -> str:
+    """Write a value with its standard uncertainty as the GUM asks: "1.003 ± 0.012".
+
+    The uncertainty to two significant digits and the value to the same decimal place
+    (JCGM 100:2008, 7.2.6); without an uncertainty (or a zero one), the value to
+    ``unit_decimals`` decimals.
+    """
+    if u is None or not math.isfinite(u) or u <= 0:
+        return f"{value:.{unit_decimals}f}"
+    decimals = 1 - math.floor(math.log10(u))
+    if round(u, decimals) >= 10 ** (2 - decimals):  # 0.0996 rounds to 0.100: two digits
+        decimals -= 1
+    shown = max(decimals, 0)
+    return f"{round(value, decimals):,.{shown}f} ± {round(u, decimals):,.{shown}f}"
+
+
+def significant(value: float, digits: int = 3) -> str:
+    """Write a value to ``digits`` significant digits, with thousands separators."""
+    if value == 0 or not math.isfinite(value):
+        return f"{value:g}"
+    decimals = digits - 1 - math.floor(math.log10(abs(value)))
+    return f"{round(value, decimals):,.{max(decimals, 0)}f}"

@@ -19,6 +19,7 @@ import base64
 import html
 import io
 import os
+import re
 import tempfile
 from pathlib import Path
 
@@ -28,16 +29,19 @@ from batlab.formatting import (
     decision_level,
     false_alarm_words,
     finding_words,
+    gum,
     p_value,
-    p_value_words,
     share,
+    significant,
     stated_chance,
     status_of,
 )
+from batlab.lab import lab_rows
 from batlab.pipeline.records import FORCED_KEY, ReportInputs, jsonable, lab_units
 from batlab.registry import now_utc
 from batlab.report_check import seal_page
 from batlab.safe_text import for_page
+from batlab.verdict_box import verdict_box
 from batlab.version import code_version
 from ema.io.atomic_write import atomic_write
 from updating.inspect.details import InspectionDetails, ModePair
@@ -283,7 +287,7 @@ def _bar_legends(axes, handles: list, has_map: bool) -> None:
     for ax, key, extra in ((axes[0], "alpha", kinds + handles), (axes[1], "beta", [])):
         signs = [Patch(facecolor=c, edgecolor="k", lw=0.4, label=word)
                  for c, word in zip(SIGN_COLOURS, SIGN_WORDS[key], strict=True)]
-        ax.legend(handles=signs + extra, fontsize=7, loc="lower left", ncol=3,
+        ax.legend(handles=signs + extra, fontsize=8, loc="lower left", ncol=3,
                   bbox_to_anchor=(0.0, 1.0), borderaxespad=0.2, frameon=False)
 
 
@@ -315,13 +319,12 @@ def _profile_panel(ax, r: ReportInputs, f: dict | None, words: str, colour: str)
                             label=f"{words}, {a:.1f}–{b:.1f} in")
             y = 0.6 * d_max
             ax.plot([a, a, b, b], [y - 0.1 * d_max, y, y, y - 0.1 * d_max], color=colour, lw=1.5)
-            ax.text((a + b) / 2, y + 0.04 * d_max, words, ha="center", va="bottom", fontsize=7,
+            ax.text((a + b) / 2, y + 0.04 * d_max, words, ha="center", va="bottom", fontsize=8,
                     color="k")
             top = 1.05 * d_max
     pts = r.baseline.modes.x_m / IN_TO_M
     ax.plot(pts, np.zeros_like(pts), "k+", ms=5, label="test points")
-    ax.legend(fontsize=7, loc="lower left", ncol=2)
-    ax.set_aspect("equal")
+    ax.legend(fontsize=8, loc="lower left", ncol=2)
     ax.set_ylim(-0.75 * d_max, top)
     ax.set_xlim(-0.5, prof.length_m / IN_TO_M + 0.5)
     ax.set_xlabel("x from the knob end (in)")
@@ -355,8 +358,8 @@ def element_figure(r: ReportInputs):
     f = shown_finding(v)
     label, words, colour = finding_label(f, status_of(v)) if f else ("", "", "")
     region = (*f["region_in"], label, colour) if f else None
-    fig, axes = plt.subplots(3, 1, sharex=True, figsize=(10, 7.2),
-                             gridspec_kw={"height_ratios": [2.2, 2.2, 1.2]})
+    fig, axes = plt.subplots(3, 1, sharex=True, figsize=(10, 7.8),
+                             gridspec_kw={"height_ratios": [2.2, 2.2, 1.7]})
     handles = []
     for ax, key, name in ((axes[0], "alpha", "mass change, alpha"),
                           (axes[1], "beta", "stiffness change, beta")):
@@ -373,7 +376,24 @@ def element_figure(r: ReportInputs):
     fig.suptitle("Element changes along the bat (knob at 0)", fontsize=11)
     _profile_panel(axes[2], r, f, words, colour)
     fig.tight_layout()
+    to_scale(fig, axes[2])
     return fig
+
+
+def to_scale(fig, ax) -> None:
+    """Draw ``ax`` to scale (an inch across is an inch up) without narrowing it.
+
+    ``set_aspect("equal")`` shrinks the axes' width and so moves the drawing of the bat off
+    the bar panels it shares its x axis with; here the y limits grow around the drawn ones
+    instead, so every panel keeps one width and one x axis.
+    """
+    fig.canvas.draw()
+    box = ax.get_window_extent()
+    x0, x1 = ax.get_xlim()
+    y0, y1 = ax.get_ylim()
+    span = (x1 - x0) * box.height / box.width
+    pad = max(span - (y1 - y0), 0.0) / 2
+    ax.set_ylim(y0 - pad, y1 + pad)
 
 
 # --- mass properties ---------------------------------------------------------------------------
@@ -431,14 +451,89 @@ def mass_rows(r: ReportInputs) -> list[tuple[str, float, float, float]]:
             for label, mk, cg, i in rows]
 
 
+def _scale_change_g(r: ReportInputs) -> tuple[float, float] | None:
+    """Return the scale's weight change since registration and its standard uncertainty, g.
+
+    The re-test's weight (retest.json) less the registered one (meta.json); the uncertainty
+    is ``WEIGHT_SIGMA_REL`` of the weight (two scales, tape and dirt), as the inspection
+    weighs it. None without both weights.
+    """
+    from updating.inspect.hypotheses import WEIGHT_SIGMA_REL
+
+    w1 = (r.conditions or {}).get("weight_kg")
+    w0 = r.meta.get("weight_lb")
+    if w1 is None or w0 is None:
+        return None
+    w0_kg = float(w0) * LB_TO_KG
+    return 1e3 * (float(w1) - w0_kg), 1e3 * WEIGHT_SIGMA_REL * w0_kg
+
+
+def _finding_change_g(r: ReportInputs) -> tuple[float, float | None, str] | None:
+    """Return the finding's weight change, g, its uncertainty and its source's words."""
+    f = r.verdict.get("finding") or {}
+    read, unc = f.get("reading") or {}, f.get("uncertainty") or {}
+    for key, sign in (("added_mass_g", 1.0), ("removed_mass_g", -1.0)):
+        if isinstance(read.get(key), (int, float)):
+            first = str((r.verdict.get("reasons") or [""])[0])
+            how = ("calipers: the re-test's diameters against the registered profile"
+                   if f.get("kind") == "material_removed" and "caliper" in first else
+                   f"vibration: the finding's fit ({f.get('rule')})")
+            u = unc.get(key)
+            return sign * float(read[key]), None if u is None else float(u), how
+    return None
+
+
+def weight_rows(r: ReportInputs) -> list[list]:
+    """Return the weight change by source, side by side (scale, calipers or vibration).
+
+    Each row: source, change in g with its standard uncertainty (GUM rounding), change in
+    %, and how it was obtained. Empty when no source gives one.
+    """
+    w0_g = 1e3 * mass_rows(r)[0][1] * LB_TO_KG
+    rows: list[list] = []
+    scale = _scale_change_g(r)
+    if scale is not None:
+        rows.append(["Scale", _Raw(_num(gum(scale[0], scale[1], 1))),
+                     _Raw(nobreak_numbers(f"{100 * scale[0] / w0_g:+.1f}")),
+                     "the re-test's weight less the registered weight"])
+    found = _finding_change_g(r)
+    if found is not None:
+        rows.append([found[2].split(":")[0].capitalize(),
+                     _Raw(_num(gum(found[0], found[1], 1))),
+                     _Raw(nobreak_numbers(f"{100 * found[0] / w0_g:+.1f}")), found[2]])
+    return rows
+
+
+def weights_agree(r: ReportInputs) -> str:
+    """Say whether the scale and the finding agree on the weight change ('' unless both).
+
+    They agree when they differ by less than twice the standard uncertainty of their
+    difference (k = 2).
+    """
+    scale, found = _scale_change_g(r), _finding_change_g(r)
+    if scale is None or found is None:
+        return ""
+    u = float(np.hypot(scale[1], found[1] or 0.0))
+    diff = found[0] - scale[0]
+    name = found[2].split(":")[0]
+    if abs(diff) <= 2 * u:
+        return (f"The scale and the {name} agree: they differ by {abs(diff):.0f} g, within "
+                f"twice the uncertainty of their difference ({2 * u:.0f} g).")
+    return (f"The scale and the {name} disagree: they differ by {abs(diff):.0f} g, more than "
+            f"twice the uncertainty of their difference ({2 * u:.0f} g); re-weigh the bat "
+            "(without the accelerometer) before relying on either.")
+
+
 # --- words -----------------------------------------------------------------------------------
 
 
 def headline(r: ReportInputs) -> str:
-    """One plain sentence (or two): what was found, where, how much and how sure."""
+    """Say the finding in the rule's words, with inches and ounces (below the verdict box).
+
+    How sure is said once, in the box; its numbers once, in the evidence table.
+    """
     v, serial = r.verdict, r.serial
-    status, said = status_of(v), p_value_words(v)
-    alpha = decision_level(v)
+    status = status_of(v)
     if status == "inconclusive":
         reasons = v.get("reasons") or ["the two tests cannot be compared"]
         return (f"No verdict is possible for bat {serial}: " + "; ".join(reasons) +
@@ -461,22 +556,85 @@ def headline(r: ReportInputs) -> str:
             d_oz = (rows[2][1] - rows[0][1]) * 16
             weight = f"{abs(d_oz):.1f} oz {'lighter' if d_oz < 0 else 'heavier'}"
             text += f"; {weight}" if words else f" ({weight})"
-        text += "."
-        if said is not None:
-            text += f" The {said}."
-        return text
+        return text + "."
     text = (f"Bat {serial} shows no sign of alteration: the re-test differs from the baseline "
             "no more than moisture, temperature and re-mounting the sensor explain.")
     grip = finding_words(v.get("finding"))
     if grip:
         text += f" Found: {grip}."
-    if said is not None:
-        text += f" The {said}"
-        if alpha:
-            text += (f"; a bat is called altered only when the F test's nominal chance is below "
-                     f"{percent(alpha)}")
-        text += "."
     return text
+
+
+def decision_rule(v: dict) -> str:
+    """Say the decision rule in one sentence (the certificate's)."""
+    alpha = decision_level(v)
+    level = percent(alpha) if alpha else "1 %"
+    return ("A bat is called altered only when its re-test differs from its baseline more "
+            "than moisture, temperature and re-mounting the sensor can explain, at a chance "
+            f"below {level} for an unaltered bat; otherwise it is not altered, or, when the "
+            "two tests cannot be compared, no verdict is given.")
+
+
+def report_number(r: ReportInputs) -> str:
+    """Return the report's number: unique to its inspection and stable when redrawn.
+
+    "BL-SERIAL-N-XXXXXXXX": N the bat's own inspection number (0 for a stateless one), the
+    tail the first 8 hex digits of the SHA-256 of the verdict record's hash (stored) or of
+    both files' hashes and the verdict's status (stateless).
+    """
+    import hashlib
+
+    pv = r.provenance
+    seed = pv.get("verdict_record_sha256") or "|".join(
+        str(x) for x in (pv.get("baseline_sha256"), pv.get("retest_sha256"),
+                         status_of(r.verdict), r.verdict.get("statistic")))
+    tail = hashlib.sha256(seed.encode()).hexdigest()[:8].upper()
+    return f"BL-{r.serial}-{pv.get('bat_inspection', 0)}-{tail}"
+
+
+def _conditions_rows(r: ReportInputs) -> list[list]:
+    """Return the certificate's rows for the re-test's conditions (retest.json)."""
+    c = r.conditions or {}
+    if not any(v is not None for v in c.values()):
+        return [["Re-test conditions", "not given (no retest.json)"]]
+    rows: list[list] = []
+    if c.get("tested_on"):
+        rows.append(["Re-test date", str(c["tested_on"])])
+    if c.get("temperature_c") is not None:
+        rows.append(["Re-test temperature (°C)", _Raw(_num(f"{c['temperature_c']:.1f}"))])
+    if c.get("sensor_mass_kg") is not None:
+        rows.append(["Accelerometer mass at re-test (g)",
+                     _Raw(_num(f"{1e3 * c['sensor_mass_kg']:.1f}"))])
+    if c.get("weight_kg") is not None:
+        rows.append(["Weight at re-test (lb, scale)",
+                     _Raw(_num(f"{c['weight_kg'] / LB_TO_KG:.3f}"))])
+    return rows
+
+
+def certificate_rows(r: ReportInputs, lab: dict | None, generated_at: str) -> list[list]:
+    """Return the certificate block: report number, bat, lab, equipment, conditions, rule."""
+    pv, meta = r.provenance, r.meta
+    rows: list[list] = [["Report number", _Raw(f"<b>{html.escape(report_number(r))}</b>")],
+                        ["Report generated (UTC)", generated_at[:19].replace("T", " ")],
+                        ["Bat", f"{r.serial} ({meta.get('species') or 'species not given'})"]]
+    if pv.get("bat_inspection") is not None:
+        when = pv["inspected_at"][:10]
+        rows.append(["Inspection", f"inspection {pv['bat_inspection']} of bat {r.serial}, "
+                                   f"{when} (registry inspection #{pv['inspection_id']})"])
+    rows += [list(x) for x in lab_rows(lab)]
+    if meta.get("weight_lb") is not None:
+        rows.append(["Weight at registration (lb, scale)",
+                     _Raw(_num(f"{float(meta['weight_lb']):.3f}"))])
+    rows += _conditions_rows(r)
+    rows.append(["Decision rule", decision_rule(r.verdict)])
+    rows.append(["Uncertainties", "each stated as ± one standard uncertainty (coverage factor "
+                                  "k = 1, about 68 %); double it for k = 2 (about 95 %)"])
+    return rows
+
+
+def _num(text: str) -> str:
+    """Wrap a number so that it never breaks across lines."""
+    return f"<span class='n'>{html.escape(text)}</span>"
 
 
 def _fit_words(v: dict) -> tuple[str, str, str]:
@@ -521,6 +679,14 @@ def _regions_words(r: ReportInputs, emap) -> str:
     if fit is None and mreg is None:
         return ("Neither the fit nor the element map finds an alteration: every "
                 "element's map bar stays within its noise band.")
+    if fit is None and status_of(v) == "inconclusive":
+        f = v.get("finding") or {}
+        fit_words = "" if not f.get("region_in") else (
+            f" and the possible {f.get('rule')} fit {f['region_in'][0]:.1f}–"
+            f"{f['region_in'][1]:.1f} in")
+        return (f"The element map marks {mreg[0]:.1f}–{mreg[1]:.1f} in{fit_words}; the verdict "
+                "gives no decision (its reason is above), and a map alone never calls a bat "
+                "altered.")
     if fit is None:
         return (f"The element map marks {mreg[0]:.1f}–{mreg[1]:.1f} in, but the decision test, "
                 "which allows for moisture and re-mounting, found the change no larger than an "
@@ -551,16 +717,26 @@ def _regions_words(r: ReportInputs, emap) -> str:
 CSS = """
 body{font-family:system-ui,Segoe UI,Helvetica,Arial,sans-serif;max-width:1000px;margin:24px auto;
 color:#222;padding:0 12px;line-height:1.4}
-h1{margin-bottom:4px}.verdict{font-size:1.25em;padding:12px 16px;border-radius:6px;margin:12px 0}
+h1{margin-bottom:4px}.verdict{font-size:1.2em;padding:8px 16px;border-radius:6px;margin:12px 0}
+.verdict p{margin:4px 0}.verdict p:first-child{font-weight:700;font-size:1.15em}
+.n{white-space:nowrap}
 .altered{background:#fde2e1;border:2px solid #c0392b}
 .not_altered{background:#e3f5e1;border:2px solid #27ae60}
 .inconclusive{background:#fdf3d8;border:2px solid #d4a017}
 table{border-collapse:collapse;margin:8px 0;width:100%;table-layout:fixed;font-size:.9em}
-td,th{border:1px solid #ccc;padding:3px 6px;text-align:right;overflow-wrap:anywhere}
+td,th{border:1px solid #ccc;padding:3px 6px;text-align:right;overflow-wrap:break-word;
+hyphens:manual}
 th{background:#f3f3f3;font-weight:600}td:first-child,th:first-child{text-align:left}
 table.facts td:first-child{width:45%}table.facts td{text-align:left}
 img{max-width:100%;display:block;margin:8px 0}.note{color:#555;font-size:.9em}
 code{font-size:.85em;overflow-wrap:anywhere}
+@media (max-width:640px){body{margin:8px auto;padding:0 8px}h1{font-size:1.4em}
+table.wide thead{display:none}table.wide,table.wide tbody,table.wide tr{display:block}
+table.wide tr{border:1px solid #ccc;margin:6px 0}table.wide td{display:block;border:0;
+text-align:right}table.wide td::before{content:attr(data-label);float:left;font-weight:600;
+text-align:left;max-width:60%}table.facts td:first-child{width:40%}}
+@media print{body{max-width:none;margin:0;padding:0;font-size:10pt}
+h2{break-after:avoid}img,table,.verdict{break-inside:avoid}}
 """
 
 MODE_HEADERS = {
@@ -602,12 +778,46 @@ def _mode_cell(key: str, v) -> str:
     return f"{v:.3f}" if key.startswith("mac") else _fmt(v)
 
 
+_NUMBER = re.compile(r"(?<![\w.#\-:/])[+\-−±]?(?:\d{1,3}(?:,\d{3})+|\d+)(?:\.\d+)?"
+                     r"(?:\s?%)?(?![\w.\-:/])")
+_TAG = re.compile(r"(<code>.*?</code>|<[^>]+>)", re.S)
+
+
+def nobreak_numbers(cell: str) -> str:
+    """Wrap each number of a cell's HTML in a span that never breaks across lines.
+
+    Text inside tags and ``<code>`` (hashes) is left as it is.
+    """
+    parts = _TAG.split(cell)
+    return "".join(p if i % 2 else _NUMBER.sub(lambda m: _num_raw(m.group(0)), p)
+                   for i, p in enumerate(parts))
+
+
+def _num_raw(text: str) -> str:
+    return f"<span class='n'>{text}</span>"
+
+
 def _table(header: list[str] | None, rows: list[list], cls: str = "") -> str:
+    """Write a table (cells' numbers never break).
+
+    With ``header``, each cell carries its column's name for the phone layout (the CSS
+    shows it beside the value when the table reflows).
+    """
     head = "" if not header else (
-        "<tr>" + "".join(f"<th>{html.escape(h)}</th>" for h in header) + "</tr>")
-    body = "".join("<tr>" + "".join(
-        f"<td>{c if isinstance(c, _Raw) else _fmt(c)}</td>" for c in r) + "</tr>" for r in rows)
-    return f"<table class='{cls}'>{head}{body}</table>"
+        "<thead><tr>" + "".join(f"<th>{html.escape(h)}</th>" for h in header)
+        + "</tr></thead>")
+    labels = header or []
+
+    def cell(i: int, c) -> str:
+        text = c if isinstance(c, _Raw) else _fmt(c)
+        if "class='n'" not in text:
+            text = nobreak_numbers(text)
+        label = f" data-label='{html.escape(labels[i])}'" if i < len(labels) else ""
+        return f"<td{label}>{text}</td>"
+
+    body = "".join("<tr>" + "".join(cell(i, c) for i, c in enumerate(r)) + "</tr>"
+                   for r in rows)
+    return f"<table class='{cls}'>{head}<tbody>{body}</tbody></table>"
 
 
 class _Raw(str):
@@ -651,12 +861,12 @@ def _facts(r: ReportInputs) -> list[list]:
             continue
         if k.endswith("_m"):
             facts.append([f"Uncertainty (1σ) of {k[:-2].replace('_', ' ')} (in)",
-                          _Raw(f"±{val / IN_TO_M:.3f}")])
+                          _Raw(f"±{val / IN_TO_M:.2g}")])
         elif k.endswith("_scale"):
             facts.append([f"Uncertainty (1σ) of whole-bat {names.get(k, k)} change, %",
-                          _Raw(f"±{100 * val:.2f}")])
+                          _Raw(f"±{100 * val:.2g}")])
         else:
-            facts.append([f"Uncertainty (1σ) of {k.replace('_', ' ')}", _Raw(f"±{val:.3g}")])
+            facts.append([f"Uncertainty (1σ) of {k.replace('_', ' ')}", _Raw(f"±{val:.2g}")])
     stat = v.get("statistic")
     if stat is not None:
         fit_evidence = stored_details(v).fit
@@ -697,10 +907,10 @@ def _chance_facts(v: dict, p: float | None) -> list[list]:
                                 f"{html.escape(str(ch.get('unmeasured') or 'no calibration'))}"
                                 ")</span>")])
     if p is not None:
-        shown = "< 0.000001" if p < 1e-6 else f"{p:.3g}"
+        shown = "p < 0.000001" if p < 1e-6 else f"p = {p:.2g}"
         rows.append([_Raw("Nominal chance <span class='note'>(the F distribution's p-value: "
                           "not a measured rate)</span>"),
-                     _Raw(f"{percent(p)} <span class='note'>(p = {shown})</span>")])
+                     _Raw(f"{percent(p)} <span class='note'>({shown})</span>")])
     rate = false_alarm_words(v.get("false_alarm_rate"))
     if rate is not None:
         rows.append(["False-alarm rate", rate])
@@ -733,20 +943,18 @@ def _finding_facts(finding: dict | None) -> list[list]:
         sfx = next((s for s in READING_UNITS if key.endswith(s)), "")
         unit, decimals = READING_UNITS.get(sfx, ("", 3))
         name = key[: -len(sfx)] if sfx else key
-        text = f"{val:.{decimals}f}"
-        if isinstance(unc.get(key), (int, float)):
-            text += f" ± {unc[key]:.{decimals}f}"
+        u = unc.get(key)
+        text = gum(val, float(u) if isinstance(u, (int, float)) else None, decimals)
         rows.append([f"Finding: {name.replace('_', ' ')}" + (f" ({unit})" if unit else ""),
-                     _Raw(text)])
+                     _Raw(_num(text))])
     return rows
 
 
-def _provenance(r: ReportInputs, generated_at: str) -> list[list]:
+def _provenance(r: ReportInputs) -> list[list]:
     pv, meta = r.provenance, r.meta
     judged = r.verdict.get("code") or pv.get("batlab_version")
     drawn = code_version()
-    rows: list[list] = [["Report generated (UTC)", generated_at[:19].replace("T", " ")],
-                        ["Code that judged (batlab version)", judged],
+    rows: list[list] = [["Code that judged (batlab version)", judged],
                         ["Code that drew this report", drawn]]
     if judged != drawn:
         rows.append(["Other code", f"judged by batlab {judged}, this report drawn by batlab "
@@ -755,15 +963,13 @@ def _provenance(r: ReportInputs, generated_at: str) -> list[list]:
                                    "again) by the code that drew it"])
     if pv.get("inspection_id") is not None:
         when = pv["inspected_at"][:19].replace("T", " ")
-        rows.append(["Inspection", f"#{pv['inspection_id']}, {when} UTC"])
-    rows.append(["Species", meta.get("species")])
+        rows.append(["Inspected (UTC)", when])
     if meta.get(FORCED_KEY):
         rows.append(["Registered with --force", str(meta[FORCED_KEY])])
-    if meta.get("weight_lb") is not None:
-        rows.append(["Weight at registration (lb)", _Raw(f"{float(meta['weight_lb']):.4f}")])
     rows.append(["Calibrated wood: E (psi), density (lb/in³), E/G", _Raw(
-        f"{r.reference.E_pa / PSI_TO_PA:,.0f}, "
-        f"{r.reference.rho_kg_m3 / LBF_IN3_TO_KG_M3:.5f}, {r.reference.e_over_g:.1f}")])
+        f"{significant(r.reference.E_pa / PSI_TO_PA, 3)}, "
+        f"{significant(r.reference.rho_kg_m3 / LBF_IN3_TO_KG_M3, 3)}, "
+        f"{r.reference.e_over_g:.1f}")])
     for label, name, key in (("Baseline file", r.baseline.name, "baseline_sha256"),
                              ("Re-test file", r.retest.name, "retest_sha256")):
         sha = pv.get(key)
@@ -778,18 +984,41 @@ def _provenance(r: ReportInputs, generated_at: str) -> list[list]:
     return rows
 
 
-def render_html(r: ReportInputs, generated_at: str, figures: dict[str, bytes]) -> str:
-    """Render the report page as a string (``figures``: name -> PNG bytes, see ``figures_png``)."""
+def verdict_box_html(v: dict, weighed: bool = False) -> str:
+    """Write the first screen (``batlab.verdict_box``) as the coloured verdict box."""
+    lines = "".join(
+        f"<p>{f'<b>{html.escape(label)}:</b> ' if label else ''}{html.escape(text)}</p>"
+        for label, text in verdict_box(v, weighed).lines())
+    return f"<div class='verdict {status_of(v)}'>{lines}</div>"
+
+
+def render_html(r: ReportInputs, generated_at: str, figures: dict[str, bytes],
+                lab: dict | None = None) -> str:
+    """Render the report page as a string.
+
+    ``figures``: name -> PNG bytes (``figures_png``); ``lab``: the lab profile
+    (``batlab.lab.read_lab``) for the certificate block, None when there is none.
+    """
     v = r.verdict
-    status = status_of(v)
+    number = report_number(r)
     parts = [f"<h1>Inspection of bat {html.escape(r.serial)}</h1>",
-             f"<p class='note'>baseline {html.escape(r.baseline.name)}, re-test "
-             f"{html.escape(r.retest.name)}</p>",
-             f"<div class='verdict {status}'>{html.escape(headline(r))}</div>",
+             f"<p class='note'>Report {html.escape(number)}</p>",
+             verdict_box_html(v, (r.conditions or {}).get("weight_kg") is not None),
+             f"<p class='finding'>{html.escape(headline(r))}</p>",
              *([f"<p class='warn'>This bat was registered with --force although its baseline "
                 f"looked odd: {html.escape(str(r.meta[FORCED_KEY]))}</p>"]
                if r.meta.get(FORCED_KEY) else []),
+             "<h2>Certificate</h2>",
+             _table(None, certificate_rows(r, lab, generated_at), "facts certificate"),
              "<h2>The evidence</h2>", _table(None, _facts(r), "facts")]
+    weights = weight_rows(r)
+    if weights:
+        parts += ["<h2>Weight, by source</h2>",
+                  _table(["Source", "Weight change (g)", "Weight change (%)", "How"],
+                         weights, "wide")]
+        agree = weights_agree(r)
+        if agree:
+            parts.append(f"<p>{html.escape(agree)}</p>")
     parts.append("<h2>Where the bat changed</h2>")
     parts.append(_img(_data_uri(figures["elements"]), "element changes over the bat profile"))
     note = regions_note(r)
@@ -809,18 +1038,18 @@ def render_html(r: ReportInputs, generated_at: str, figures: dict[str, bytes]) -
     rows = mass_rows(r)
     w0, cg0, i0 = rows[0][1:]
     parts.append(_table(
-        ["Model", "Weight (lb)", "Weight change (%)", "Balance point from the knob (in)",
+        ["Model", "Weight (lb)", "Balance point from the knob (in)",
          "Shift (in)", "Swing weight about the knob (lb in²)", "Change (%)"],
-        [[label, _Raw(f"{w:.4f}"), _Raw(f"{100 * (w / w0 - 1):+.2f}"), _Raw(f"{cg:.2f}"),
+        [[label, _Raw(f"{w:.3f}"), _Raw(f"{cg:.2f}"),
           _Raw(f"{cg - cg0:+.3f}"), _Raw(f"{i:.0f}"), _Raw(f"{100 * (i / i0 - 1):+.2f}")]
-         for label, w, cg, i in rows]))
+         for label, w, cg, i in rows], "wide"))
     modes = [jsonable(ModePair.from_json_dict(m).to_json_dict()) for m in v.get("modes") or []]
     if modes:
         keys = list(dict.fromkeys(k for m in modes for k in m))
         parts.append("<h2>Paired modes</h2>")
         parts.append(_table([_label(k) for k in keys],
                             [[_Raw(_mode_cell(k, m.get(k))) for k in keys] for m in modes],
-                            "modes"))
+                            "modes wide"))
     parts.append("<h2>Test data</h2>")
     parts.append(_img(_data_uri(figures["frf"]), "driving-point FRF overlay"))
     parts.append(_img(_data_uri(figures["mac"]), "MAC baseline vs re-test"))
@@ -830,16 +1059,21 @@ def render_html(r: ReportInputs, generated_at: str, figures: dict[str, bytes]) -
             parts.append(f"<h3>Stabilisation diagram: {html.escape(name)}</h3>")
             parts.append(_img(_data_uri(figures[key]), f"stabilisation {name}"))
     parts.append("<h2>Provenance</h2>")
-    parts.append(_table(None, _provenance(r, generated_at), "facts"))
+    parts.append(_table(None, _provenance(r), "facts"))
     if r.provenance.get("verdict_record") is not None:
         parts.append("<p class='note'>To verify: <code>batlab registry check --report "
                      "index.html</code> on the registry confirms every record is unchanged and "
                      "that this page's records and files are the registry's; <code>batlab "
                      f"history {html.escape(r.serial)} --json</code> shows these hashes; a "
                      "file's <code>sha256sum</code> must equal its hash above.</p>")
+    page_css = ("@page{size:A4;margin:16mm 12mm 18mm;@top-left{content:'batlab report "
+                f"{number}';font-size:9pt;color:#555}}@bottom-right{{content:'Page ' "
+                "counter(page) ' of ' counter(pages);font-size:9pt;color:#555}}")
     return ("<!DOCTYPE html><html lang='en'><head><meta charset='utf-8'>"
-            f"<title>batlab inspection {html.escape(r.serial)}</title>"
-            f"<style>{CSS}</style></head><body>" + "\n".join(parts) + "</body></html>\n")
+            "<meta name='viewport' content='width=device-width, initial-scale=1'>"
+            f"<title>batlab inspection {html.escape(r.serial)}: report {html.escape(number)}"
+            f"</title><style>{CSS}{page_css}</style></head><body>" + "\n".join(parts)
+            + "</body></html>\n")
 
 
 def figures_png(r: ReportInputs) -> dict[str, bytes]:
@@ -895,8 +1129,11 @@ def write_report(
     out_dir = check_destination(out_dir)
     if plots_dir is not None:
         plots_dir = check_destination(plots_dir, "plots")
+    from batlab.lab import read_lab
+
+    lab = read_lab()
     figures = figures_png(r)
-    page = for_page(render_html(r, generated_at or now_utc(), figures))  # no NUL on a page
+    page = for_page(render_html(r, generated_at or now_utc(), figures, lab))  # no NUL
     if r.provenance.get("verdict_record") is not None:
         page = seal_page(page)
     path = out_dir / "index.html"
@@ -904,3 +1141,69 @@ def write_report(
     if plots_dir is not None:
         write_plots(plots_dir, r, figures)
     return path
+
+
+CHROMIUM_NAMES = ("chromium", "chromium-browser", "google-chrome")
+"""The browsers ``find_chromium`` looks for on PATH (Debian's package installs
+``/usr/bin/chromium``)."""
+
+
+def find_chromium(env: dict | None = None) -> str:
+    """Return the Chromium that prints the PDF.
+
+    ``$BATLAB_CHROMIUM``, else the first of ``CHROMIUM_NAMES`` on PATH; ValueError with how
+    to install it when there is none.
+    """
+    import shutil
+
+    env = os.environ if env is None else env
+    if env.get("BATLAB_CHROMIUM"):
+        return env["BATLAB_CHROMIUM"]
+    for name in CHROMIUM_NAMES:
+        found = shutil.which(name, path=env.get("PATH"))
+        if found:
+            return found
+    raise ValueError("--pdf needs Chromium to print the page and none was found on PATH "
+                     "(apt-get install chromium, or set BATLAB_CHROMIUM)")
+
+
+def write_pdf(page: Path, pdf: Path | None = None, timeout_s: float = 120.0) -> Path:
+    """Print a report page to PDF with headless Chromium (``--print-to-pdf``).
+
+    The page's print stylesheet sets A4, the report number on every page and "Page x of y";
+    Chromium's own header and footer are left out. Written to a temporary file and renamed.
+
+    Parameters
+    ----------
+    page : Path
+        The report's ``index.html``.
+    pdf : Path or None
+        Where to write; default ``report.pdf`` beside the page.
+    timeout_s : float
+        How long Chromium may take, s.
+
+    Returns
+    -------
+    Path
+        The PDF's path.
+    """
+    import subprocess
+
+    browser = find_chromium()
+    pdf = Path(pdf) if pdf is not None else page.parent / "report.pdf"
+    with tempfile.TemporaryDirectory(prefix="batlab-pdf-") as tmp:
+        out = Path(tmp) / "report.pdf"
+        cmd = [browser, "--headless", "--no-sandbox", "--disable-gpu", "--no-first-run",
+               "--disable-background-networking", "--disable-component-update",
+               "--disable-sync", f"--user-data-dir={tmp}/profile", "--no-pdf-header-footer",
+               f"--print-to-pdf={out}", page.resolve().as_uri()]
+        try:
+            done = subprocess.run(cmd, capture_output=True, text=True, timeout=timeout_s)
+        except (OSError, subprocess.TimeoutExpired) as exc:
+            raise ValueError(f"{browser}: could not print the PDF ({exc})") from None
+        if done.returncode != 0 or not out.exists() or out.stat().st_size == 0:
+            tail = (done.stderr.strip().splitlines() or ["no output"])[-1]
+            raise ValueError(f"{browser}: could not print the PDF (exit {done.returncode}: "
+                             f"{tail})")
+        atomic_write(pdf, lambda t: t.write_bytes(out.read_bytes()))
+    return pdf

@@ -23,6 +23,7 @@ _SEAL = re.compile(r'<meta name="batlab-seal" content="(ed25519:[A-Za-z0-9+/=]+)
                    r'([A-Za-z0-9+/=]+)">')
 _HEAD = re.compile(r"<td>Registry head when written</td><td><code>(\d+:[0-9a-f]{64})</code>")
 _STATUS = re.compile(r"<div class='verdict (\w+)'>")
+_NUMBER_SPAN = re.compile(r"<span class='n'>([^<]*)</span>")
 
 
 def seal_page(page: str) -> str:
@@ -60,9 +61,10 @@ def _content_problems(conn: sa.Connection, page: str, where: str,
     if shown is None or shown.group(1) != stored.status:
         problems.append(f"{where}: shows verdict {shown.group(1) if shown else 'none'!r}, "
                         f"inspection #{stored.id} is {stored.status!r}")
+    words = _NUMBER_SPAN.sub(r"\1", page)  # the report keeps each number on one line
     problems += [f"{where}: reason missing or changed: {reason!r}"
                  for reason in stored.verdict.get("reasons") or []
-                 if for_page(html.escape(reason)) not in page]
+                 if for_page(html.escape(reason)) not in words]
     head = _HEAD.search(page)
     if head is None:
         problems.append(f"{where}: shows no registry head")

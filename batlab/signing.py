@@ -42,8 +42,18 @@ def key_path(env: dict | None = None) -> Path:
     env = os.environ if env is None else env
     if env.get("BATLAB_KEY"):
         return Path(env["BATLAB_KEY"]).expanduser()
+    return config_dir(env) / "signing-key.pem"
+
+
+def config_dir(env: dict | None = None) -> Path:
+    """Return the lab's batlab configuration folder.
+
+    ``$XDG_CONFIG_HOME/batlab``, else ``~/.config/batlab`` (the signing key, the lab
+    profile, ``batlab.lab``).
+    """
+    env = os.environ if env is None else env
     base = env.get("XDG_CONFIG_HOME") or str(Path.home() / ".config")
-    return Path(base).expanduser() / "batlab" / "signing-key.pem"
+    return Path(base).expanduser() / "batlab"
 
 
 def _refuse_open_mode(path: Path) -> None:

@@ -50,7 +50,7 @@ FLEET_MAY_IMPORT = (  # batlab/fleet runs virtual bats through the real command 
 
 COMMAND_MAY_IMPORT = {  # what a command may import from batlab besides batlab.pipeline
     "batlab", "batlab.cli_support", "batlab.formatting", "batlab.registry", "batlab.report",
-    "batlab.diagnose_report", "batlab.report_check",
+    "batlab.diagnose_report", "batlab.report_check", "batlab.lab",
 }
 
 

@@ -32,6 +32,19 @@ def test_every_command_has_an_example_in_its_help(name):
     for action in sub._actions:  # and every option says what it is
         if action.option_strings and action.dest != "help":
             assert action.help, f"{name} {action.option_strings[0]} has no help"
+    example = text.split("example:\n")[1]
+    assert max(len(line) for line in example.splitlines()) <= 100, example
+
+
+def test_inspect_help_names_the_retest_once_per_form():
+    """`inspect --help` shows its two forms, one a line, the re-test as RETEST in each, and
+    no metavar spelt as its option's dest (issue 50)."""
+    text = build_parser()._subparsers._group_actions[0].choices["inspect"].format_help()
+    usage = text.split("\n\n")[0].splitlines()
+    assert usage[1].strip().startswith("batlab inspect --serial S RETEST")
+    assert usage[2].strip().startswith("batlab inspect --profile P --meta M --baseline B "
+                                       "--retest RETEST")
+    assert "FALSE_ALARM" not in text and "retest_file" not in text
 
 
 def test_one_default_wood_stated_on_stderr(capsys):

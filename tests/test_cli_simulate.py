@@ -77,3 +77,12 @@ def test_simulate_case_bad_nuisance(tmp_path, capsys):
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "bogus" in err[0]
     assert not (tmp_path / "x").exists()
+
+
+def test_case_names_the_bat_in_words():
+    """An unaltered simulated bat is "an unaltered bat", never "a none bat" (issue 50)."""
+    from batlab.pipeline.bench import bat_words
+
+    assert bat_words("none") == "an unaltered bat"
+    assert bat_words("cork") == "a cork bat"
+    assert bat_words("oak") == "an oak bat"

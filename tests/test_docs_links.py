@@ -26,8 +26,8 @@ DOTTED = re.compile(r"(?:rigs|ema|updating|batlab)(?:\.\w+)+")
 
 
 def doc_files() -> list[Path]:
-    """Return README.md, CHANGELOG.md and docs/*.md."""
-    return [ROOT / "README.md", ROOT / "CHANGELOG.md", *sorted((ROOT / "docs").glob("*.md"))]
+    """Return README.md, CHANGELOG.md and docs/**/*.md (the results pages too)."""
+    return [ROOT / "README.md", ROOT / "CHANGELOG.md", *sorted((ROOT / "docs").rglob("*.md"))]
 
 
 def dead_links(path: Path) -> list[str]:

@@ -56,6 +56,9 @@ def test_report_regenerated_from_the_registry_alone(lab, capsys):
     assert WRITTEN.sub("", DATE_LINE.sub("", again)) == WRITTEN.sub("", DATE_LINE.sub("", original))
     assert again != original or DATE_LINE.search(again)  # only the date may differ
     assert (lab / "plots" / "elements.png").is_file()
+    # the bat's first inspection is its inspection 1, whatever the registry's numbering
+    assert re.search(r"inspection <span class='n'>1</span> of bat HX-2001, \S+ \(registry "
+                     r"inspection #\d+\)", again)
     code, out, _ = run_cli(["history", "HX-2001", "--json"], capsys)
     (insp,) = json.loads(out)["inspections"]
     assert insp["record_sha256"] in again and insp["retest_sha256"] in again
@@ -64,6 +67,7 @@ def test_report_regenerated_from_the_registry_alone(lab, capsys):
     code, out, _ = run_cli(["registry", "check", "--report", lab / "again" / "index.html"],
                            capsys)
     assert code == 0 and "intact" in out
+    assert f"{lab / 'again' / 'index.html'}: verified against this registry, checked " in out
     forged = again.replace(insp["record_sha256"], "0" * 64)
     (lab / "forged.html").write_text(forged)
     code, out, _ = run_cli(["registry", "check", "--report", lab / "forged.html"], capsys)

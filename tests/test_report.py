@@ -54,18 +54,22 @@ def test_report_is_self_contained(result, tmp_path):
     page = path.read_text()
     assert "Inspection of bat HX-2001" in page
     assert "Bat HX-2001 has been altered: a bore about 1.00 in across from 24.0 to 33.0 in" in page
-    # no registry to read a calibration from: said unmeasured, the nominal 1 - 0.999 beside
-    assert ("The chance an unaltered bat differs this much: unmeasured, no calibration was"
-            in page and "nominal 0.1 % is not a measured rate." in page)
+    # no registry to read a calibration from: the box says it plainly, the evidence table
+    # says once that the chance is unmeasured and gives the nominal 1 - 0.999 beside it
+    box = page.split("<div class='verdict altered'>")[1].split("</div>")[0]
+    assert "unmeasured" not in box and "nominal" not in box
+    assert page.count("unmeasured <span class='note'>(no calibration was") == 1
+    assert ("<span class='n'>0.1 %</span> <span class='note'>(p = <span class='n'>0.001</span>)"
+            in page)
     assert "confidence" not in page.lower()
     assert pipeline.file_sha256(SAMPLE / "retest_corked.uff") in page  # provenance
-    assert "<td>Species</td><td>white ash</td>" in page
+    assert "<td>Bat</td><td>HX-2001 (white ash)</td>" in page  # the certificate block
     imgs = re.findall(r'<img src="data:image/png;base64,([A-Za-z0-9+/=]+)"', page)
     assert len(imgs) >= 3  # element bars over the bat, FRF overlay, MAC
     for b64 in imgs:
         assert base64.b64decode(b64)[:8] == b"\x89PNG\r\n\x1a\n"
     assert not re.search(r"(src|href)=\"(?!data:)", page)  # nothing fetched from elsewhere
-    assert "24.00 – 33.00" in page  # region in inches from the knob
+    assert "<span class='n'>24.00</span> – <span class='n'>33.00</span>" in page  # region, in
 
 
 def test_report_with_real_fits_has_stabilisation_diagrams(monkeypatch, tmp_path):
@@ -181,10 +185,11 @@ def test_plain_sentence_for_clean_and_inconclusive(result):
                           fill_density_ratio=None)  # as stored before chances were measured
     text = headline(clean)
     assert text.startswith("Bat HX-2001 shows no sign of alteration")
-    assert "The chance an unaltered bat differs this much: unmeasured" in text
-    assert "the F distribution's nominal 92 % is not a measured rate" in text
-    assert "called altered only when the F test's nominal chance is below 1 %" in text
-    assert "0.075" not in text and "7.5" not in text
+    assert "chance" not in text  # said once, in the evidence table
+    page = render_html(clean, "2026-01-01T00:00:00", figures_png(clean))
+    assert ("<span class='n'>92 %</span> <span class='note'>(p = <span class='n'>0.93</span>)"
+            in page)
+    assert "0.075" not in page and "7.5 %" not in page
     odd = _with_verdict(result, status="inconclusive", altered=None,
                         reasons=["too few modes pair (2 of 6): re-test with more hits"])
     assert headline(odd) == ("No verdict is possible for bat HX-2001: too few modes pair (2 of "
@@ -256,3 +261,89 @@ def test_report_import_loads_no_stage():
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                          check=True, cwd=Path(__file__).resolve().parents[1])
     assert out.stdout.strip() == "True"  # the check above can fail: a pipeline name loads it
+
+
+def test_bat_drawing_shares_the_panels_x_axis(result):
+    """The to-scale drawing of the bat and the bar panels above it put every inch at the same
+    pixel (within 2 px at the page's resolution), with a finding's label above the bat; and
+    the drawing stays to scale (an inch up is an inch across, within 2 %)."""
+    from batlab.report import element_figure
+
+    finding = {"kind": "inserted_mass", "rule": "nailed", "legal": False,
+               "region_in": [30.8, 33.8], "reading": {"added_mass_g": 18.0}}
+    r = _with_verdict(result, finding=finding)
+    fig = element_figure(r)
+    fig.set_dpi(110)  # as the page's PNG
+    fig.canvas.draw()
+    axes = fig.axes[:3]
+    xs = [ax.transData.transform([(0.0, 0.0), (34.0, 0.0)])[:, 0] for ax in axes]
+    for x in xs[:2]:
+        assert np.abs(x - xs[2]).max() <= 2.0, (x, xs[2])
+    ax = axes[2]
+    (x0, y0), (x1, y1) = ax.transData.transform([(0.0, 0.0), (1.0, 1.0)])
+    assert (y1 - y0) == pytest.approx(x1 - x0, rel=0.02)
+    import matplotlib.pyplot as plt
+
+    plt.close(fig)
+
+
+def test_inconclusive_map_note_does_not_acquit(result):
+    """An inconclusive verdict's map note names both regions and never says the decision
+    found the change no larger than an unaltered bat's (issue 50: a nailed bat's page said
+    both "large against the test's noise" and that)."""
+    from batlab.report import regions_note
+
+    n = len(result.verdict["elements"])
+    msso = {"alpha": [0.0] * n, "beta": [0.0] * n, "alpha_std": [0.01] * n,
+            "beta_std": [0.01] * n, "region_m": [32.1 * IN_TO_M, 33.1 * IN_TO_M]}
+    details = {"p_value": 0.2, "statistic": "F", "n_modes": 6, "msso": msso}
+    finding = {"kind": "inserted_mass", "rule": "nailed", "legal": False,
+               "region_in": [30.9, 32.4], "reading": {"added_mass_g": 9.5}}
+    r = _with_verdict(result, status="inconclusive", altered=None, region_in=None,
+                      finding=finding, reasons=["the change fits nailed and is large"],
+                      details=details)
+    note = regions_note(r)
+    assert "no larger than an unaltered bat's" not in note
+    assert note.startswith("The element map marks 32.1–33.1 in and the possible nailed fit "
+                           "30.9–32.4 in")
+    assert "no decision" in note
+
+
+@pytest.mark.parametrize("value, u, text", [
+    (1.003, 0.003, "1.0030 ± 0.0030"), (9.54, 1.6, "9.5 ± 1.6"), (45.44, 1.23, "45.4 ± 1.2"),
+    (18.2, 0.0996, "18.20 ± 0.10"), (1809198.0, 23456.0, "1,809,000 ± 23,000"),
+    (0.074, None, "0.074")])
+def test_gum_rounding(value, u, text):
+    """An uncertainty to two significant digits, the value to the same place (GUM 7.2.6);
+    issue 50's "core diameter 1.003 ± 0.003" and "E 1,809,198 psi"."""
+    from batlab.formatting import gum, significant
+
+    assert gum(value, u) == text
+    assert significant(1809198.0) == "1,810,000"
+
+
+def test_report_states_each_weight_once_with_its_source(result):
+    """The scale's change and the finding's side by side, in g and %, and whether they agree;
+    the re-test's weight in lb in the certificate (issue 50: three weights that disagreed,
+    the re-test's never shown)."""
+    from batlab.report import certificate_rows, weight_rows, weights_agree
+
+    w0_kg = float(result.meta["weight_lb"]) * LB_TO_KG
+    finding = {"kind": "inserted_mass", "rule": "nailed", "legal": False,
+               "region_in": [30.9, 32.4], "reading": {"added_mass_g": 9.5},
+               "uncertainty": {"added_mass_g": 1.6}}
+    r = replace(_with_verdict(result, finding=finding),
+                conditions={"weight_kg": w0_kg + 0.002, "tested_on": "2026-03-14"})
+    rows = [[str(c) for c in row] for row in weight_rows(r)]
+    assert [row[0] for row in rows] == ["Scale", "Vibration"]
+    assert rows[1][1] == "<span class='n'>9.5 ± 1.6</span>"
+    assert rows[0][1].startswith("<span class='n'>2.0 ± 2.4")  # 0.3 % of 809 g
+    assert weights_agree(r).startswith("The scale and the vibration disagree: they differ by "
+                                       "7 g, more than twice")
+    near = replace(r, conditions={"weight_kg": w0_kg + 0.009})
+    assert weights_agree(near).startswith("The scale and the vibration agree: they differ by "
+                                          "0 g")
+    cert = {str(k): str(v) for k, v in certificate_rows(r, None, "2026-03-14T10:00:00")}
+    assert cert["Weight at re-test (lb, scale)"] == \
+        f"<span class='n'>{(w0_kg + 0.002) / LB_TO_KG:.3f}</span>"
+    assert cert["Re-test date"] == "2026-03-14"

@@ -73,10 +73,12 @@ def raw(path: Path, *statements: str) -> None:
 
 
 def check(path: Path, *extra) -> tuple[int, list[str]]:
-    """Exit code and the problems of `registry check --json` on ``path``."""
+    """Exit code and the problems of `registry check --json` on ``path`` (the registry's,
+    then a checked report page's)."""
     code, out, err = cli("registry", "check", "--db", path, "--json", *extra)
     assert out, err
-    return code, json.loads(out)["problems"]
+    res = json.loads(out)
+    return code, res["problems"] + (res.get("report") or {}).get("problems", [])
 
 
 def test_the_lab_registry_checks_clean_also_against_its_head(lab, copy):
@@ -234,9 +236,9 @@ def test_a_report_page_with_edited_verdict_words_fails(lab, copy, tmp_path):
     page = (lab["root"] / "rep2" / "index.html").read_text()
     assert cli("registry", "check", "--db", copy, "--report",
                lab["root"] / "rep2" / "index.html")[0] == 0
-    m = re.search(r"<div class='verdict altered'>([^<]*)</div>", page)
-    assert m and "altered" in m.group(1)
-    edited = page.replace(m.group(1), m.group(1).replace("altered", "not altered", 1))
+    m = re.search(r"<div class='verdict altered'><p>([^<]*)</p>", page)
+    assert m and m.group(1).startswith("Altered")
+    edited = page.replace(m.group(0), m.group(0).replace(m.group(1), "Not altered."), 1)
     (tmp_path / "edited.html").write_text(edited)
     code, problems = check(copy, "--report", tmp_path / "edited.html")
     assert code == 1 and any("seal does not verify" in p for p in problems)
@@ -248,6 +250,14 @@ def test_a_report_page_with_edited_verdict_words_fails(lab, copy, tmp_path):
     assert code == 1 and any("carries no seal" in p for p in problems)
     assert any("shows verdict 'not_altered', inspection #2 is 'altered'" in p
                for p in problems), problems
+    # the page is blamed, not the registry, and the check says when it ran
+    code, out, _ = cli("registry", "check", "--db", copy, "--report",
+                       tmp_path / "stripped.html")
+    first, *rest = out.splitlines()
+    assert code == 1 and ": intact: " in first and "DAMAGED" not in out
+    page_line = next(line for line in rest if line.startswith(str(tmp_path / "stripped.html")))
+    assert "DOES NOT MATCH this registry (the page is at fault" in page_line
+    assert re.search(r"checked \d{4}-\d\d-\d\d \d\d:\d\d:\d\d UTC", page_line)
 
 
 def _schema(path: Path) -> list:

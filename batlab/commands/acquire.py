@@ -20,8 +20,8 @@ from batlab.cli_support import add_out_argument
 if TYPE_CHECKING:
     from batlab.pipeline import CaptureSettings
 
-EXAMPLE = ("batlab acquire --port /dev/ttyACM0 --points 1,3,5,7,9,11,13,15,16 "
-           "--driving-point 16 --hits 3 --meta meta.json -o test.uff")
+EXAMPLE = ("batlab acquire --port /dev/ttyACM0 --points 1,3,5,7,9,11,13,15,16 \\\n"
+           "      --driving-point 16 --hits 3 --meta meta.json -o test.uff")
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:

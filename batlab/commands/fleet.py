@@ -29,7 +29,7 @@ import time
 from batlab.cli_support import add_db_argument, db_path, note_printer, progress_printer
 
 EXAMPLE = ("batlab fleet calibrate --profile profile.csv --meta meta.json --n 3000 --seed 1 "
-           "--json   (or: batlab fleet inspect retests/ --db lab.sqlite --json)")
+           "--json\n  batlab fleet inspect retests/ --db lab.sqlite --json")
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:

@@ -32,27 +32,34 @@ from batlab.cli_support import (
     progress_printer,
 )
 
-EXAMPLE = ("batlab inspect --serial HX-1004 retest.uff -o report/   (or: --profile "
-           "profile.csv --meta meta.json --baseline baseline.uff --retest retest.uff --json)")
+EXAMPLE = ("batlab inspect --serial HX-1004 retest.uff -o report/\n"
+           "  batlab inspect --profile profile.csv --meta meta.json --baseline baseline.uff \\\n"
+           "      --retest retest.uff --json")
+USAGE = ("\n  batlab inspect --serial S RETEST [options]                  (registered bat)"
+         "\n  batlab inspect --profile P --meta M --baseline B --retest RETEST [options]"
+         "  (stateless)")
+"""The two forms, one a line (argparse would list RETEST twice in one line)."""
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
     """Add the options of ``batlab inspect`` to its sub-parser."""
-    p.add_argument("retest_file", nargs="?", default=None,
-                   help="re-test file (the registry form: --serial S R.uff)")
+    p.usage = USAGE
+    p.add_argument("retest_file", nargs="?", default=None, metavar="RETEST",
+                   help="the re-test file, registry form (--serial S RETEST)")
     p.add_argument("--serial", default=None, help="a registered bat's serial number")
     p.add_argument("--profile", default=None, help="profile.csv (stateless form)")
     p.add_argument("--meta", default=None, help="meta.json (stateless form)")
     p.add_argument("--baseline", default=None, help="baseline test file (stateless form)")
-    p.add_argument("--retest", default=None, help="re-test file")
+    p.add_argument("--retest", default=None, metavar="RETEST",
+                   help="the re-test file, stateless form (the same file as RETEST above)")
     p.add_argument("--retest-meta", default=None, metavar="RETEST_JSON",
                    help="retest.json: the re-test's weight_lb, accelerometer_mass_g, "
                         "temperature_c, tested_on (every key optional)")
     p.add_argument("--retest-profile", default=None, metavar="RETEST_PROFILE_CSV",
                    help="retest_profile.csv: the caliper profile measured again at the "
                         "re-test (x_in,diameter_in,angle_deg)")
-    p.add_argument("--false-alarm", type=float, default=0.01,
-                   help="false-alarm rate of the decision (default 0.01)")
+    p.add_argument("--false-alarm", type=float, default=0.01, metavar="RATE",
+                   help="the decision's false-alarm rate, a fraction (default 0.01)")
     add_out_argument(p, "write the HTML report to DIR/index.html (created if needed; "
                         "checked writable before any work)", "DIR", old="--report")
     p.add_argument("--plots", default=None, metavar="DIR",
@@ -125,7 +132,8 @@ def run(args: argparse.Namespace) -> int:
                     retest_meta=bool(args.retest_meta), once=once)
             except AlreadyStored as same:
                 return _print_stored(args, conn, same.inspection, retest, progress, readable)
-            progress(f"stored as inspection #{stored.id} of {result.serial} (custody record "
+            progress(f"stored as inspection {pipeline.bat_inspection_number(conn, stored)} of "
+                     f"{result.serial} (registry inspection #{stored.id}, custody record "
                      f"#{stored.record_seq})")
             _print(args, pipeline.result_dict(result), readable)
             if args.out or args.plots:

@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 import json
 import sys
-from dataclasses import asdict, replace
+from dataclasses import asdict
 
 from batlab.cli_support import add_db_argument, db_path, note_printer, say, stdout_closed
 
@@ -115,16 +115,20 @@ def run(args: argparse.Namespace) -> int:
         trusted = signing.trusted_keys(args.trust, args.trust_own)
         witnessed = [read_witnessed(f) for f in args.witnessed or []]
         res = check(conn, trusted, args.head, witnessed)
+        page = None
         if args.report:
+            from batlab.registry import now_utc
             from batlab.report_check import check_page
 
-            res = replace(res, problems=res.problems + check_page(conn, args.report, trusted))
+            page = {"path": str(args.report), "checked_at": now_utc(),
+                    "problems": check_page(conn, args.report, trusted)}
+            page["ok"] = not page["problems"]
     try:
-        _print(res, shown(path), args.json, trusted is not None)
+        _print(res, shown(path), args.json, trusted is not None, page)
         sys.stdout.flush()  # (a pipe's buffer: its reader may have left before the flush)
     except BrokenPipeError:  # `registry check | head -3`: the reader left; the status stands
         stdout_closed()
-    return 0 if res.ok else 1
+    return 0 if res.ok and (page is None or page["ok"]) else 1
 
 
 def _head(conn, path, as_json: bool) -> int:
@@ -196,14 +200,18 @@ def _witness(args: argparse.Namespace) -> int:
     return 0
 
 
-def _print(res, path, as_json: bool, signers_checked: bool) -> None:
+def _print(res, path, as_json: bool, signers_checked: bool, page: dict | None = None) -> None:
     """Print a check's result: JSON, or a summary line and one line per problem and note.
 
     ``signers_checked`` False (no ``--trust``, no ``--trust-own``): the summary says that
-    the signatures were checked for consistency only (JSON: ``signers_checked``).
+    the signatures were checked for consistency only (JSON: ``signers_checked``). A report
+    page checked against the registry (``--report``) gets its own line: its problems are
+    the page's, not the registry's, and it says when it was checked.
     """
     if as_json:
-        print(json.dumps({**asdict(res), "ok": res.ok, "signers_checked": signers_checked}))
+        print(json.dumps({**asdict(res), "ok": res.ok and (page is None or page["ok"]),
+                          "registry_ok": res.ok, "signers_checked": signers_checked,
+                          **({"report": page} if page else {})}))
         return
     state = "intact" if res.ok else "DAMAGED OR CHANGED"
     if res.ok and not signers_checked:
@@ -218,6 +226,14 @@ def _print(res, path, as_json: bool, signers_checked: bool) -> None:
         say(f"  note: {line}")
     if res.first_changed is not None:
         say(f"  first changed record: #{res.first_changed}")
+    if page is not None:
+        when = page["checked_at"][:19].replace("T", " ")
+        state = ("verified against this registry" if page["ok"] else
+                 "DOES NOT MATCH this registry (the page is at fault, not the registry)")
+        say(f"{page['path']}: {state}, checked {when} UTC (its seal, verdict, reasons, "
+            "records, files and registry head)")
+        for line in page["problems"]:
+            say(f"  problem: {line}")
 
 
 def _registry_arg(text: str):

@@ -23,6 +23,9 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     add_out_argument(p, "write DIR/index.html (default ./report-SERIAL-N)", "DIR")
     p.add_argument("--plots", default=None, metavar="DIR",
                    help="also write the figures as PNG files to DIR")
+    p.add_argument("--pdf", action="store_true",
+                   help="also print the page to DIR/report.pdf with headless Chromium "
+                        "($BATLAB_CHROMIUM, else chromium on PATH)")
     add_db_argument(p)
 
 
@@ -44,10 +47,12 @@ def run(args: argparse.Namespace) -> int:
 
     from batlab import pipeline
     from batlab.registry import history
-    from batlab.report import check_destination, write_report
+    from batlab.report import check_destination, find_chromium, write_pdf, write_report
 
     pipeline.admit(args, note_printer("report"), outputs={"out": "dir", "plots": "dir"},
                    serial_label="SERIAL")
+    if args.pdf:
+        find_chromium()  # before any work: without a browser, say so at once
     progress = progress_printer("report")
     with read_registry(args, "report") as conn:
         rows = history(conn, args.serial)
@@ -58,6 +63,10 @@ def run(args: argparse.Namespace) -> int:
             check_destination(args.plots, "--plots")
         inputs = pipeline.stored_report_inputs(conn, args.serial, args.inspection, progress)
     path = write_report(out, inputs, plots_dir=args.plots)
-    progress(f"inspection #{inputs.provenance['inspection_id']} of {args.serial}")
+    pv = inputs.provenance
+    progress(f"inspection {pv['bat_inspection']} of {args.serial} (registry inspection "
+             f"#{pv['inspection_id']})")
     print(path)
+    if args.pdf:
+        print(write_pdf(path))
     return 0

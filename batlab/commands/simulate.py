@@ -8,8 +8,8 @@ import sys
 
 from batlab.cli_support import add_deprecated_alias, add_out_argument, progress_printer
 
-EXAMPLE = ("batlab simulate --profile profile.csv --meta meta.json --alter "
-           "cork:depth=10,d=1.0 --seed 1 -o retest.uff")
+EXAMPLE = ("batlab simulate --profile profile.csv --meta meta.json \\\n"
+           "      --alter cork:depth=10,d=1.0 --seed 1 -o retest.uff")
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:

@@ -192,6 +192,14 @@ def nuisance_names() -> tuple[str, ...]:
     return tuple(NUISANCES)
 
 
+def bat_words(kind: FieldKind) -> str:
+    """Name a simulated bat by its alteration: "an unaltered bat", "a nails bat"."""
+    if kind in (None, "none"):
+        return "an unaltered bat"
+    name = str(kind)
+    return f"{'an' if name[0] in 'aeiou' else 'a'} {name} bat"
+
+
 def simulate_field_case(
     seed: int | None, kind: FieldKind, nuisances: tuple[str, ...], integrity: Integrity | None,
     folder, progress: Progress = _quiet, calipers: int = 0,
@@ -208,7 +216,7 @@ def simulate_field_case(
 
     rng = np.random.default_rng(seed)
     case = draw_case(rng, kind, nuisances, integrity)
-    progress(f"simulating a {kind} bat with {', '.join(nuisances) or 'no nuisance'} ...")
+    progress(f"simulating {bat_words(kind)} with {', '.join(nuisances) or 'no nuisance'} ...")
     paths = write_case(case, folder, seed=int(rng.integers(2**31)), truth=True,
                        retest_profile=calipers)
     return paths, case.expected

@@ -74,6 +74,9 @@ class ReportInputs:
     verdict: dict
     meta: dict
     provenance: dict
+    conditions: dict | None = None
+    """The re-test's conditions from retest.json, SI (``RetestConditions`` as a dict), or
+    None when none were given."""
 
 
 def _in(x_m: float) -> float:

@@ -25,8 +25,8 @@ from updating.inspect.retest_meta import RetestConditions
 from updating.model.calipers import CaliperSurvey, make_survey
 
 __all__ = [
-    "already_inspected", "history_table", "note_report", "provenance", "report_inputs",
-    "store_inspection", "stored_bat", "stored_report_inputs",
+    "already_inspected", "bat_inspection_number", "history_table", "note_report",
+    "provenance", "report_inputs", "store_inspection", "stored_bat", "stored_report_inputs",
 ]
 
 
@@ -148,6 +148,15 @@ def note_report(conn: sa.Connection, stored: reg.Inspection, path: str) -> None:
     reg.set_report_path(conn, stored.id, path)
 
 
+def bat_inspection_number(conn: sa.Connection, stored: reg.Inspection) -> int:
+    """Return an inspection's number among its bat's own (1 for its first).
+
+    The registry numbers inspections across all bats (``Inspection.id``); a bat's first
+    inspection is its inspection 1 whatever that id.
+    """
+    return 1 + [r.id for r in reg.history(conn, stored.serial)].index(stored.id)
+
+
 def provenance(
     conn: sa.Connection | None = None, stored: reg.Inspection | None = None,
     baseline_sha256: str | None = None, retest_sha256: str | None = None,
@@ -178,7 +187,8 @@ def provenance(
                     "verdict_record": stored.record_seq, "verdict_record_sha256":
                     stored.record_sha256,
                     "verdict_sha256": reg.custody_record(conn, stored.record_seq).content_sha256,
-                    "chain_head": reg.head(conn)})
+                    "chain_head": reg.head(conn),
+                    "bat_inspection": bat_inspection_number(conn, stored)})
         if stored.reference_seq is not None:
             ref = reg.custody_record(conn, stored.reference_seq)
             out.update({"reference_record": ref.seq, "reference_record_sha256":
@@ -207,7 +217,8 @@ def report_inputs(result: InspectionResult, meta: dict, prov: dict) -> ReportInp
     """
     return ReportInputs(result.serial, result.profile, result.reference, result.baseline,
                         result.retest, verdict_record(result.serial, result.verdict,
-                                                      result.stated), meta, prov)
+                                                      result.stated), meta, prov,
+                        None if result.conditions is None else asdict(result.conditions))
 
 
 def _stored_inspection(conn: sa.Connection, serial: str,
@@ -311,7 +322,8 @@ def stored_report_inputs(
     """
     stored, bat, case = stored_case(conn, serial, inspection_id, progress)
     inputs = ReportInputs(serial, case.profile, case.reference, case.baseline, case.retest,
-                          stored.verdict, bat.meta, provenance(conn, stored=stored))
+                          stored.verdict, bat.meta, provenance(conn, stored=stored),
+                          (stored.inputs or {}).get("retest_conditions"))
     return with_element_map(inputs, case, stored.inputs or {}, progress)
 
 

@@ -1,7 +1,7 @@
 """What changed, in the rulebook's words: the kind of a local change and its reading.
 
 The families fitted beside the generic local change (``local_change``) say what the change
-is by its physics (../../docs/inspection.md, "The kinds and their signatures"); which kind a
+is by its physics (../../docs/kinds.md, "The kinds and their signatures"); which kind a
 family's fit reads as, its rule words and whether it is legal are the table of kinds'
 (``kind_table``).
 

@@ -6,7 +6,7 @@ of change: ``FAMILIES``, the fitted families with their parameters and bounds, a
 whether it is legal and its report label and colour; ``kind(name)`` looks one up,
 ``kind_of`` the kind of a finding (contract ``finding.kind`` and ``finding.rule``) and
 ``read_kind`` the kind a family's fit reads as. Every other place asks the table
-(../../docs/inspection.md, "The table of kinds").
+(../../docs/kinds.md, "The table of kinds").
 
 A family's fit reads as the first kind of that family, in the table's order, whose
 ``reads`` holds for the fitted stretch (in from the knob end), the bat's length and the

@@ -23,7 +23,7 @@ The integration follows the segment's ends smoothly, so a fit can move them. It 
 fast, element-wise counterpart of ``updating.model.local_change`` (which rebuilds a model's
 sections for the virtual rig); both give the same matrices on a mesh with nodes at the
 segment's ends (tests/test_local_change.py).
-Reference: ../../docs/inspection.md ("H1: a local change, then its kind").
+Reference: ../../docs/kinds.md ("H1: a local change, then its kind").
 """
 
 from __future__ import annotations

@@ -17,7 +17,7 @@ chord's end (``|psi| < a``) at ``R cos(a - |psi|)`` from the centre, so the widt
     w(psi) = R (1 - cos(a - |psi|))   for |psi| < a, else 0,
 
 h at the normal, spanning +-a about it (a 0.05 in flat on a 2.5 in barrel: +-16 deg;
-../docs/inspection.md, "The re-test's caliper profile"). A diameter turned down (shaving, a
+../docs/kinds.md, "The re-test's caliper profile"). A diameter turned down (shaving, a
 groove's ring) shortens every orientation by the diameter lost.
 """
 

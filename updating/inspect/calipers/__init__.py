@@ -1,6 +1,6 @@
 """The re-test's caliper profile against the registration's: removal measured, not inferred.
 
-The public face (../../../docs/inspection.md, "The re-test's caliper profile"); the work is in
+The public face (../../../docs/kinds.md, "The re-test's caliper profile"); the work is in
 its modules, each with one job:
 
 - ``null``: the survey's stations paired with the registered profile, and what an unaltered

@@ -1,6 +1,6 @@
 """The re-test's caliper profile against the registration's: removal measured, not inferred.
 
-``compare_profiles`` is the one entry (../../../docs/inspection.md, "The re-test's caliper
+``compare_profiles`` is the one entry (../../../docs/kinds.md, "The re-test's caliper
 profile"):
 
 1. the survey's stations are paired with the registered profile (``calipers.null``);

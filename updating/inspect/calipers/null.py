@@ -6,7 +6,7 @@ the registration read several orientations). At station i, orientation theta_k, 
 
     delta_ik = g_i (1 + s) - r_ik
 
-is, on an unaltered bat (../../../docs/inspection.md, "The re-test's caliper profile"):
+is, on an unaltered bat (../../../docs/kinds.md, "The re-test's caliper profile"):
 
 - caliper noise e_ik, independent, ``sigma_re`` (1 sigma; 0.001-0.002 in; taken as at
   least ``NOISE_FLOOR_IN``);
