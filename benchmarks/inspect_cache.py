@@ -14,6 +14,14 @@ both tests' modes, the re-test's and the registration's conditions) with the tru
     OPENBLAS_NUM_THREADS=1 PYTHONPATH=. python benchmarks/inspect_cache.py score \
         --clean 40 --altered 42 --seed 600 [--out rows.jsonl]
 
+Add ``coherence`` to ``--nuisances`` for files that carry their coherence (the noise
+measured, docs/noise.md); ``score --residual-noise`` then judges the same bats as if they did
+not (docs/results/noise.md):
+
+    OPENBLAS_NUM_THREADS=1 PYTHONPATH=. python benchmarks/inspect_cache.py build \
+        --clean 40 --altered 28 --seed 900000 --nuisances \
+        moisture,temperature,billet,planes,cup,noise,points,band,accelerometer,bungees,coherence
+
 Bats live in ``--dir`` (default /tmp/batlab-inspect-cache) as <seed>_<kind>.pkl. The final
 numbers come from ``bench_inspect_field.py`` (files to verdict), not from this cache.
 """
@@ -27,6 +35,7 @@ import os
 import pickle
 import sys
 import time
+from dataclasses import replace
 from pathlib import Path
 
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
@@ -54,6 +63,9 @@ def main() -> int:
                     help="meta.json records the baseline's temperature and accelerometer "
                          "mass (build: written; score: added to cached bats)")
     ap.add_argument("--out", type=Path, default=None, help="score: JSON lines of the rows")
+    ap.add_argument("--residual-noise", action="store_true",
+                    help="score: judge as if the files carried no coherence (the noise from "
+                         "H0's residual), for comparison with the measured noise")
     ap.add_argument("--set", action="append", default=[], metavar="MODULE.NAME=VALUE",
                     help="score: override a module constant, e.g. updating.inspect."
                          "decision.F_FLOOR=10 (for studies; the summary's gates read the module)")
@@ -82,7 +94,11 @@ def main() -> int:
             print(f"{i + 1}/{len(todo)} {p.name} ({time.perf_counter() - t0:.1f} s)",
                   file=sys.stderr, flush=True)
             continue
-        row = score_one(pickle.loads(p.read_bytes()), registration=args.registration)
+        bat = pickle.loads(p.read_bytes())
+        if args.residual_noise and "error" not in bat:  # as if the files had no coherence
+            bat = dict(bat, **{k: replace(bat[k], shape_noise_rel=None)
+                               for k in ("baseline", "retest")})
+        row = score_one(bat, registration=args.registration)
         rows.append(row)
         print(f"{i + 1}/{len(todo)} {kind} {integ or ''}: {row['status']} "
               f"F={row.get('F') or float('nan'):.1f}", file=sys.stderr, flush=True)
