@@ -10,8 +10,8 @@ from dataclasses import asdict
 from batlab.cli_support import add_db_argument, db_path, note_printer, say, stdout_closed
 
 EXAMPLE = ("batlab registry check --db lab.sqlite --trust lab.keys --head 42:<sha256>\n"
-           "  batlab registry head --json > head.json; batlab registry witness head.json "
-           "--key league.pem -o witnessed.json\n"
+           "  batlab registry head --json > head.json\n"
+           "  batlab registry witness head.json --key league.pem -o witnessed.json\n"
            "  batlab registry copy --from lab.sqlite --to postgresql://lab@league/batlab\n"
            "  batlab registry calibrations --db league.sqlite --json")
 
