@@ -269,8 +269,8 @@ def _grip_past(e: Evidence) -> list[str]:
 
 def _altered(e: Evidence) -> list[str]:
     beyond = "" if not e.held_core else (
-        f"; not even {what_to_check(e.held_core)} changed three times further than it "
-        "physically can would explain it")
+        f"; not even {what_to_check(e.held_core)}, changed three times as far as it "
+        "physically can, would explain it")
     return [f"the change between the tests is not one moisture, temperature, the "
             f"accelerometer or a grip can make ({chance(e.p_value)})"
             f"{e.weight_note}{beyond}", f"it fits {e.finding_text}"]
@@ -287,21 +287,25 @@ def _listed(items: tuple[str, ...]) -> str:
     return items[0] if len(items) == 1 else ", ".join(items[:-1]) + f" or {items[-1]}"
 
 
+def _weigh(e: Evidence) -> str:
+    """Ask for the scale and retest.json only when the re-test's weight was not given."""
+    return ("weigh the bat, give retest.json (weight, accelerometer mass, temperature), "
+            if e.dlnw is None else "")
+
+
 def _altered_or_drift(e: Evidence) -> list[str]:
     return [f"the change between the tests fits {e.finding_text}, but also fits "
             f"{what_to_check(e.held_core)} changed as far as it physically can: an alteration and "
-            "that change cannot be told apart; weigh the bat, give retest.json (weight, "
-            "accelerometer mass, temperature) and re-test after a week at the "
+            f"that change cannot be told apart; {_weigh(e)}re-test after a week at the "
             "baseline's conditions"]
 
 
 def _large(e: Evidence) -> list[str]:
-    return [f"the change between the tests fits {e.finding_text} and is large against the "
-            f"test's noise (F {e.F_fit:.0f} with the noise the best local change leaves), "
-            f"though not beyond drift at the stated chance ({chance(e.p_value)}){e.weight_note}: "
-            "not cleared. Weigh the bat and give retest.json (a scale tells a core from "
-            "drift), X-ray the barrel end, and re-test it in a week at the baseline's "
-            "conditions"]
+    return [f"the change between the tests fits {e.finding_text} and stands out of the "
+            f"test's own noise, though it is not surely beyond drift at the stated chance "
+            f"({chance(e.p_value)}){e.weight_note}: not cleared. "
+            f"{_weigh(e).capitalize()}X-ray the barrel end and re-test it in a week at the "
+            "baseline's conditions"]
 
 
 def _unexplained(e: Evidence) -> list[str]:
@@ -322,8 +326,10 @@ def _below_gate(e: Evidence) -> list[str]:
         "not surely beyond what the model's own error makes"
     return [f"the tests differ beyond what moisture, temperature and the accelerometer make "
             f"({chance(e.p_value)}), most like {e.finding_text}, but {how}{e.weight_note}: "
-            "not cleared either. X-ray the barrel end (a core or nails show), weigh the bat "
-            "and re-test it in a week at the baseline's conditions"]
+            "not cleared either. X-ray the barrel end (a core or nails show), "
+            f"{'weigh the bat ' if e.dlnw is None else ''}"
+            f"{'and ' if e.dlnw is None else 'then '}re-test it in a week at the "
+            "baseline's conditions"]
 
 
 def _drift_beyond_bounds(e: Evidence) -> list[str]:
