@@ -301,11 +301,11 @@ def _altered_or_drift(e: Evidence) -> list[str]:
 
 
 def _large(e: Evidence) -> list[str]:
+    todo = f"{_weigh(e)}X-ray the barrel end and re-test it in a week at the baseline's " \
+        "conditions"
     return [f"the change between the tests fits {e.finding_text} and stands out of the "
             f"test's own noise, though it is not surely beyond drift at the stated chance "
-            f"({chance(e.p_value)}){e.weight_note}: not cleared. "
-            f"{_weigh(e).capitalize()}X-ray the barrel end and re-test it in a week at the "
-            "baseline's conditions"]
+            f"({chance(e.p_value)}){e.weight_note}: not cleared. {todo[0].upper()}{todo[1:]}"]
 
 
 def _unexplained(e: Evidence) -> list[str]:
@@ -327,8 +327,7 @@ def _below_gate(e: Evidence) -> list[str]:
     return [f"the tests differ beyond what moisture, temperature and the accelerometer make "
             f"({chance(e.p_value)}), most like {e.finding_text}, but {how}{e.weight_note}: "
             "not cleared either. X-ray the barrel end (a core or nails show), "
-            f"{'weigh the bat ' if e.dlnw is None else ''}"
-            f"{'and ' if e.dlnw is None else 'then '}re-test it in a week at the "
+            f"{'weigh the bat and ' if e.dlnw is None else 'then '}re-test it in a week at the "
             "baseline's conditions"]
 
 
