@@ -14,7 +14,10 @@ it has passed, in this order:
    bat can be (``files.check_bat``), meta.json's points_in against the baseline's impact
    points, a baseline an inspection can use (``updating.diagnose.pairing_check.MIN_POINTS``
    points at least, the barrel covered: ``updating.inspect.checks.coverage_reason``), the
-   re-test's points against the baseline's, ``--serial`` against meta.json's serial;
+   re-test's points against the baseline's, ``--serial`` against meta.json's serial, the
+   moisture readings of meta.json and retest.json on the bat profile.csv describes
+   (``updating.inspect.retest_meta.stations_problem``; against a registered bat's profile,
+   ``batlab.pipeline.registered.inspect_registered``);
 4. **what the command writes** (``outputs``, ``registry``): a file's directory exists, a
    directory or the registry's file is what it must be (or can be made), and each is
    writable; nothing is created here.
@@ -193,8 +196,15 @@ def together(args: argparse.Namespace, read: dict[str, object]) -> None:
     )
     from updating.diagnose.pairing_check import MIN_POINTS
     from updating.inspect.checks import coverage_reason
+    from updating.inspect.retest_meta import conditions_from_dict, stations_problem
 
     profile, meta = read.get("profile"), read.get("meta")
+    if profile is not None:
+        for dest, cond in (("meta", None if meta is None else conditions_from_dict(
+                meta.extra, args.meta)), ("retest_meta", read.get("retest_meta"))):
+            why = stations_problem(cond, profile.length_m)
+            if why:
+                raise ValueError(f"{getattr(args, dest)}: {why}")
     if profile is not None and meta is not None:
         check_bat(profile, meta, args.profile, args.meta)
         serial = getattr(args, "serial", None)
