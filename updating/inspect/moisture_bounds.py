@@ -19,13 +19,13 @@ the two tests' conditions (``RetestConditions``; docs/noise.md, "Moisture readin
    conditioning hours ``conditioned_h`` at the room's EMC, from ``humidity_pct``, moved
    further than the section; without both, an unknown offset common to the test's stations,
    ``SHELL_UNKNOWN_SD_PT``); the differences d_i = u + e_k w_k(x_i) + e_b w_b(x_i)
-   (w = exp(-s / l)) fitted by Bayesian least squares: prior u ~ N(0, ``DENSITY_PRIOR_PT``),
-   e ~ N(0, ``PRIOR_END_MOISTURE_PT``); covariance: the meter's ``METER_SD_PT`` per reading
-   (over the station's count), the conditioning's uncertain diffusivity and the unknown
-   offsets, each common to a test's stations. The posterior's centre and standard
-   deviation become H0's prior, its bounds centre +- ``BOUND_SD`` sd cut to the physical
-   ones of step 1 (``within``) and the check beyond drift's ranges centre +- ``BEYOND_SD``
-   sd.
+   (w = exp(-s / l)) fitted by Bayesian least squares: u flat (H0 had no prior on it),
+   e ~ N(0, ``PRIOR_END_MOISTURE_PT``) (H0's prior); covariance: the meter's
+   ``METER_SD_PT`` per reading (over the station's count), the conditioning's uncertain
+   diffusivity and the unknown offsets, each common to a test's stations. The posterior's
+   centre and sd become H0's prior, its bounds centre +- ``BOUND_SD`` sd cut to the
+   physical ones of step 1 (``within``) and the check beyond drift's ranges centre +-
+   ``BEYOND_SD`` sd.
 
 Weights and temperatures are not used here: the weight is already a datum of the fit (with
 its own sd, ``hypotheses.WEIGHT_SIGMA_REL``), and an alteration moves it too; the
@@ -54,9 +54,6 @@ PRIOR_END_MOISTURE_PT = 1.0
 END_MAX_PT, DENSITY_MAX_PCT = 2.5, 3.0
 """Physical bounds without readings: end grain up to 2.5 points beyond the middle, the
 uniform moisture +-3 points (+-3 % of mass)."""
-DENSITY_PRIOR_PT = DENSITY_MAX_PCT / 2.5
-"""The uniform change's prior sd where readings are fitted: the 3-point bound at 2.5 sd, as
-the ends' 2.5-point bound is at 2.5 prior sd."""
 BEYOND_FACTOR = 3.0
 """Without readings or dates: the check beyond drift widens the ranges and deepens the end
 grain's front this many times (the fixed factor of before)."""
@@ -270,7 +267,7 @@ def posterior(diff: np.ndarray, cov: np.ndarray, rows: np.ndarray,
               prior_sd: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Return the Gaussian posterior (mean, sd) of theta for diff = rows theta + noise.
 
-    Prior theta ~ N(0, diag(prior_sd^2)), noise ~ N(0, cov):
+    Prior theta ~ N(0, diag(prior_sd^2)) (an infinite sd: flat), noise ~ N(0, cov):
     Sigma = (R^T C^-1 R + P^-1)^-1, mu = Sigma R^T C^-1 diff.
     """
     ci = np.linalg.inv(cov)
@@ -309,8 +306,7 @@ def moisture_bound(registered: RetestConditions | None, retest: RetestConditions
         + np.outer(second.common, second.common)
     rows = end_weights(x, length, base.end_decay_m)
     mean, sd = posterior(second.value - first.value, cov, rows,
-                         np.array([DENSITY_PRIOR_PT, PRIOR_END_MOISTURE_PT,
-                                   PRIOR_END_MOISTURE_PT]))
+                         np.array([np.inf, PRIOR_END_MOISTURE_PT, PRIOR_END_MOISTURE_PT]))
     per_point = 100.0 * MASS_PER_POINT  # % of mass per point
     density = within(MoistureParam.measured(per_point * float(mean[0]),
                                             per_point * float(sd[0])), base.density_pct)
