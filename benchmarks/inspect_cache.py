@@ -12,7 +12,7 @@ both tests' modes, the re-test's and the registration's conditions) with the tru
     OPENBLAS_NUM_THREADS=1 PYTHONPATH=. python benchmarks/inspect_cache.py build \
         --clean 40 --altered 42 --seed 600
     OPENBLAS_NUM_THREADS=1 PYTHONPATH=. python benchmarks/inspect_cache.py score \
-        --clean 40 --altered 42 --seed 600 [--out rows.jsonl]
+        --clean 40 --altered 42 --seed 600 [--records N] [--out rows.jsonl]
 
 Bats live in ``--dir`` (default /tmp/batlab-inspect-cache) as <seed>_<kind>.pkl. The final
 numbers come from ``bench_inspect_field.py`` (files to verdict), not from this cache.
@@ -53,6 +53,9 @@ def main() -> int:
     ap.add_argument("--registration", action="store_true",
                     help="meta.json records the baseline's temperature and accelerometer "
                          "mass (build: written; score: added to cached bats)")
+    ap.add_argument("--records", type=int, default=None, metavar="N",
+                    help="score: both tests' dates, rooms and N moisture meter readings a "
+                         "station (updating.simulate.meter; 0: dates and rooms alone)")
     ap.add_argument("--out", type=Path, default=None, help="score: JSON lines of the rows")
     ap.add_argument("--set", action="append", default=[], metavar="MODULE.NAME=VALUE",
                     help="score: override a module constant, e.g. updating.inspect."
@@ -82,7 +85,8 @@ def main() -> int:
             print(f"{i + 1}/{len(todo)} {p.name} ({time.perf_counter() - t0:.1f} s)",
                   file=sys.stderr, flush=True)
             continue
-        row = score_one(pickle.loads(p.read_bytes()), registration=args.registration)
+        row = score_one(pickle.loads(p.read_bytes()), registration=args.registration,
+                        records=args.records)
         rows.append(row)
         print(f"{i + 1}/{len(todo)} {kind} {integ or ''}: {row['status']} "
               f"F={row.get('F') or float('nan'):.1f}", file=sys.stderr, flush=True)

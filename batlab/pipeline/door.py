@@ -102,6 +102,7 @@ NUMBERS: dict[str, tuple[str, float, float]] = {  # dest: (option, lowest, highe
     "freq_tol": ("--freq-tol", 0.0, 100.0),
     "max_damping": ("--max-damping", 0.0, 100.0),
     "scale_tol": ("--scale-tol", 0.0, 100.0),
+    "records": ("--records", 0, 100),
 }
 """Numeric options: finite and within [lowest, highest] (``--band``: each end, increasing)."""
 

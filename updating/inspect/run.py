@@ -184,16 +184,12 @@ def inspect_retest(
         The baseline's accelerometer mass, kg, if known (fixes its change with ``conditions``).
     fill_modulus_ratio : float
         Assumed fill stiffness of a core (fill/wood modulus).
-    n_starts : int
-        Number of core positions refined by least squares.
-    min_mac : float
-        Minimum MAC to pair two modes.
+    n_starts, min_mac : int, float
+        Core positions refined by least squares; the least MAC that pairs two modes.
     with_map : bool
-        Compute the MSSO element map a report draws (``details.msso``); without it the
-        verdict is the same, sooner.
+        Compute the MSSO element map a report draws (``details.msso``; same verdict).
     moisture : MoistureBound
-        H0's moisture as the two tests' records bound it
-        (``moisture_bounds.moisture_bound``; ``NOMINAL``: nothing recorded).
+        H0's moisture as the tests' records bound it (``moisture_bounds``; NOMINAL: none).
 
     Returns
     -------
@@ -217,10 +213,9 @@ def inspect_retest(
         return _nan_verdict(predict, false_alarm, reasons + list(identity.notes),
                             InspectionDetails(pairs.n, time.perf_counter() - t0))
     diff = differences(predict, baseline, retest, pairs, dlnw)
-    space = ParamSpace(profile, _null_bounds(cond, baseline_temperature_c,
-                                             baseline_sensor_mass_kg, moisture),
-                       fill_modulus_ratio, float(retest.sensor_x_m - baseline.sensor_x_m),
-                       moisture)
+    bounds = _null_bounds(cond, baseline_temperature_c, baseline_sensor_mass_kg, moisture)
+    space = ParamSpace(profile, bounds, fill_modulus_ratio,
+                       float(retest.sensor_x_m - baseline.sensor_x_m), moisture)
     hyp = fit_hypotheses(predict, diff, space, n_starts)
     test = nested_test(diff, hyp)
     evidence, kinds = weigh_evidence(predict, diff, space, hyp, test, false_alarm, dlnw)
