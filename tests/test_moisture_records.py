@@ -186,6 +186,24 @@ def test_a_wet_barrel_end_moves_the_barrel_ends_bound_alone():
     assert b.barrel_end_pt.upper > dry.barrel_end_pt.upper
 
 
+@pytest.mark.parametrize("n,narrower", [(1, False), (4, False), (100, True)])
+def test_only_informative_readings_narrow_the_range_beyond_drift(n, narrower):
+    """Readings showing no change at the handle, mid-barrel and barrel end, n a station: the
+    barrel end's excess is known from them alone to 3.6 / sqrt(n) points (1 in from the
+    end, where a 2 in front has fallen to 61 %); beyond drift it may reach 5 of those sds,
+    within the physical +-7.5 points: one or four a station leave +-7.5, a hundred narrow
+    it to about +-1.8."""
+    x = [8.0, 27.0, 32.0]
+    reg = RetestConditions(moisture=readings(x, [9.0] * 3, n), humidity_pct=45.0,
+                           conditioned_h=0.0)
+    b = moisture_bound(reg, replace(reg), BAT)
+    lo, hi = b.beyond_ranges()["barrel_end_moisture_pt"]
+    assert (hi < NOMINAL.barrel_end_pt.beyond_upper) is narrower
+    assert lo == pytest.approx(-hi) and hi >= b.barrel_end_pt.upper
+    if narrower:
+        assert hi == pytest.approx(5 * 3.6 / math.sqrt(n), rel=0.05)
+
+
 def test_the_virtual_meter_reads_the_drawn_moisture():
     """A fleet bat's records: dates whose days the drawn front needed, a room for each test,
     readings at the handle, mid-barrel and barrel end that (with the shell's share inverted)

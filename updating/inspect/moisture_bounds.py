@@ -23,9 +23,11 @@ the two tests' conditions (``RetestConditions``; docs/noise.md, "Moisture readin
    e ~ N(0, ``PRIOR_END_MOISTURE_PT``) (H0's prior); covariance: the meter's
    ``METER_SD_PT`` per reading (over the station's count), the conditioning's uncertain
    diffusivity and the unknown offsets, each common to a test's stations. The posterior's
-   centre and sd become H0's prior, its bounds centre +- ``BOUND_SD`` sd cut to the
-   physical ones of step 1 (``within``) and the check beyond drift's ranges centre +-
-   ``BEYOND_SD`` sd.
+   centre and sd become H0's prior and its bounds centre +- ``BOUND_SD`` sd, cut to the
+   physical ones of step 1; the check beyond drift's ranges are what the readings alone
+   (each end's prior left out) say, +- ``BEYOND_SD`` of their sd, cut to the physical ones
+   three times as wide (``measured``): readings as uncertain as one a station leave both as
+   they were.
 
 Weights and temperatures are not used here: the weight is already a datum of the fit (with
 its own sd, ``hypotheses.WEIGHT_SIGMA_REL``), and an alteration moves it too; the
@@ -65,9 +67,12 @@ SHELL_UNKNOWN_SD_PT = 1.0
 not recorded (the shell moved towards an unknown room), points, common to its stations."""
 STATION_TOL_M = 0.5 * IN_TO_M
 """Readings within this distance are one station."""
-BOUND_SD, BEYOND_SD = 3.0, 7.5
-"""Measured bounds and the check beyond drift's ranges, in posterior sds about the centre
-(without readings the ends' are 2.5 and 7.5 prior sds)."""
+BOUND_SD, BEYOND_SD = 3.0, 5.0
+"""H0's bounds, in posterior sds about the posterior's centre; the check beyond drift's
+ranges, in sds of what the readings alone say about their estimate (a Gaussian meter leaves
+the truth outside 5 sd once in 1.7 million)."""
+UNSEEN_PT = 1e3
+"""Prior sd, points, of an end's excess in what the readings alone say: no prior."""
 EMC_SPAN_PT = float(wm.emc_pct(80.0) - wm.emc_pct(30.0))
 """How far apart the air a bat lives in can put its moisture: EMC at 80 % less at 30 %."""
 MIN_DECAY_M = 0.5 * IN_TO_M
@@ -101,12 +106,6 @@ class MoistureParam:
     def fixed(half: float, sd: float, factor: float = BEYOND_FACTOR) -> MoistureParam:
         """Return +-``half`` about 0 with prior sd ``sd``, beyond drift ``factor`` as wide."""
         return MoistureParam(-half, half, 0.0, sd, -factor * half, factor * half)
-
-    @staticmethod
-    def measured(center: float, sd: float) -> MoistureParam:
-        """Return centre +- ``BOUND_SD`` sd, prior (centre, sd), beyond +- ``BEYOND_SD`` sd."""
-        return MoistureParam(center - BOUND_SD * sd, center + BOUND_SD * sd, center, sd,
-                             center - BEYOND_SD * sd, center + BEYOND_SD * sd)
 
 
 @dataclass(frozen=True)
@@ -305,27 +304,41 @@ def moisture_bound(registered: RetestConditions | None, retest: RetestConditions
     cov = np.diag(first.var + second.var) + np.outer(first.common, first.common) \
         + np.outer(second.common, second.common)
     rows = end_weights(x, length, base.end_decay_m)
-    mean, sd = posterior(second.value - first.value, cov, rows,
+    diff = second.value - first.value
+    mean, sd = posterior(diff, cov, rows,
                          np.array([np.inf, PRIOR_END_MOISTURE_PT, PRIOR_END_MOISTURE_PT]))
+    data, data_sd = posterior(diff, cov, rows, np.array([np.inf, UNSEEN_PT, UNSEEN_PT]))
     per_point = 100.0 * MASS_PER_POINT  # % of mass per point
-    density = within(MoistureParam.measured(per_point * float(mean[0]),
-                                            per_point * float(sd[0])), base.density_pct)
-    knob, barrel = (within(MoistureParam.measured(float(m), float(s)), physical)
-                    for m, s, physical in zip(mean[1:], sd[1:], (base.knob_end_pt,
-                                                                 base.barrel_end_pt),
-                                              strict=True))
-    return MoistureBound(density, knob, barrel, base.end_decay_m, base.beyond_decay_m,
-                         base.days, len(stations))
+    params = [measured(per_point * mean[0], per_point * sd[0], per_point * data[0],
+                       per_point * data_sd[0], base.density_pct)]
+    params += [measured(*v, physical) for v, physical in zip(
+        zip(mean[1:], sd[1:], data[1:], data_sd[1:], strict=True),
+        (base.knob_end_pt, base.barrel_end_pt), strict=True)]
+    return MoistureBound(*params, base.end_decay_m, base.beyond_decay_m, base.days,
+                         len(stations))
 
 
-def within(measured: MoistureParam, physical: MoistureParam) -> MoistureParam:
-    """Return the measured parameter with its bounds cut to the physical ones.
+def overlap(a: tuple[float, float], b: tuple[float, float]) -> tuple[float, float]:
+    """Return the overlap of two ranges, or ``a`` when they do not overlap."""
+    lo, hi = max(a[0], b[0]), min(a[1], b[1])
+    return (lo, hi) if lo < hi else a
 
-    Both hold, so H0 keeps their overlap; when they do not overlap (the readings say the
-    wood moved beyond what was taken as physical), the measured bounds alone.
+
+def measured(center: float, sd: float, data: float, data_sd: float,
+             physical: MoistureParam) -> MoistureParam:
+    """Return one moisture parameter as the readings and physics bound it together.
+
+    Prior: the posterior (``center``, ``sd``, H0's prior included). Bounds: centre +-
+    ``BOUND_SD`` sd within the physical bounds. Beyond drift: what the readings alone say
+    (``data`` +- ``BEYOND_SD`` ``data_sd``) within the physical range beyond drift. Both
+    hold, so each keeps their overlap; where they do not overlap (the readings say the wood
+    moved beyond what was taken as physical) the readings' range alone. Readings as
+    uncertain as a meter's single reading (+-3.6 points at the barrel end) leave the
+    physical ranges as they were.
     """
-    lo, hi = max(measured.lower, physical.lower), min(measured.upper, physical.upper)
-    if lo >= hi:
-        return measured
-    return MoistureParam(lo, hi, measured.center, measured.sd, measured.beyond_lower,
-                         measured.beyond_upper)
+    lo, hi = overlap((center - BOUND_SD * sd, center + BOUND_SD * sd),
+                     (physical.lower, physical.upper))
+    b_lo, b_hi = overlap((data - BEYOND_SD * data_sd, data + BEYOND_SD * data_sd),
+                         (physical.beyond_lower, physical.beyond_upper))
+    return MoistureParam(float(lo), float(hi), float(center), float(sd),
+                         float(min(b_lo, lo)), float(max(b_hi, hi)))
