@@ -71,6 +71,9 @@ BOUND_SD, BEYOND_SD = 3.0, 5.0
 """H0's bounds, in posterior sds about the posterior's centre; the check beyond drift's
 ranges, in sds of what the readings alone say about their estimate (a Gaussian meter leaves
 the truth outside 5 sd once in 1.7 million)."""
+READINGS_AS_PRIOR = 1.0
+"""Whether the posterior is H0's prior (1) or H0 keeps its physical prior and the readings
+only bound it (0)."""
 UNSEEN_PT = 1e3
 """Prior sd, points, of an end's excess in what the readings alone say: no prior."""
 EMC_SPAN_PT = float(wm.emc_pct(80.0) - wm.emc_pct(30.0))
@@ -340,5 +343,6 @@ def measured(center: float, sd: float, data: float, data_sd: float,
                      (physical.lower, physical.upper))
     b_lo, b_hi = overlap((data - BEYOND_SD * data_sd, data + BEYOND_SD * data_sd),
                          (physical.beyond_lower, physical.beyond_upper))
-    return MoistureParam(float(lo), float(hi), float(center), float(sd),
+    c, s = (center, sd) if READINGS_AS_PRIOR else (physical.center, physical.sd)
+    return MoistureParam(float(lo), float(hi), float(c), float(s),
                          float(min(b_lo, lo)), float(max(b_hi, hi)))
