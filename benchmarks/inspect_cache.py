@@ -12,7 +12,7 @@ both tests' modes, the re-test's and the registration's conditions) with the tru
     OPENBLAS_NUM_THREADS=1 PYTHONPATH=. python benchmarks/inspect_cache.py build \
         --clean 40 --altered 42 --seed 600
     OPENBLAS_NUM_THREADS=1 PYTHONPATH=. python benchmarks/inspect_cache.py score \
-        --clean 40 --altered 42 --seed 600 [--out rows.jsonl]
+        --clean 40 --altered 42 --seed 600 [--records N] [--out rows.jsonl]
 
 Add ``coherence`` to ``--nuisances`` for files that carry their coherence (the noise
 measured, docs/noise.md); ``score --residual-noise`` then judges the same bats as if they did
@@ -62,6 +62,9 @@ def main() -> int:
     ap.add_argument("--registration", action="store_true",
                     help="meta.json records the baseline's temperature and accelerometer "
                          "mass (build: written; score: added to cached bats)")
+    ap.add_argument("--records", type=int, default=None, metavar="N",
+                    help="score: both tests' dates, rooms and N moisture meter readings a "
+                         "station (updating.simulate.meter; 0: dates and rooms alone)")
     ap.add_argument("--out", type=Path, default=None, help="score: JSON lines of the rows")
     ap.add_argument("--residual-noise", action="store_true",
                     help="score: judge as if the files carried no coherence (the noise from "
@@ -98,7 +101,7 @@ def main() -> int:
         if args.residual_noise and "error" not in bat:  # as if the files had no coherence
             bat = dict(bat, **{k: replace(bat[k], shape_noise_rel=None)
                                for k in ("baseline", "retest")})
-        row = score_one(bat, registration=args.registration)
+        row = score_one(bat, registration=args.registration, records=args.records)
         rows.append(row)
         print(f"{i + 1}/{len(todo)} {kind} {integ or ''}: {row['status']} "
               f"F={row.get('F') or float('nan'):.1f}", file=sys.stderr, flush=True)

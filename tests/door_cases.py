@@ -201,6 +201,9 @@ META_CASES: dict[str, tuple[dict, tuple[str, ...]]] = {
     "accelerometer_negative": ({"accelerometer_mass_g": -3.0}, ("accelerometer_mass_g",)),
     "temperature_text": ({"temperature_c": "hot"}, ("temperature_c",)),
     "tested_on_future": ({"tested_on": "2099-01-01"}, ("tested_on",)),
+    "moisture_off_the_bat": ({"moisture": [{"x_in": 40.0, "mc_pct": 9.0}]},
+                             ("moisture", "x_in", "off the bat")),
+    "humidity_text": ({"humidity_pct": "45"}, ("humidity_pct",)),
 }
 """meta.json's malformed values."""
 
@@ -289,6 +292,12 @@ RETEST_JSON_CASES: dict[str, tuple[object, tuple[str, ...]]] = {
     "retest_weight_grams": ({"weight_lb": 809.3}, ("weight_lb",)),
     "retest_temperature_500": ({"temperature_c": 500}, ("temperature_c",)),
     "retest_accelerometer_negative": ({"accelerometer_mass_g": -1}, ("accelerometer_mass_g",)),
+    "moisture_mc_45": ({"moisture": [{"x_in": 31.0, "mc_pct": 45.0}]}, ("moisture", "mc_pct")),
+    "moisture_off_the_bat": ({"moisture": [{"x_in": 40.0, "mc_pct": 9.0}]},
+                             ("moisture", "x_in", "off the bat")),
+    "moisture_not_records": ({"moisture": [9.0, 9.2]}, ("moisture",)),
+    "humidity_120": ({"humidity_pct": 120}, ("humidity_pct",)),
+    "conditioned_negative": ({"conditioned_h": -1}, ("conditioned_h",)),
     "retest_json_list": ("[]", ()),
     "retest_json_broken": ('{"weight_lb": ', ()),
 }

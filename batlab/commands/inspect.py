@@ -54,7 +54,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    help="the re-test file, stateless form (the same file as RETEST above)")
     p.add_argument("--retest-meta", default=None, metavar="RETEST_JSON",
                    help="retest.json: the re-test's weight_lb, accelerometer_mass_g, "
-                        "temperature_c, tested_on (every key optional)")
+                        "temperature_c, tested_on, humidity_pct, conditioned_h and "
+                        "moisture readings [{x_in, mc_pct}, ...] (every key optional)")
     p.add_argument("--retest-profile", default=None, metavar="RETEST_PROFILE_CSV",
                    help="retest_profile.csv: the caliper profile measured again at the "
                         "re-test (x_in,diameter_in,angle_deg)")

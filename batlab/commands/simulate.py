@@ -31,6 +31,12 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--calipers", type=int, default=0, metavar="N",
                    help="--case: also the re-test's caliper profile read at N orientations "
                         "(retest_profile.csv; 4: 0, 45, 90, 135 deg)")
+    p.add_argument("--records", type=int, default=None, metavar="N",
+                   help="--case: what the lab records of the wood and the room at both tests "
+                        "(tested_on, humidity_pct, conditioned_h, and N moisture meter "
+                        "readings at each of the handle, mid-barrel and barrel end; 0: no "
+                        "readings) in retest.json and meta.json (which then also holds the "
+                        "baseline's temperature and accelerometer mass)")
     p.add_argument("--nuisances", default="all",
                    help="--case: all, none, or a comma-separated list (moisture, uniform_drift, "
                         "temperature, billet, planes, cup, noise, points, model_points, band, "
@@ -80,7 +86,7 @@ def run_case(args, folder: str) -> int:
         nuisances = tuple(n.strip() for n in args.nuisances.split(",") if n.strip())
     paths, expected = pipeline.simulate_field_case(
         args.seed, args.kind, nuisances, args.integrity, folder,
-        progress=progress_printer("simulate"), calipers=args.calipers)
+        progress=progress_printer("simulate"), calipers=args.calipers, records=args.records)
     summary = {k: str(v) for k, v in paths.items() if v is not None}
     summary["expected"] = expected
     if args.json:

@@ -23,6 +23,7 @@ from updating.inspect.run import inspect
 from updating.simulate.alterations import KINDS
 from updating.simulate.field_fleet import draw_case, write_case
 from updating.simulate.integrity import INTEGRITY
+from updating.simulate.meter import lab_records
 from updating.simulate.nuisances import NUISANCES
 
 
@@ -153,26 +154,52 @@ def build_case(case, seed: int, with_meta: bool = True, registration: bool = Fal
     return out
 
 
+def _redrawn(bat: dict):
+    """Return the cached bat's case, re-drawn from its seed (which makes the same bat)."""
+    return draw_case(np.random.default_rng(bat["seed"]), bat["kind"],
+                     bat.get("nuisances", NUISANCES), integrity=bat["integrity"],
+                     serial=f"F-{bat['seed']}")
+
+
 def registered_conditions(bat: dict) -> RetestConditions:
     """Return the bat's registration with the baseline's temperature and accelerometer mass.
 
-    As if meta.json had recorded them (``FieldCase.registration_conditions``; the case
-    re-drawn from its seed, which makes the same bat).
+    As if meta.json had recorded them (``FieldCase.registration_conditions``).
     """
-    case = draw_case(np.random.default_rng(bat["seed"]), bat["kind"],
-                     bat.get("nuisances", NUISANCES), integrity=bat["integrity"],
-                     serial=f"F-{bat['seed']}")
-    extra = conditions_from_dict(case.registration_conditions, "meta.json")
+    extra = conditions_from_dict(_redrawn(bat).registration_conditions, "meta.json")
     return replace(bat["registered"], sensor_mass_kg=extra.sensor_mass_kg,
                    temperature_c=extra.temperature_c)
 
 
+RECORD_FIELDS = ("tested_on", "moisture", "humidity_pct", "conditioned_h")
+"""What ``with_records`` adds to both tests' conditions."""
+
+
+def with_records(bat: dict, per_station: int) -> dict:
+    """Return the cached bat with the lab's records of its wood and rooms.
+
+    ``updating.simulate.meter.lab_records`` of the re-drawn case: both tests' dates and
+    rooms, and ``per_station`` moisture readings at each station (0: none), added to the
+    registration's and the re-test's conditions (a bat cached without retest.json gains one
+    holding only these). The modes do not depend on them, so the cache serves both.
+    """
+    records = lab_records(_redrawn(bat), bat["seed"], per_station)
+    out = dict(bat)
+    for key, where in (("registered", "registration"), ("conditions", "retest")):
+        got = conditions_from_dict(records[where], f"{where} records")
+        out[key] = replace(bat[key] or RetestConditions(),
+                           **{f: getattr(got, f) for f in RECORD_FIELDS})
+    return out
+
+
 def score_one(bat: dict, false_alarm: float = 0.01, registration: bool = False,
-              with_map: bool = True) -> dict:
+              with_map: bool = True, records: int | None = None) -> dict:
     """Run the inspection alone on a cached bat: ``field_row``'s row.
 
     With ``registration``: meta.json's baseline temperature and accelerometer mass given;
-    ``with_map`` False skips the MSSO element map (the verdict is the same).
+    ``with_map`` False skips the MSSO element map (the verdict is the same); ``records``
+    N: both tests' dates, rooms and N moisture readings a station (``with_records``; 0:
+    dates and rooms alone; None: none).
     """
     row = {"seed": bat["seed"], "kind": bat["kind"], "integrity": bat["integrity"]}
     if "error" in bat:
@@ -181,6 +208,8 @@ def score_one(bat: dict, false_alarm: float = 0.01, registration: bool = False,
     row["expected"] = bat["expected"]
     if registration and not bat.get("registration"):
         bat = dict(bat, registered=registered_conditions(bat))
+    if records is not None:
+        bat = with_records(bat, records)
     t0 = time.perf_counter()
     try:
         v = inspect(bat["profile"], bat["reference"], bat["baseline"], bat["retest"],

@@ -202,23 +202,29 @@ def bat_words(kind: FieldKind) -> str:
 
 def simulate_field_case(
     seed: int | None, kind: FieldKind, nuisances: tuple[str, ...], integrity: Integrity | None,
-    folder, progress: Progress = _quiet, calipers: int = 0,
+    folder, progress: Progress = _quiet, calipers: int = 0, records: int | None = None,
 ) -> tuple[dict, str]:
     """Draw one random bat of the nuisance-rich fleet and write its files.
 
     One random bat of the nuisance-rich fleet written as a lab hands it over (profile.csv,
     meta.json, baseline.uff, retest.uff, retest.json, truth.json in ``folder``;
     ``updating.simulate.field_fleet``; with ``calipers`` N > 0 also retest_profile.csv read
-    at N orientations). Returns (paths by name, the expected verdict); ``progress`` is told
-    before the files are simulated.
+    at N orientations; with ``records`` N, both tests' dates, rooms and N moisture readings
+    a station, meta.json holding the registration's conditions,
+    ``updating.simulate.meter``). Returns (paths by name, the expected verdict);
+    ``progress`` is told before the files are simulated.
     """
     from updating.simulate.field_fleet import draw_case, write_case
+    from updating.simulate.meter import with_lab_records
 
     rng = np.random.default_rng(seed)
     case = draw_case(rng, kind, nuisances, integrity)
+    noise_seed = int(rng.integers(2**31))
+    if records is not None:
+        case = with_lab_records(case, noise_seed, records)
     progress(f"simulating {bat_words(kind)} with {', '.join(nuisances) or 'no nuisance'} ...")
-    paths = write_case(case, folder, seed=int(rng.integers(2**31)), truth=True,
-                       retest_profile=calipers)
+    paths = write_case(case, folder, seed=noise_seed, truth=True, retest_profile=calipers,
+                       registration=records is not None)
     return paths, case.expected
 
 

@@ -15,7 +15,10 @@ it has passed, in this order:
    points, a baseline an inspection can use (``updating.diagnose.pairing_check.MIN_POINTS``
    points at least, the barrel covered: ``updating.inspect.checks.coverage_reason``), the
    re-test's points against the baseline's, a re-test that is the baseline over again
-   (``files.same_test_reason``), ``--serial`` against meta.json's serial;
+   (``files.same_test_reason``), ``--serial`` against meta.json's serial, the moisture
+   readings of meta.json and retest.json on the bat profile.csv describes
+   (``updating.inspect.retest_meta.stations_problem``; against a registered bat's profile,
+   ``batlab.pipeline.registered.inspect_registered``);
 4. **what the command writes** (``outputs``, ``registry``): a file's directory exists, a
    directory or the registry's file is what it must be (or can be made), and each is
    writable; nothing is created here.
@@ -101,6 +104,7 @@ NUMBERS: dict[str, tuple[str, float, float]] = {  # dest: (option, lowest, highe
     "freq_tol": ("--freq-tol", 0.0, 100.0),
     "max_damping": ("--max-damping", 0.0, 100.0),
     "scale_tol": ("--scale-tol", 0.0, 100.0),
+    "records": ("--records", 0, 100),
 }
 """Numeric options: finite and within [lowest, highest] (``--band``: each end, increasing)."""
 
@@ -195,8 +199,15 @@ def together(args: argparse.Namespace, read: dict[str, object]) -> None:
     )
     from updating.diagnose.pairing_check import MIN_POINTS
     from updating.inspect.checks import coverage_reason
+    from updating.inspect.retest_meta import conditions_from_dict, stations_problem
 
     profile, meta = read.get("profile"), read.get("meta")
+    if profile is not None:
+        for dest, cond in (("meta", None if meta is None else conditions_from_dict(
+                meta.extra, args.meta)), ("retest_meta", read.get("retest_meta"))):
+            why = stations_problem(cond, profile.length_m)
+            if why:
+                raise ValueError(f"{getattr(args, dest)}: {why}")
     if profile is not None and meta is not None:
         check_bat(profile, meta, args.profile, args.meta)
         serial = getattr(args, "serial", None)

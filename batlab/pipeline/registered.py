@@ -34,7 +34,7 @@ from batlab.pipeline.records import FORCED_KEY, FittedTest
 from batlab.version import code_version
 from updating.correlate.measured import driving_mass_line
 from updating.correlate.points import match_points, point_positions_m
-from updating.inspect.retest_meta import RetestConditions, conditions_from_dict
+from updating.inspect.retest_meta import RetestConditions, conditions_from_dict, stations_problem
 from updating.model import plausible
 from updating.model.lab_input import BatMeta
 from updating.model.profile import Profile, make_profile
@@ -356,6 +356,10 @@ def inspect_registered(
         ``store_inspection``).
     """
     conditions = read_conditions(retest_meta_path)
+    bat = reg.get_bat(conn, serial)
+    why = stations_problem(conditions, float(bat.profile_x_m[-1] - bat.profile_x_m[0]))
+    if why:
+        raise ValueError(f"{retest_meta_path}: {why}")
     case = registered_case(conn, serial, retest_path, refit_baseline, progress, baseline_fit,
                            retest_profile_path)
     progress("inspecting the re-test against the registered reference")

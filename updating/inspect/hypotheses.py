@@ -48,6 +48,7 @@ import numpy as np
 
 from updating.inspect.kind_table import FAMILIES
 from updating.inspect.model import E_PER_POINT, MASS_PER_POINT, ChangeParams, ChangePredictor
+from updating.inspect.moisture_bounds import NOMINAL, MoistureBound
 from updating.inspect.parallel import fork_map
 from updating.inspect.segments import Segment
 from updating.inspect.sensitivity import predicted_change
@@ -110,9 +111,9 @@ core is told apart from that drift."""
 WEIGHT_SIGMA_REL = 0.003
 """Standard deviation of ln(W_retest / W_registered) beyond the modelled drift: two scales,
 tape and dirt (0.3 %, ~0.1 oz on a 2.2 lb bat)."""
-PRIOR_SHIFT_IN, PRIOR_END_MOISTURE_PT, PRIOR_SENSOR_MASS_G = 0.1, 1.0, 2.0
-"""Prior standard deviations of the accelerometer's re-mounting shift, the end-grain moisture
-excess and an unknown replacement accelerometer's mass change."""
+PRIOR_SHIFT_IN, PRIOR_SENSOR_MASS_G = 0.1, 2.0
+"""Prior standard deviations of the accelerometer's re-mounting shift and an unknown
+replacement accelerometer's mass change (the moisture's: ``moisture_bounds``)."""
 FREQ_MODEL_ERROR_REL = 3e-4
 """Floor on the relative frequency-change uncertainty: what the 1D change model misses in a
 change of frequency (suspension, mesh)."""
@@ -155,10 +156,10 @@ class NullBounds:
     """Physical bounds of the null parameters.
 
     Physical bounds of the null parameters (x[:N_NULL], module docstring), from
-    ../docs/inspection.md: moisture +-2.5 points (E -2 %, mass +1 % per point), temperature
-    +-10 C (E -0.1..-0.3 %/C), end grain up to 2.5 points beyond the middle, the sensor
-    re-mounted within 0.3 in, a replacement accelerometer within 0-10 g (or its known mass
-    within 0.3 g).
+    ../docs/inspection.md: moisture as the lab's records bound it (``moisture_bounds``;
+    without records +-3 points, E -2 %, mass +1 % per point, end grain up to 2.5 points
+    beyond the middle), temperature +-10 C (E -0.1..-0.3 %/C), the sensor re-mounted within
+    0.3 in, a replacement accelerometer within 0-10 g (or its known mass within 0.3 g).
     """
 
     lower: np.ndarray
@@ -171,14 +172,16 @@ class NullBounds:
 
     @staticmethod
     def physical(sensor_change_kg: float | None = None,
-                 temperature_change_c: float | None = None) -> NullBounds:
+                 temperature_change_c: float | None = None,
+                 moisture: MoistureBound = NOMINAL) -> NullBounds:
         """Return the physical bounds, narrowed by what the lab recorded.
 
         ``sensor_change_kg``: the change of accelerometer mass when both tests' masses
         are known (else fitted within +-10 g, prior ``PRIOR_SENSOR_MASS_G``: the calibrated
         reference's own sensor mass can hold other physics, even be 0 g, so the change is
         not bounded by it); ``temperature_change_c``: re-test minus baseline temperature
-        when both are known.
+        when both are known; ``moisture``: the uniform moisture's and the end grain's
+        bounds and priors (``moisture_bounds.moisture_bound``; ``NOMINAL`` without records).
         """
         if temperature_change_c is None:
             t_lo, t_hi = -3.0, 3.0
@@ -197,15 +200,13 @@ class NullBounds:
         inf = np.inf
         by_name = {  # name: lower, upper, prior centre, prior sd
             "stiffness_beyond_moisture_pct": (s_lo, s_hi, 0.0, inf),
-            "density_pct": (-3.0, 3.0, 0.0, inf),
             "sensor_shift_in": (-0.3, 0.3, 0.0, PRIOR_SHIFT_IN),
-            "knob_end_moisture_pt": (-2.5, 2.5, 0.0, PRIOR_END_MOISTURE_PT),
-            "barrel_end_moisture_pt": (-2.5, 2.5, 0.0, PRIOR_END_MOISTURE_PT),
             "sensor_mass_change_g": (m_lo, m_hi, m0, m_sig),
             "plane_mix": (-PLANE_MIX_MAX, PLANE_MIX_MAX, 0.0, PRIOR_PLANE_MIX),
             "handle_substance_g": (0.0, HANDLE_MAX_G, 0.0, inf),
             "handle_substance_to_in": (HANDLE_MIN_IN, HANDLE_MAX_IN, 10.0, inf),
             "handle_substance_from_in": (0.0, HANDLE_FROM_MAX_IN, 1.0, inf),
+            **{n: (p.lower, p.upper, p.center, p.sd) for n, p in moisture.by_name().items()},
         }
         lo, hi, center, sigma = (np.array(c, dtype=float)
                                  for c in zip(*(by_name[n] for n in NULL_NAMES), strict=True))
@@ -222,15 +223,21 @@ class NullBounds:
         lo[uniform], hi[uniform] = (-40.0, -30.0), (40.0, 30.0)
         return NullBounds(lo, hi, self.prior_center, self.prior_sigma)
 
-    def relaxed(self, factor: float = 3.0, only: tuple[str, ...] | None = None) -> NullBounds:
+    def relaxed(self, factor: float = 3.0, only: tuple[str, ...] | None = None,
+                ranges: dict[str, tuple[float, float]] | None = None) -> NullBounds:
         """Return the bounds widened about their middles.
 
         Every range ``factor`` times as wide about its middle (priors kept): to ask whether
         the data really want a nuisance beyond its physical bound. With ``only`` (names of
         ``NULL_NAMES``) just those ranges, the others held where physics holds them.
+        ``ranges`` (name: (lower, upper)) gives a widened range of its own to the names it
+        holds (the moisture's, ``MoistureBound.beyond_ranges``).
         """
         mid, half = 0.5 * (self.lower + self.upper), 0.5 * (self.upper - self.lower)
         lo, hi = mid - factor * half, mid + factor * half
+        for name, (r_lo, r_hi) in (ranges or {}).items():
+            i = NULL_INDEX[name]
+            lo[i], hi[i] = min(r_lo, self.lower[i]), max(r_hi, self.upper[i])
         if only is not None:
             free = np.isin(np.array(NULL_NAMES), only)
             lo, hi = np.where(free, lo, self.lower), np.where(free, hi, self.upper)
@@ -394,12 +401,15 @@ class ParamSpace:
 
     ``sensor_mount_m`` is the nominal move of the accelerometer between the tests (the
     difference of the labelled sensor points); the fitted shift is added to it.
+    ``moisture`` is what the lab's records say of the moisture (``bounds`` holds its H0
+    ranges; the check beyond drift reads its wider ranges and deeper front).
     """
 
     profile: Profile
     bounds: NullBounds
     fill_modulus_ratio: float = 0.0
     sensor_mount_m: float = 0.0
+    moisture: MoistureBound = NOMINAL
 
     def lower(self) -> np.ndarray:
         """Return the lower bounds of x."""

@@ -40,6 +40,7 @@ from updating.inspect.kind_table import kind
 from updating.inspect.kinds import N_PARAMS, KindFits, classify, refit_family, segment_space
 from updating.inspect.local_change import N_SEGMENT, fit_segment
 from updating.inspect.model import ChangePredictor
+from updating.inspect.moisture_bounds import BEYOND_FACTOR
 from updating.model.units import IN_TO_M
 from updating.tails import chi2_ppf, f_sf
 
@@ -240,23 +241,26 @@ def _bounds_matter(predict, diff, space, hyp: Hypotheses, n: int,
 
 
 def _core_beyond_drift(predict, diff, space, hyp: Hypotheses, q: int, dof: int,
-                       false_alarm: float, held: tuple[str, ...],
-                       factor: float = 3.0) -> float | None:
+                       false_alarm: float, held: tuple[str, ...]) -> float | None:
     """Ask whether the core beats drift beyond the bounds.
 
-    The null refitted with each ``held`` nuisance's range ``factor`` times as wide (priors
-    kept; ``NullBounds.relaxed``; the others where physics holds them) and, when an end's
-    moisture is held, the end grain's moisture reaching ``factor`` times as far from each
-    end (``ChangePredictor.with_end_decay``: a front 6 in deep, not 2), under both
-    noises (``fit_hypotheses``): F of the core against it when the change is still beyond
-    that drift at the stated chance (H0's noise: ``decision.is_significant``) and still
-    large (H1's noise: ``decision.is_large``), else None. A core fit beside a nuisance held
-    at its bound is told apart from that drift only when no drift three times as large
-    explains the change.
+    The null refitted with each ``held`` nuisance's range widened (priors kept;
+    ``NullBounds.relaxed``; the others where physics holds them): the moisture's to the
+    ranges the lab's records leave beyond drift (``space.moisture``,
+    ``moisture_bounds``: three times the physical ones when nothing is recorded), the
+    accelerometer's ``BEYOND_FACTOR`` times as wide; and, when an end's moisture is held,
+    the end grain's moisture reaching as far as those records let it
+    (``MoistureBound.beyond_decay_m``; ``ChangePredictor.with_end_decay``: a front 6 in
+    deep, not 2, when nothing is recorded), under both noises (``fit_hypotheses``): F of
+    the core against it when the change is still beyond that drift at the stated chance
+    (H0's noise: ``decision.is_significant``) and still large (H1's noise:
+    ``decision.is_large``), else None. A core fit beside a nuisance held at its bound is
+    told apart from that drift only when no drift that large explains the change.
     """
-    relaxed = replace(space, bounds=space.bounds.relaxed(factor, only=held))
+    relaxed = replace(space, bounds=space.bounds.relaxed(
+        BEYOND_FACTOR, only=held, ranges=space.moisture.beyond_ranges()))
     ends = any(h in END_MOISTURE_NAMES for h in held)
-    deep = predict.with_end_decay(factor * predict.end_decay_m) if ends else predict
+    deep = predict.with_end_decay(space.moisture.beyond_decay_m) if ends else predict
     wide = fit_null(deep, diff, relaxed, hyp.sigma_rel, x0=hyp.null.x)
     F, p = nested_f(wide.rss, min(hyp.full.rss, hyp.null.rss), q, dof)
     wide_h0 = fit_null(deep, diff, relaxed, hyp.sigma_h0, x0=hyp.null_h0.x)

@@ -58,7 +58,13 @@ from updating.inspect.decision import Evidence, decide
 from updating.inspect.details import ElementMap, InspectionDetails
 from updating.inspect.finding import Finding
 from updating.inspect.hypotheses import NullBounds, ParamSpace
-from updating.inspect.model import ChangeParams, ChangePredictor, baseline_sensor_offset
+from updating.inspect.model import (
+    END_DECAY_M,
+    ChangeParams,
+    ChangePredictor,
+    baseline_sensor_offset,
+)
+from updating.inspect.moisture_bounds import NOMINAL, MoistureBound, moisture_bound
 from updating.inspect.nested import fit_hypotheses, nested_test, weigh_evidence
 from updating.inspect.plane_split_verdict import with_plane_split
 from updating.inspect.reading import (
@@ -105,15 +111,19 @@ def _weight_change(cond: RetestConditions, registered_weight_kg: float | None) -
 
 
 def _null_bounds(cond: RetestConditions, baseline_temperature_c: float | None,
-                 baseline_sensor_mass_kg: float | None) -> NullBounds:
-    """H0's physical bounds, narrowed by the temperature and accelerometer change if known."""
+                 baseline_sensor_mass_kg: float | None,
+                 moisture: MoistureBound = NOMINAL) -> NullBounds:
+    """H0's physical bounds, narrowed by the temperature and accelerometer change if known.
+
+    The moisture's as ``moisture`` bounds it (``moisture_bounds``).
+    """
     dT = None
     if cond.temperature_c is not None and baseline_temperature_c is not None:
         dT = cond.temperature_c - baseline_temperature_c
     dm = None
     if cond.sensor_mass_kg is not None and baseline_sensor_mass_kg is not None:
         dm = cond.sensor_mass_kg - baseline_sensor_mass_kg
-    return NullBounds.physical(dm, dT)
+    return NullBounds.physical(dm, dT, moisture)
 
 
 def _uncertainty(reading: Reading, finding: Finding | None) -> dict[str, float]:
@@ -127,15 +137,18 @@ def _uncertainty(reading: Reading, finding: Finding | None) -> dict[str, float]:
 
 
 def _predictor(profile: Profile, reference: BatReference, baseline: MeasuredModes,
-               retest: MeasuredModes) -> tuple[ChangePredictor, float]:
+               retest: MeasuredModes,
+               end_decay_m: float = END_DECAY_M) -> tuple[ChangePredictor, float]:
     """Return the reference's change predictor at the baseline's accelerometer.
 
     The reference model's changes at the test points, its accelerometer moved to the
-    baseline's (``baseline_sensor_offset``), and that offset, m.
+    baseline's (``baseline_sensor_offset``), and that offset, m; the end grain's moisture
+    decaying over ``end_decay_m`` from each end.
     """
     points = np.asarray(baseline.x_m, dtype=float)
     n_solve = max(baseline.freq_hz.size, retest.freq_hz.size) + 6
-    predict = ChangePredictor(profile, reference, points, reference.sensor_x_m, n_solve)
+    predict = ChangePredictor(profile, reference, points, reference.sensor_x_m, n_solve,
+                              end_decay_m)
     offset = baseline_sensor_offset(predict, baseline.freq_hz, baseline.shapes)
     return predict.at_sensor(reference.sensor_x_m + offset), offset
 
@@ -147,6 +160,7 @@ def inspect_retest(
     baseline_temperature_c: float | None = None,
     baseline_sensor_mass_kg: float | None = None, fill_modulus_ratio: float = 0.0,
     n_starts: int = 2, min_mac: float = 0.8, with_map: bool = True,
+    moisture: MoistureBound = NOMINAL,
 ) -> Verdict:
     """Judge a re-test of a bat against its baseline test and reference (module docstring).
 
@@ -170,13 +184,12 @@ def inspect_retest(
         The baseline's accelerometer mass, kg, if known (fixes its change with ``conditions``).
     fill_modulus_ratio : float
         Assumed fill stiffness of a core (fill/wood modulus).
-    n_starts : int
-        Number of core positions refined by least squares.
-    min_mac : float
-        Minimum MAC to pair two modes.
+    n_starts, min_mac : int, float
+        Core positions refined by least squares; the least MAC that pairs two modes.
     with_map : bool
-        Compute the MSSO element map a report draws (``details.msso``); without it the
-        verdict is the same, sooner.
+        Compute the MSSO element map a report draws (``details.msso``; same verdict).
+    moisture : MoistureBound
+        H0's moisture as the tests' records bound it (``moisture_bounds``; NOMINAL: none).
 
     Returns
     -------
@@ -191,7 +204,7 @@ def inspect_retest(
     t0 = time.perf_counter()
     cond = conditions or RetestConditions()
     _check(profile, baseline, retest)
-    predict, offset = _predictor(profile, reference, baseline, retest)
+    predict, offset = _predictor(profile, reference, baseline, retest, moisture.end_decay_m)
     dlnw = _weight_change(cond, registered_weight_kg)
     pairs, identity = identify_pairs(predict, baseline, retest,
                                      pair_tests(predict, baseline, retest, min_mac))
@@ -200,9 +213,9 @@ def inspect_retest(
         return _nan_verdict(predict, false_alarm, reasons + list(identity.notes),
                             InspectionDetails(pairs.n, time.perf_counter() - t0))
     diff = differences(predict, baseline, retest, pairs, dlnw)
-    space = ParamSpace(profile, _null_bounds(cond, baseline_temperature_c,
-                                             baseline_sensor_mass_kg),
-                       fill_modulus_ratio, float(retest.sensor_x_m - baseline.sensor_x_m))
+    bounds = _null_bounds(cond, baseline_temperature_c, baseline_sensor_mass_kg, moisture)
+    space = ParamSpace(profile, bounds, fill_modulus_ratio,
+                       float(retest.sensor_x_m - baseline.sensor_x_m), moisture)
     hyp = fit_hypotheses(predict, diff, space, n_starts)
     test = nested_test(diff, hyp)
     evidence, kinds = weigh_evidence(predict, diff, space, hyp, test, false_alarm, dlnw)
@@ -310,7 +323,9 @@ def inspect(profile: Profile, reference: BatReference, baseline: MeasuredModes,
         The re-test's retest.json (weight, accelerometer mass, temperature).
     registered : RetestConditions or None
         The same keys of the bat's meta.json (its weight at registration, and the
-        baseline's accelerometer mass and temperature when the lab recorded them).
+        baseline's accelerometer mass, temperature, date, room and moisture readings when
+        the lab recorded them: with the re-test's, they bound H0's moisture,
+        ``moisture_bounds``).
     with_map : bool
         Compute the MSSO element map for the evidence (``inspect_retest``).
     retest_profile : CaliperSurvey or None
@@ -327,6 +342,7 @@ def inspect(profile: Profile, reference: BatReference, baseline: MeasuredModes,
     verdict = inspect_retest(profile, reference, baseline, retest, false_alarm=false_alarm,
                              conditions=conditions, registered_weight_kg=reg.weight_kg,
                              baseline_temperature_c=reg.temperature_c,
-                             baseline_sensor_mass_kg=reg.sensor_mass_kg, with_map=with_map)
+                             baseline_sensor_mass_kg=reg.sensor_mass_kg, with_map=with_map,
+                             moisture=moisture_bound(reg, conditions, profile))
     verdict = with_calipers(verdict, profile, retest_profile, reference.rho_kg_m3)
     return with_plane_split(verdict, profile, reference, baseline, retest)

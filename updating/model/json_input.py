@@ -77,8 +77,10 @@ class Key:
     Attributes
     ----------
     kind : str
-        ``"number"``, ``"numbers"`` (a non-empty list of numbers), ``"text"`` (non-blank)
-        or ``"date"`` (text ``YYYY-MM-DD`` from ``EARLIEST_DATE`` to tomorrow).
+        ``"number"``, ``"numbers"`` (a non-empty list of numbers), ``"text"`` (non-blank),
+        ``"date"`` (text ``YYYY-MM-DD`` from ``EARLIEST_DATE`` to tomorrow) or
+        ``"records"`` (a non-empty list of objects, each holding every key of ``fields``:
+        a moisture meter's readings, ``[{"x_in": 31.0, "mc_pct": 8.9}, ...]``).
     unit : str
         The value's unit, for messages (``"lb"``).
     lo, hi : float
@@ -87,6 +89,8 @@ class Key:
         The key must be present and not null.
     rule : callable or None
         For text: returns why a value is unusable (``lab_input.serial_problem``), or None.
+    fields : dict of str to Key or None
+        For records: what each object's keys must hold (every one required).
     """
 
     kind: str
@@ -95,11 +99,14 @@ class Key:
     hi: float = math.inf
     required: bool = False
     rule: Callable[[str], str | None] | None = None
+    fields: dict[str, Key] | None = None
 
     @property
     def expected(self) -> str:
         """What the key holds, as messages say it."""
         unit = f" ({self.unit})" if self.unit else ""
+        if self.kind == "records":
+            return "a list of objects {" + ", ".join(self.fields or {}) + "}"
         return {"number": f"a number{unit}", "numbers": f"a list of numbers{unit}",
                 "text": "text", "date": "a date as text YYYY-MM-DD"}[self.kind]
 
@@ -160,6 +167,26 @@ def _date(value, name: str, key: Key, today: dt.date) -> str:
     return day.isoformat()
 
 
+def _records(value, name: str, key: Key, today: dt.date) -> list[dict]:
+    """Check a list of objects, each holding every key of ``key.fields`` (others ignored)."""
+    if not isinstance(value, list):
+        raise ValueError(f"{name} must be {key.expected}, not {shown(value)}")
+    if not value:
+        raise ValueError(f"{name} is empty, expected {key.expected}")
+    out = []
+    for k, item in enumerate(value):
+        if not isinstance(item, dict):
+            raise ValueError(f"{name}[{k}] must be an object {{{', '.join(key.fields)}}}, "
+                             f"not {shown(item)}")
+        record = {}
+        for field, sub in key.fields.items():
+            if item.get(field) is None:
+                raise ValueError(f"{name}[{k}] has no {field!r}, expected {sub.expected}")
+            record[field] = _value(item[field], f"{name}[{k}][{field!r}]", sub, today)
+        out.append(record)
+    return out
+
+
 def _value(value, name: str, key: Key, today: dt.date):
     if key.kind == "number":
         return _number(value, name, key)
@@ -171,6 +198,8 @@ def _value(value, name: str, key: Key, today: dt.date):
         if not value:
             raise ValueError(f"{name} is empty, expected {key.expected}")
         return [_number(v, f"{name}[{k}]", key) for k, v in enumerate(value)]
+    if key.kind == "records":
+        return _records(value, name, key, today)
     if not isinstance(value, str):
         raise ValueError(f"{name} must be {key.expected}, not {shown(value)}")
     problem = key.rule(value) if key.rule else None

@@ -4,9 +4,9 @@ meta.json (docs/contract.md): ``META_KEYS`` says what each key must hold: serial
 ``serial_problem``-free text), species, nominal_E_psi, nominal_weight_density_lbf_in3,
 weight_lb (the bat on a scale: the registration's mass-line check needs it) and points_in
 (the impact points) are required; the baseline's own conditions (``CONDITION_KEYS``:
-accelerometer_mass_g, used by diagnose as a prior, temperature_c, tested_on) and model (the
-bat model's name, which its calibrations are stored under) are optional; other keys are
-ignored (``json_input.unused_keys`` lists them).
+accelerometer_mass_g, used by diagnose as a prior, temperature_c, tested_on, moisture,
+humidity_pct, conditioned_h) and model (the bat model's name, which its calibrations are stored
+under) are optional; other keys are ignored (``json_input.unused_keys`` lists them).
 """
 
 from __future__ import annotations
@@ -55,13 +55,24 @@ def serial_problem(serial: str) -> str | None:
     return None
 
 
+BAT_MAX_IN = 42.0
+"""Longest bat (Rule 3.02(a)): a moisture reading further from the knob is off any bat."""
+MOISTURE_READING = {"x_in": Key("number", "in from the knob end", 0.0, BAT_MAX_IN),
+                    "mc_pct": Key("number", "% of oven-dry mass", 0.0, 40.0)}
+"""One moisture meter reading: where (from the knob end) and what it read (0-40 %: oven-dry
+to well past fibre saturation, about 30 %)."""
 CONDITION_KEYS = {  # retest.json's keys (every one optional); meta.json's at the baseline
     "weight_lb": Key("number", "lb", 0.5, 5.0),
     "accelerometer_mass_g": Key("number", "g", 0.0, 100.0),
     "temperature_c": Key("number", "C", -20.0, 60.0),
     "tested_on": Key("date"),
+    "moisture": Key("records", fields=MOISTURE_READING),
+    "humidity_pct": Key("number", "% relative humidity", 0.0, 100.0),
+    "conditioned_h": Key("number", "hours in the test room", 0.0, 24.0 * 365),
 }
-"""A test's own conditions (the re-test's retest.json, the baseline's in meta.json)."""
+"""A test's own conditions (the re-test's retest.json, the baseline's in meta.json): the
+scale, the accelerometer, the room's temperature and humidity, the date, the hours the bat
+spent in the test room and a moisture meter's readings along the bat."""
 META_KEYS = {  # ranges wider than any bat: plausible.check_meta judges a bat's values
     "serial": Key("text", required=True, rule=serial_problem),
     "species": Key("text", required=True),

@@ -98,11 +98,13 @@ class FieldCase:
         """Return what a lab may record at registration beside the weight.
 
         meta.json's optional keys: the baseline's temperature and accelerometer mass, read as
-        retest.json's.
+        retest.json's, and the date, room and moisture readings when the case has them
+        (``meter.with_lab_records``).
         """
         t_base = self.truth["drawn"].get("temperature", {}).get("baseline_c", 21.0)
         return {"temperature_c": round(t_base, 1),
-                "accelerometer_mass_g": round(1e3 * self.baseline.sensor_mass_kg, 2)}
+                "accelerometer_mass_g": round(1e3 * self.baseline.sensor_mass_kg, 2),
+                **self.truth.get("lab_records", {}).get("registration", {})}
 
     @property
     def min_plug_in(self) -> float:
