@@ -599,9 +599,8 @@ def _shape_noise(test: FrfTest, lay: _Layout, sel: np.ndarray, p: _Poles) -> np.
     i_d, j_d = (0, 0) if lay.driving is None else lay.driving
     row = coh[:, i_d, :] if lay.row_layout else coh[:, :, j_d]
     col = None if lay.driving is None else lay.d_index
-    n_avg = test.meta.get("n_averages")
-    return shape_noise_from_coherence(test.freq_hz[sel], row, None if n_avg is None
-                                      else int(n_avg), p.freq_hz, p.damping_ratio, col)
+    return shape_noise_from_coherence(test.freq_hz[sel], row, test.meta.get("n_averages"),
+                                      p.freq_hz, p.damping_ratio, col)
 
 
 def _rigid(

@@ -111,8 +111,7 @@ def shape_noise_from_coherence(
     peak = 1.0 / (1.0 + ((f - fr) / width) ** 2)                        # (F, m)
     info = np.einsum("fm,fj->jm", peak, np.where(np.isfinite(v), 1.0 / v, 0.0))
     var = np.where(info > 0, 1.0 / np.maximum(info, 1e-300), np.nan)   # (n_points, m)
-    var = var[usable]
-    rel = 0.5 * var
+    rel = 0.5 * var[usable]
     if driving is not None and usable[driving]:
-        rel = rel + 0.125 * var[int(np.flatnonzero(usable).tolist().index(driving))]
+        rel = rel + 0.125 * var[driving]
     return np.sqrt(np.nanmedian(rel, axis=0))

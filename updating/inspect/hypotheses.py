@@ -296,8 +296,8 @@ class Differences:
         in order): a point left out (``without_point``).
     sigma_meas
         (m,) relative shape noise of each paired mode as both tests measured it (their
-        coherence: ``ema.shapes.noise``; ``changes.measured_shape_noise``), not below
-        ``SHAPE_NOISE_FLOOR``; None when either test carries no coherence.
+        coherence: ``ema.shapes.noise``; ``changes.measured_shape_noise``, with the change
+        model's own error in quadrature); None when either test carries no coherence.
     """
 
     model_index: np.ndarray

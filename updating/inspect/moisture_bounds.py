@@ -23,11 +23,11 @@ the two tests' conditions (``RetestConditions``; docs/noise.md, "Moisture readin
    e ~ N(0, ``PRIOR_END_MOISTURE_PT``) (H0's prior); covariance: the meter's
    ``METER_SD_PT`` per reading (over the station's count), the conditioning's uncertain
    diffusivity and the unknown offsets, each common to a test's stations. The posterior's
-   centre and sd become H0's prior and its bounds centre +- ``BOUND_SD`` sd, cut to the
-   physical ones of step 1; the check beyond drift's ranges are what the readings alone
-   (each end's prior left out) say, +- ``BEYOND_SD`` of their sd, cut to the physical ones
-   three times as wide (``measured``): readings as uncertain as one a station leave both as
-   they were.
+   centre and sd give H0's bounds, centre +- ``BOUND_SD`` sd, cut to the physical ones of
+   step 1 (H0's prior stays the physical one: ``READINGS_AS_PRIOR``); the check beyond
+   drift's ranges are what the readings alone (each end's prior left out) say, +-
+   ``BEYOND_SD`` of their sd, cut to the physical ones three times as wide (``measured``):
+   readings as uncertain as one a station leave both as they were.
 
 Weights and temperatures are not used here: the weight is already a datum of the fit (with
 its own sd, ``hypotheses.WEIGHT_SIGMA_REL``), and an alteration moves it too; the
@@ -71,9 +71,10 @@ BOUND_SD, BEYOND_SD = 3.0, 5.0
 """H0's bounds, in posterior sds about the posterior's centre; the check beyond drift's
 ranges, in sds of what the readings alone say about their estimate (a Gaussian meter leaves
 the truth outside 5 sd once in 1.7 million)."""
-READINGS_AS_PRIOR = 1.0
+READINGS_AS_PRIOR = 0.0
 """Whether the posterior is H0's prior (1) or H0 keeps its physical prior and the readings
-only bound it (0)."""
+only bound it (0, the default: on the development fleet one reading a station as the prior
+made a clean bat inconclusive, as bounds none; docs/noise.md)."""
 UNSEEN_PT = 1e3
 """Prior sd, points, of an end's excess in what the readings alone say: no prior."""
 EMC_SPAN_PT = float(wm.emc_pct(80.0) - wm.emc_pct(30.0))

@@ -379,10 +379,12 @@ def weigh_evidence(predict: ChangePredictor, diff: Differences, space: ParamSpac
     return evidence, kinds
 
 
-STATISTIC_VERSION = 3
+STATISTIC_VERSION = 4
 """The version of the statistic F the verdict states and a calibration measures (version 1:
 F with the noise the best local change leaves; 2: with the noise H0 leaves, ``nested_test``;
-3: with the noise both tests measured when their files carry coherence, docs/noise.md).
+3: with the noise both tests measured when their files carry coherence, docs/noise.md;
+4: with H0's moisture bounded by the lab's records, moisture readings, the room and the
+dates, ``moisture_bounds``).
 A stored calibration is used only by code of the same version (batlab.pipeline.chance).
 Bump it whenever F's definition changes: whenever the code named in ``STATISTIC_DEFINITION``
 changes (its docstrings and comments aside), and then record that code's new
@@ -400,9 +402,12 @@ STATISTIC_DEFINITION = (
     "updating.inspect.changes.measured_shape_noise", "updating.inspect.changes.MODEL_SHAPE_ERROR",
     "ema.shapes.noise.shape_noise_from_coherence", "ema.shapes.noise.line_variance",
     "ema.shapes.noise.UNKNOWN_AVERAGES",
+    "updating.inspect.moisture_bounds.moisture_bound", "updating.inspect.moisture_bounds.dated",
+    "updating.inspect.moisture_bounds.measured",
+    "updating.inspect.moisture_bounds.READINGS_AS_PRIOR",
 )
 """The code that defines F: the test, the fits it compares and their weights and noise."""
 
-STATISTIC_SOURCE_SHA256 = "6f795621ddb74cdf0c7ccf3159e34d28a3bc8e26eeae89826a328f4d5d127d0b"
+STATISTIC_SOURCE_SHA256 = "a1200c39867dfd0b1745092ca48673c818e615f79a3786b5c462662ccb1d17b5"
 """SHA-256 of ``STATISTIC_DEFINITION``'s code (tests/test_statistic_version.py), recorded
 with ``STATISTIC_VERSION``."""
