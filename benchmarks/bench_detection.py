@@ -3,7 +3,7 @@
     python benchmarks/bench_detection.py [--bats 6] [--diameters 0.5,0.75,1.0,1.25]
         [--lengths 3,6,9,12] [--ratio 0.3] [--kinds deep,empty,end_plug,partial,small,neutral]
         [--lab-clean 100] [--lab-bats 0] [--seed 2] [--workers 2] [--scheduler ADDR]
-        [--no-retest-meta] [--coherence]
+        [--no-retest-meta] [--coherence] [--records N]
         [--out rows.json]
 
 Paired design on nuisance-rich virtual bats (``updating.simulate.field_fleet``, every
@@ -28,8 +28,11 @@ gives that table alone.
 
 batlab's ROC is over its ``confidence`` (1 - p), clean re-tests against altered ones; its
 operating point is its own verdict (``status`` == "altered", or ``altered`` on older
-outputs). Prints the detection rate per grid cell and per kind for each method, the smallest
-core found on at least 90 % of the bats, the false alarms and the ROC area.
+outputs), its screen "altered" or "inconclusive" (the bat goes to the X-ray). Prints the
+detection rate per grid cell and per kind for each method, the volume from which 90 % of the
+cores are found (a logistic fit in log volume) and the smallest cell found on at least 90 %
+of the bats, the false alarms and the ROC area. ``--records N`` adds the lab's records of the
+wood and the room (dates, rooms, N moisture readings a station) to both tests' files.
 """
 
 from __future__ import annotations
@@ -58,7 +61,8 @@ def floats(text: str) -> list[float]:
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--bats", type=int, default=6)
-    ap.add_argument("--diameters", default="0.5,0.75,1.0,1.25", help="core diameters, in")
+    ap.add_argument("--diameters", default="0.35,0.5,0.75,1.0,1.25",
+                    help="core diameters, in (0.35 x 3 in: 0.29 in^3)")
     ap.add_argument("--lengths", default="3,6,9,12", help="filled lengths, in")
     ap.add_argument("--ratio", type=float, default=0.3, help="cork fill density ratio")
     ap.add_argument("--kinds", default="deep,empty,end_plug,partial,small,neutral",
@@ -76,6 +80,10 @@ def main(argv=None) -> int:
     ap.add_argument("--coherence", action="store_true",
                     help="the tests' files carry their coherence (5 hits a point): the "
                          "noise measured (docs/noise.md)")
+    ap.add_argument("--records", type=int, default=None, metavar="N",
+                    help="the lab's records of the wood and the room in meta.json and "
+                         "retest.json: both tests' dates, rooms and N moisture readings a "
+                         "station (0: dates and rooms alone; docs/noise.md)")
     ap.add_argument("--out", default=None, help="write the result rows (JSON) here")
     args = ap.parse_args(argv)
 
@@ -86,13 +94,15 @@ def main(argv=None) -> int:
         print(lab_only_report(args.lab_bats, args.seed + 1, grid, args.ratio, kinds, limit))
         return 0
     jobs = detection_jobs(args.bats, args.seed, grid, args.ratio, kinds, args.no_retest_meta,
-                          args.coherence)
+                          args.coherence, args.records)
     rows = [r for bat in fleet_map(detection_rows, jobs, args.workers, "bat", args.scheduler)
             for r in bat]
     save_rows(args.out, rows)
     limit = clean_balance_limit_in(args.lab_clean, args.seed)
     print(f"\n## Detection ({args.bats} bats, {len(rows)} re-tests, seed {args.seed}, "
-          f"retest.json {'not ' if args.no_retest_meta else ''}passed)\n")
+          f"retest.json {'not ' if args.no_retest_meta else ''}passed"
+          + ("" if args.records is None else f", {args.records} moisture readings a station")
+          + ")\n")
     print(detection_report(rows, limit))
     if args.lab_bats:
         print(f"\n### The lab's methods on {args.lab_bats} further bats\n")

@@ -75,16 +75,19 @@ def test_false_alarm_one_bat_through_the_command():
 
 
 def test_detection_one_bat_through_the_registry():
-    plan = jobs.detection_jobs(1, 2, [(1.0, 10.0)], 0.3, [], no_retest_meta=False)
+    plan = jobs.detection_jobs(1, 2, [(1.0, 10.0)], 0.3, [], no_retest_meta=False, records=1)
     rows = [r for bat in fleet_map(jobs.detection_rows, plan, 1, "bat") for r in bat]
     assert [r["kind"] for r in rows] == ["none", "cork"]
     assert all(r["status"] in STATUSES for r in rows)
     assert [r["truth"]["grid"] for r in rows] == [False, True]
+    # both tests' records reached the files: the re-tests share the bat's readings
+    assert all(len(r["truth"]["lab_records"]["retest"]["moisture"]) == 3 for r in rows)
     cork = rows[1]["truth"]
     a, b = cork["region_in"]
     assert cork["core_diameter_in"] == 1.0 and b - a == pytest.approx(10.0)
     text = detection_report(rows, balance_limit_in=1.0)
     assert "| 1.00 x 10 in | 1 |" in text and "clean re-tests: 1" in text
+    assert "90 % found from not fitted (all or none found)" in text  # one core cannot fit
     # the lab's scale: a 1 x 10 in cork core (70 % of 7.9 in^3 of wood gone) is far beyond
     # what +-2 points of moisture move; the clean re-test is not
     said = [lab_verdicts(r["truth"], balance_limit_in=1.0) for r in rows]

@@ -20,6 +20,7 @@ import numpy as np
 from batlab.fleet.runner import inspect_args, run_batlab, timed
 from updating.simulate.detection import retests
 from updating.simulate.field_fleet import draw_case, write_case, write_retest
+from updating.simulate.meter import with_lab_records
 from updating.simulate.nuisances import NUISANCES
 from updating.simulate.scoring import verdict_row
 
@@ -82,8 +83,8 @@ def false_alarm_row_without_meta(job: dict) -> dict:
 
 
 def detection_jobs(n_bats: int, seed: int, grid: list[tuple[float, float]], ratio: float,
-                   kinds: list[str], no_retest_meta: bool, coherence: bool = False
-                   ) -> list[dict]:
+                   kinds: list[str], no_retest_meta: bool, coherence: bool = False,
+                   records: int | None = None) -> list[dict]:
     """Plan the detection study's bats: bat b has serial DET-b and seed ``seed * 100019 + b``.
 
     Parameters
@@ -99,6 +100,11 @@ def detection_jobs(n_bats: int, seed: int, grid: list[tuple[float, float]], rati
     coherence : bool
         The tests' files carry their coherence (``nuisances.OPTIONAL_NUISANCES``): the noise
         measured, not estimated (docs/noise.md). The same bats either way.
+    records : int or None
+        What the lab records of the wood and the room, with N moisture readings a station
+        (``updating.simulate.meter.with_lab_records``; 0: the dates and rooms alone): in
+        meta.json and every re-test's retest.json (not with ``no_retest_meta``). The same
+        bats either way: the records have their own random stream.
 
     Returns
     -------
@@ -108,7 +114,7 @@ def detection_jobs(n_bats: int, seed: int, grid: list[tuple[float, float]], rati
     nuisances = NUISANCES + (("coherence",) if coherence else ())
     return [{"serial": f"DET-{b + 1:03d}", "seed": seed * 100019 + b, "grid": grid,
              "ratio": ratio, "kinds": kinds, "no_retest_meta": no_retest_meta,
-             "nuisances": nuisances} for b in range(n_bats)]
+             "nuisances": nuisances, "records": records} for b in range(n_bats)]
 
 
 def register_and_inspect(job: dict) -> list[dict]:
@@ -127,12 +133,16 @@ def register_and_inspect(job: dict) -> list[dict]:
     """
     rng = np.random.default_rng(job["seed"])
     case = draw_case(rng, "none", job.get("nuisances", NUISANCES), None, job["serial"])
+    records = job.get("records")
+    if records is not None:
+        case = with_lab_records(case, job["seed"], records)
     rows = []
     n_grid = len(job["grid"])
     with tempfile.TemporaryDirectory(prefix="batlab-det-") as tmp:
         tmp = Path(tmp)
         keys = () if job["no_retest_meta"] else None
-        paths = write_case(case, tmp, seed=int(rng.integers(2**31)), retest_meta_keys=keys)
+        paths = write_case(case, tmp, seed=int(rng.integers(2**31)), retest_meta_keys=keys,
+                           registration=records is not None)
         db = tmp / "registry.sqlite"
         code, _, err = run_batlab(["register", "--profile", paths["profile"], "--meta",
                                    paths["meta"], "--baseline", paths["baseline"], "--db", db,

@@ -4,13 +4,15 @@ Paired design: one nuisance-rich bat re-tested clean, with a cork core of every 
 grid (diameter x filled length) and with one alteration of each further kind
 (``retests``). ``detection_report`` gives the false alarms, the detection rate per grid cell
 and per kind of each method (batlab, ``lab_methods``' scale and scale + balance point), the
-smallest core each finds on at least 90 % of the bats, batlab's readings against the targets
+smallest core each finds on at least 90 % of the bats and the volume from which 90 % are
+found (``volume_found``: a logistic fit in log volume), batlab's readings against the targets
 and the ROC areas; ``lab_only_report`` the lab's methods alone on further bats.
 """
 
 from __future__ import annotations
 
 import numpy as np
+from scipy.optimize import minimize
 
 from updating.model.units import IN_TO_M
 from updating.simulate.alterations import draw_alteration, end_bored
@@ -157,14 +159,78 @@ def _false_alarm_lines(clean: list[dict], balance_limit_in: float) -> list[str]:
             f"/{len(clean)} | | |", ""]
 
 
-def _smallest_found_lines(found: dict) -> list[str]:
-    """List each method's smallest grid core (by volume) found on at least 90 % of bats."""
-    vol = {k: float(k.split(" x ")[0]) ** 2 * float(k.split(" x ")[1].split()[0]) for k in found}
+def core_volume_in3(truth: dict) -> float:
+    """Return a core's volume, in^3: pi / 4 d^2 times its filled length (its truth)."""
+    a, b = truth["region_in"]
+    return float(np.pi / 4 * truth["core_diameter_in"] ** 2 * (b - a))
+
+
+def volume_found(volume_in3: np.ndarray, found: np.ndarray, rate: float = 0.9,
+                 ridge: float = 1e-3) -> float | None:
+    """Return the core volume found at ``rate``, from a logistic fit in log volume.
+
+    P(found | V) = 1 / (1 + exp(-(a + b ln V))), (a, b) by maximum likelihood with a small
+    ridge on b (``ridge``, so a perfectly separated fleet gives a finite, steep fit rather
+    than none); V_rate = exp((ln(rate / (1 - rate)) - a) / b).
+
+    Parameters
+    ----------
+    volume_in3 : ndarray
+        Each core's volume, in^3.
+    found : ndarray of bool
+        Whether the method found it.
+    rate : float
+        The detection rate asked for (0.9: the volume from which 90 % are found).
+    ridge : float
+        Penalty ridge * b^2 on the log-likelihood.
+
+    Returns
+    -------
+    float or None
+        The volume, in^3; None when nothing, or everything, was found, or the fitted rate
+        does not rise with volume.
+
+    Examples
+    --------
+    >>> v = np.array([0.3, 0.6, 1.2, 2.4, 4.8] * 4)
+    >>> round(volume_found(v, v > 1.0), 1) <= 1.2
+    True
+    """
+    y = np.asarray(found, dtype=float)
+    if y.size == 0 or y.min() == y.max():
+        return None
+    x = np.log(np.asarray(volume_in3, dtype=float))
+    x0 = float(np.mean(x))
+
+    def nll(theta):
+        z = theta[0] + theta[1] * (x - x0)
+        return float(np.sum(np.logaddexp(0.0, z) - y * z) + ridge * theta[1] ** 2)
+
+    a, b = minimize(nll, np.array([0.0, 1.0]), method="Nelder-Mead",
+                    options={"xatol": 1e-8, "fatol": 1e-10, "maxiter": 4000}).x
+    if b <= 0:
+        return None
+    return float(np.exp(x0 + (np.log(rate / (1 - rate)) - a) / b))
+
+
+def _smallest_found_lines(found: dict, grid: list[dict]) -> list[str]:
+    """Give each method's 90 % volume (``volume_found``) and smallest 90 % grid cell."""
+    vol = {k: np.pi / 4 * float(k.split(" x ")[0]) ** 2 * float(k.split(" x ")[1].split()[0])
+           for k in found}
+    v = np.array([core_volume_in3(r["truth"]) for r in grid])
+    drawn = f"drawn {v.min():.2f}-{v.max():.2f} in^3" if v.size else "none drawn"
     lines = []
     for m in METHODS:
         ok = [k for k in found if found[k][m] >= 0.9]
         best = min(ok, key=vol.get) if ok else "none on the grid"
-        lines.append(f"- smallest cork core found on >= 90 % of the bats, {m}: {best}")
+        v90 = volume_found(v, np.array([r["said"][m] for r in grid]))
+        where = ("not fitted (all or none found)" if v90 is None else
+                 f"{v90:.2f} in^3" + (" (below every core drawn: an extrapolation)"
+                                      if v90 < v.min() else
+                                      " (above every core drawn: an extrapolation)"
+                                      if v90 > v.max() else ""))
+        lines.append(f"- cork cores, {m}: 90 % found from {where} (logistic in log volume; "
+                     f"{drawn}); smallest cell found on >= 90 % of the bats: {best}")
     return lines
 
 
@@ -216,7 +282,7 @@ def detection_report(rows: list[dict], balance_limit_in: float) -> str:
     lines = _false_alarm_lines(clean, balance_limit_in)
     t, found = _rate_table("cork core (d x filled length)", lambda r: cell_name(r["truth"]),
                            grid)
-    lines += t + [""] + _smallest_found_lines(found)
+    lines += t + [""] + _smallest_found_lines(found, grid)
     others = [r for r in rows if r["kind"] != "none" and not r["truth"].get("grid")]
     if others:
         t, _ = _rate_table("alteration kind", lambda r: r["kind"], others)
