@@ -40,6 +40,7 @@ from batlab.fleet.runner import fleet_map, inspect_args, timed  # noqa: E402
 from updating.simulate.field_fleet import draw_case, write_case  # noqa: E402
 from updating.simulate.lab_methods import clean_balance_limit_in  # noqa: E402
 from updating.simulate.limits import limits_table  # noqa: E402
+from updating.simulate.meter import with_lab_records  # noqa: E402
 from updating.simulate.scoring import verdict_row  # noqa: E402
 
 KINDS = ("none", "pine_tar", "grip_tape", "spray", "tar_past_18", "nails", "shaved",
@@ -59,7 +60,9 @@ def one(job: tuple) -> dict:
     Parameters
     ----------
     job : tuple
-        (kind, seed, with retest.json[, with the re-test profile]).
+        (kind, seed, with retest.json[, with the re-test profile[, records]]); records N:
+        the lab's dates, rooms and N moisture readings a station in meta.json and
+        retest.json (``updating.simulate.meter.with_lab_records``), None: none.
 
     Returns
     -------
@@ -67,12 +70,16 @@ def one(job: tuple) -> dict:
         ``updating.simulate.scoring.verdict_row`` plus with_meta, with_profile, finding,
         region_ok and kind_ok.
     """
-    kind, seed, with_meta, with_profile = (tuple(job) + (False,))[:4]
+    kind, seed, with_meta, *rest = job
+    with_profile, records = (list(rest) + [False, None][len(rest):])[:2]
     try:
         case = draw_case(np.random.default_rng(seed), kind, serial=f"R-{seed}")
+        if records is not None:
+            case = with_lab_records(case, seed, records)
         with tempfile.TemporaryDirectory(prefix="batlab-rulebook-") as tmp:
             paths = write_case(case, tmp, seed, retest_meta_keys=None if with_meta else [],
-                               retest_profile=ORIENTATIONS if with_profile else 0)
+                               retest_profile=ORIENTATIONS if with_profile else 0,
+                               registration=records is not None)
             args = inspect_args(paths)
             if with_profile:
                 args[-1:-1] = ["--retest-profile", paths["retest_profile"]]
@@ -159,6 +166,9 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--summary", default=None, help="summarise a JSON-lines file and stop")
     ap.add_argument("--balance-clean", type=int, default=100, metavar="N",
                     help="clean bats (readings only) that set the balance-point limit")
+    ap.add_argument("--records", type=int, default=None, metavar="N",
+                    help="the lab's records of the wood and the room in meta.json and "
+                         "retest.json: dates, rooms and N moisture readings a station")
     args = ap.parse_args(argv)
     if args.summary:
         lines = Path(args.summary).read_text().splitlines()
@@ -166,7 +176,7 @@ def main(argv: list[str] | None = None) -> int:
         return 0
     ways = ((True, False, args.per_kind), (False, False, min(args.without, args.per_kind)),
             (True, True, min(args.with_profile, args.per_kind)))
-    jobs = [(kind, args.seed + 1000 * k + i, meta, profile)
+    jobs = [(kind, args.seed + 1000 * k + i, meta, profile, args.records)
             for k, kind in enumerate(args.kinds) for meta, profile, n in ways
             for i in range(n)]
     rows = fleet_map(one, jobs, args.workers, "bat", args.scheduler)
