@@ -25,7 +25,9 @@ handle in turn (bare, legal grip, bare, legal grip, bare, tar past 18 in), as ``
 does. ``--cache DIR`` keeps the modal fits and calibration of each bat and vector, so a run
 after a change of the inspection alone re-scores in about a third of the time.
 ``--no-retest-meta`` inspects without retest.json; ``--coherence`` gives the tests' files
-their coherence (5 hits a point: the noise measured, docs/noise.md). Rows (JSON lines) go to
+their coherence (5 hits a point: the noise measured, docs/noise.md); ``--records N`` gives the
+search's bats the lab's records of their wood and rooms (both tests' dates, rooms and N
+moisture readings a station, made from each searched bat's own moisture). Rows (JSON lines) go to
 ``--out`` (the search's also to ``<out>.log`` as they are made), tables to stdout, progress
 to stderr.
 """
@@ -74,7 +76,7 @@ def search_jobs(args) -> list[dict]:
     return [{"seed": s, "handle": wide.HANDLES[i % len(wide.HANDLES)],
              "nuisances": wide.fleet_nuisances(i), "budget": args.budget,
              "starts": args.starts, "with_meta": not args.no_retest_meta,
-             "coherence": args.coherence,
+             "coherence": args.coherence, "records": args.records,
              "cache": args.cache, "log": log} for i, s in enumerate(seeds)]
 
 
@@ -119,6 +121,9 @@ def main(argv=None) -> int:
     ap.add_argument("--coherence", action="store_true",
                     help="the tests' files carry their coherence: the noise measured "
                          "(docs/noise.md)")
+    ap.add_argument("--records", type=int, default=None, metavar="N",
+                    help="search: the lab's records of each bat's wood and rooms (dates, "
+                         "rooms, N moisture readings a station; docs/noise.md)")
     ap.add_argument("--out", default=None, help="JSON lines of the rows")
     args = ap.parse_args(argv)
     if args.purpose == "validation":

@@ -175,15 +175,16 @@ RECORD_FIELDS = ("tested_on", "moisture", "humidity_pct", "conditioned_h")
 """What ``with_records`` adds to both tests' conditions."""
 
 
-def with_records(bat: dict, per_station: int) -> dict:
+def with_records(bat: dict, per_station: int, case=None) -> dict:
     """Return the cached bat with the lab's records of its wood and rooms.
 
-    ``updating.simulate.meter.lab_records`` of the re-drawn case: both tests' dates and
-    rooms, and ``per_station`` moisture readings at each station (0: none), added to the
-    registration's and the re-test's conditions (a bat cached without retest.json gains one
-    holding only these). The modes do not depend on them, so the cache serves both.
+    ``updating.simulate.meter.lab_records`` of ``case`` (default: the bat re-drawn from its
+    seed): both tests' dates and rooms, and ``per_station`` moisture readings at each station
+    (0: none), added to the registration's and the re-test's conditions (a bat cached without
+    retest.json gains one holding only these). The modes do not depend on them, so the cache
+    serves both.
     """
-    records = lab_records(_redrawn(bat), bat["seed"], per_station)
+    records = lab_records(_redrawn(bat) if case is None else case, bat["seed"], per_station)
     out = dict(bat)
     for key, where in (("registered", "registration"), ("conditions", "retest")):
         got = conditions_from_dict(records[where], f"{where} records")

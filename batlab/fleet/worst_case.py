@@ -20,7 +20,7 @@ from pathlib import Path
 
 import numpy as np
 
-from batlab.fleet.cache import build_case, score_one
+from batlab.fleet.cache import build_case, score_one, with_records
 from updating.simulate import wide
 from updating.simulate.worst_case import Evaluation, search_worst
 
@@ -57,8 +57,8 @@ def _built(seed: int, settings: dict, with_meta: bool, cache: Path | None,
 
 
 def evaluate_wide(seed: int, unit: np.ndarray, nuisances, with_meta: bool = True,
-                  cache: Path | None = None, coherence: bool = False
-                  ) -> tuple[float | None, str, dict]:
+                  cache: Path | None = None, coherence: bool = False,
+                  records: int | None = None) -> tuple[float | None, str, dict]:
     """Inspect the bat of ``seed`` under the nuisance vector ``unit``.
 
     Parameters
@@ -75,6 +75,9 @@ def evaluate_wide(seed: int, unit: np.ndarray, nuisances, with_meta: bool = True
         A folder keeping the built inspection inputs.
     coherence : bool
         The tests' files carry their coherence (docs/noise.md).
+    records : int or None
+        The lab's records of this bat's wood and rooms (``cache.with_records`` of its wide
+        case): both tests' dates and rooms and N moisture readings a station; None: none.
 
     Returns
     -------
@@ -88,14 +91,16 @@ def evaluate_wide(seed: int, unit: np.ndarray, nuisances, with_meta: bool = True
         truth's ``drawn``).
     """
     return evaluate_settings(seed, wide.settings_of(unit, nuisances), with_meta, cache,
-                             coherence)
+                             coherence, records)
 
 
 def evaluate_settings(seed: int, settings: dict, with_meta: bool = True,
-                      cache: Path | None = None, coherence: bool = False
-                      ) -> tuple[float | None, str, dict]:
+                      cache: Path | None = None, coherence: bool = False,
+                      records: int | None = None) -> tuple[float | None, str, dict]:
     """Inspect the bat of ``seed`` under physical ``settings`` (``evaluate_wide``'s result)."""
     bat = _built(seed, settings, with_meta, cache, coherence)
+    if records is not None and "error" not in bat:
+        bat = with_records(bat, records, wide.wide_case(seed, settings, coherence=coherence))
     full = score_one(bat, with_map=False)
     row = {k: full[k] for k in KEEP if k in full}
     row["settings"] = settings
@@ -168,7 +173,7 @@ def search_bat(job: dict) -> dict:
 
     def evaluate(u):
         return evaluate_wide(seed, u, nuis, job.get("with_meta", True), job.get("cache"),
-                             job.get("coherence", False))
+                             job.get("coherence", False), job.get("records"))
 
     def note(ev: Evaluation) -> None:
         F = "-" if not np.isfinite(ev.F) else f"{ev.F:.2f}"
