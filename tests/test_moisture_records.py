@@ -150,14 +150,18 @@ def test_nothing_recorded_gives_the_fixed_ranges_of_before():
 
 
 def test_dates_set_how_deep_the_end_grain_can_have_moved():
-    """14 days at the end grain's fastest (6e-10 x 20 m^2/s): 2 sqrt(D t / pi) =
-    2 sqrt(1.2e-8 * 1209600 / pi) = 0.1360 m = 5.35 in beyond drift, the 2 in front kept."""
+    """30 days at the end grain's fastest (6e-10 x 20 m^2/s): 2 sqrt(D t / pi) =
+    2 sqrt(1.2e-8 * 2592000 / pi) = 0.1990 m = 7.8 in beyond drift, deeper than three times
+    the 2 in front; 14 days reach 5.35 in, and the 6 in of nothing recorded is kept: the
+    dates only deepen it (the 2 in front of H0 kept either way)."""
     assert days_between("2026-04-18", "2026-05-02") == 14.0
-    b = dated(14.0, 0.033)
-    assert b.beyond_decay_m == pytest.approx(2 * math.sqrt(1.2e-8 * 1209600 / math.pi))
-    assert b.end_decay_m == END_DECAY_M
-    short = dated(1.0, 0.033)
-    assert short.end_decay_m < END_DECAY_M and short.beyond_decay_m == short.end_decay_m
+    long = dated(30.0, 0.033)
+    assert long.beyond_decay_m == pytest.approx(2 * math.sqrt(1.2e-8 * 2592000 / math.pi))
+    assert long.end_decay_m == END_DECAY_M
+    for days in (1.0, 3.0, 14.0):
+        short = dated(days, 0.033)
+        assert short.end_decay_m == END_DECAY_M
+        assert short.beyond_decay_m == pytest.approx(3 * END_DECAY_M)
 
 
 @FAST

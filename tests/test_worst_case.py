@@ -136,3 +136,17 @@ def test_the_wet_barrel_with_the_labs_records_is_not_called_altered(records):
     case = json.loads((Path(__file__).parent / "data" / "worst_case_wet_barrel.json").read_text())
     F, status, row = evaluate_settings(case["seed"], case["settings"], records=records)
     assert status in ("inconclusive", "not_altered"), row["reasons"]
+
+
+def test_dates_never_make_the_front_beyond_drift_shallower():
+    """A worst case of the search with the lab's records: a clean bat whose barrel end took
+    up to 3.9 points, decaying over 6.1 in, its tests dated 3 days apart (the virtual
+    meter had dated a 1.8 in front). When the dates made the front the check beyond drift
+    allows shallower (2.5 in for 3 days), H0 could not follow that end and the bat was
+    called altered (F 29.4); a wet end laid down before the baseline moves deeper than the
+    days between the tests reach. The dates only deepen that front: inconclusive."""
+    case = json.loads((Path(__file__).parent / "data" /
+                       "worst_case_dated_wet_barrel.json").read_text())
+    F, status, row = evaluate_settings(case["seed"], case["settings"], True, None, True, 0)
+    assert status == "inconclusive", row["reasons"]
+    assert "moisture at the barrel end" in row["reasons"][0]

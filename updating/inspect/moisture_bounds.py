@@ -9,10 +9,14 @@ the two tests' conditions (``RetestConditions``; docs/noise.md, "Moisture readin
 
 1. The days between the tests (both ``tested_on``): the end grain's front can have gone at
    most l_max = 2 sqrt(D_L,high t / pi) deep (``wood_moisture.front_decay_m``, D along the
-   grain at its highest), so the model's front is min(2 in, l_max) and the check beyond
-   drift reaches l_max (not three times 2 in); the section's uniform change is at most the
-   span of the air a bat lives in (``EMC_SPAN_PT``) times the share of the barrel's section
-   diffusion reached (``wood_moisture.section_share``), and never more than 3 points.
+   grain at its highest), so the check beyond drift reaches l_max where that is deeper than
+   three times the model's 2 in front (weeks between the tests), never shallower: a bat
+   tested just after weeks in a damp locker redistributes its wet end in the days to the
+   re-test, a change deeper than those days' front (a worst-case search with the fronts and
+   dates drawn apart found a clean bat called altered when the dates narrowed it); the
+   section's uniform change is at most the span of the air a bat lives in (``EMC_SPAN_PT``)
+   times the share of the barrel's section diffusion reached
+   (``wood_moisture.section_share``), and never more than 3 points.
 2. Moisture meter readings at both tests, matched by station (within ``STATION_TOL_M``):
    each test's station mean, as the section's mean moisture after the room
    (``wood_moisture.section_from_reading``: the meter reads the shell, which the
@@ -79,8 +83,6 @@ UNSEEN_PT = 1e3
 """Prior sd, points, of an end's excess in what the readings alone say: no prior."""
 EMC_SPAN_PT = float(wm.emc_pct(80.0) - wm.emc_pct(30.0))
 """How far apart the air a bat lives in can put its moisture: EMC at 80 % less at 30 %."""
-MIN_DECAY_M = 0.5 * IN_TO_M
-"""Shallowest end-grain front modelled (an element's length)."""
 MIN_DENSITY_PCT = 0.25
 """Narrowest uniform bound the dates give (the meter-free floor of a same-day re-test)."""
 
@@ -176,11 +178,11 @@ def dated(days: float | None, barrel_radius_m: float) -> MoistureBound:
     seconds = max(days, 1.0) * wm.SECONDS_PER_DAY  # a same-day re-test: a day's drift
     d_high = wm.D_ACROSS_M2_S[2]
     reach = wm.front_decay_m(d_high * wm.ALONG_GRAIN_RATIO[2], seconds)
-    decay = max(min(END_DECAY_M, reach), MIN_DECAY_M)
     share = wm.section_share(d_high, seconds, barrel_radius_m)
     half = float(np.clip(EMC_SPAN_PT * share, MIN_DENSITY_PCT, DENSITY_MAX_PCT))
     return MoistureBound(MoistureParam.fixed(half, np.inf), NOMINAL.knob_end_pt,
-                         NOMINAL.barrel_end_pt, decay, max(reach, decay), days)
+                         NOMINAL.barrel_end_pt, NOMINAL.end_decay_m,
+                         max(reach, NOMINAL.beyond_decay_m), days)
 
 
 @dataclass(frozen=True)

@@ -408,6 +408,6 @@ STATISTIC_DEFINITION = (
 )
 """The code that defines F: the test, the fits it compares and their weights and noise."""
 
-STATISTIC_SOURCE_SHA256 = "a1200c39867dfd0b1745092ca48673c818e615f79a3786b5c462662ccb1d17b5"
+STATISTIC_SOURCE_SHA256 = "c331ba32dc069518a0ad7948cc689519a2df80453bc0df5e6d83ce402954aa1f"
 """SHA-256 of ``STATISTIC_DEFINITION``'s code (tests/test_statistic_version.py), recorded
 with ``STATISTIC_VERSION``."""
