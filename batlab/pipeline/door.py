@@ -202,18 +202,19 @@ def together(args: argparse.Namespace, read: dict[str, object]) -> None:
     from updating.inspect.retest_meta import conditions_from_dict, stations_problem
 
     profile, meta = read.get("profile"), read.get("meta")
-    if profile is not None:
-        for dest, cond in (("meta", None if meta is None else conditions_from_dict(
-                meta.extra, args.meta)), ("retest_meta", read.get("retest_meta"))):
-            why = stations_problem(cond, profile.length_m)
-            if why:
-                raise ValueError(f"{getattr(args, dest)}: {why}")
     if profile is not None and meta is not None:
         check_bat(profile, meta, args.profile, args.meta)
         serial = getattr(args, "serial", None)
         if serial is not None and serial != meta.serial:
             raise ValueError(f"{args.meta}: key 'serial' {meta.serial!r} differs from "
                              f"--serial {serial!r}")
+    if profile is not None:  # meta.json's readings alone: its other keys are judged above
+        readings = None if meta is None else conditions_from_dict(
+            {k: meta.extra[k] for k in ("moisture",) if k in meta.extra}, args.meta)
+        for dest, cond in (("meta", readings), ("retest_meta", read.get("retest_meta"))):
+            why = stations_problem(cond, profile.length_m)
+            if why:
+                raise ValueError(f"{getattr(args, dest)}: {why}")
     base_dest = next((d for d in ("baseline", "frf") if d in read), None)
     if meta is not None and base_dest:
         base_path = getattr(args, base_dest)
