@@ -7,7 +7,8 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from updating.simulate.detection import core_volume_in3, volume_found
+from updating.simulate.detection import volume_found
+from updating.simulate.limits import core_volume_in3
 
 
 @settings(max_examples=15, deadline=None)

@@ -18,6 +18,7 @@ from updating.model.units import IN_TO_M
 from updating.simulate.alterations import draw_alteration, end_bored
 from updating.simulate.field_fleet import FieldCase, alter_case, draw_case
 from updating.simulate.lab_methods import lab_statistics, lab_verdicts
+from updating.simulate.limits import core_volume_in3
 from updating.simulate.nuisances import NUISANCES
 from updating.simulate.scoring import roc_auc
 
@@ -157,12 +158,6 @@ def _false_alarm_lines(clean: list[dict], balance_limit_in: float) -> list[str]:
                 f"{sum(r['said'][m] for r in clean)}/{len(clean)}" for m in METHODS) + " |",
             "| batlab inconclusive | " + f"{sum(r['status'] == 'inconclusive' for r in clean)}"
             f"/{len(clean)} | | |", ""]
-
-
-def core_volume_in3(truth: dict) -> float:
-    """Return a core's volume, in^3: pi / 4 d^2 times its filled length (its truth)."""
-    a, b = truth["region_in"]
-    return float(np.pi / 4 * truth["core_diameter_in"] ** 2 * (b - a))
 
 
 def volume_found(volume_in3: np.ndarray, found: np.ndarray, rate: float = 0.9,

@@ -99,8 +99,13 @@ def change_size(truth: dict) -> tuple[float, str] | None:
     if finding is not None:
         key, unit = SIZE[truth["kind"]]
         return float(finding["reading"][key]), unit
+    return core_volume_in3(truth), "in^3"
+
+
+def core_volume_in3(truth: dict) -> float:
+    """Return a core's volume, in^3: pi / 4 d^2 times its length (``core_dimensions_in``)."""
     d_in, length_in = core_dimensions_in(truth)
-    return float(np.pi / 4 * d_in**2 * length_in), "in^3"
+    return float(np.pi / 4 * d_in**2 * length_in)
 
 
 def core_dimensions_in(truth: dict) -> tuple[float, float]:
