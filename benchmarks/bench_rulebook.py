@@ -60,7 +60,7 @@ def one(job: tuple) -> dict:
     Parameters
     ----------
     job : tuple
-        (kind, seed, with retest.json[, with the re-test profile[, records]]); records N:
+        (kind, seed, with retest.json, with the re-test profile, records); records N:
         the lab's dates, rooms and N moisture readings a station in meta.json and
         retest.json (``updating.simulate.meter.with_lab_records``), None: none.
 
@@ -70,8 +70,7 @@ def one(job: tuple) -> dict:
         ``updating.simulate.scoring.verdict_row`` plus with_meta, with_profile, finding,
         region_ok and kind_ok.
     """
-    kind, seed, with_meta, *rest = job
-    with_profile, records = (list(rest) + [False, None][len(rest):])[:2]
+    kind, seed, with_meta, with_profile, records = job
     try:
         case = draw_case(np.random.default_rng(seed), kind, serial=f"R-{seed}")
         if records is not None:
