@@ -202,7 +202,8 @@ def fit_evidence(diff: Differences, space: ParamSpace, hyp: Hypotheses, test: Ne
     FitEvidence
         The record the verdict's details carry.
     """
-    null, full = hyp.null, hyp.kinds.fits["local_change"]
+    null = hyp.null
+    full = hyp.full if hyp.kinds is None else hyp.kinds.fits["local_change"]
     candidate, plug_m = CoreCandidate.from_json_dict(None), float("nan")
     if hyp.kinds is not None:
         core_fit = hyp.kinds.fits["core"]
