@@ -19,11 +19,19 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
+from updating.inspect import robustness
 from updating.inspect.changes import differences, identify_pairs, pair_tests
 from updating.inspect.decision import Evidence, decide, kind_supported
-from updating.inspect.hypotheses import NullBounds, ParamSpace, covariance, fit_core, fit_null
+from updating.inspect.hypotheses import (
+    NullBounds,
+    ParamSpace,
+    covariance,
+    fit_core,
+    fit_null,
+    residual_function,
+)
 from updating.inspect.kinds import N_PARAMS, read_finding
-from updating.inspect.robustness import leave_one_out
+from updating.inspect.robustness import leave_one_out, left_out_rows
 from updating.inspect.run import _predictor, inspect_retest
 from updating.model.sections import Core
 from updating.model.units import IN_TO_M
@@ -102,3 +110,45 @@ def test_a_core_seen_by_every_mode_survives_every_leave_out():
     assert lo <= v.core_diameter_m <= hi + 1e-9
     assert hi - lo < 0.3 * v.core_diameter_m
     assert v.region_m[0] == pytest.approx(L - 11.0 * IN_TO_M, abs=1.5 * IN_TO_M)
+
+
+@pytest.mark.parametrize("what", ["mode", "point"])
+def test_the_rows_left_out_are_the_reduced_changes_residual(what):
+    """``left_out_rows`` names exactly the rows ``Differences.without_mode``/``_point`` drop:
+    the reduced residual at any x is the full one without them."""
+    case = random_case(np.random.default_rng(24), "none")
+    base, _, cored = _modes(case, 24)
+    predict, _ = _predictor(case.profile, case.reference, base, cored)
+    pairs, _ = identify_pairs(predict, base, cored, pair_tests(predict, base, cored, 0.8))
+    diff = differences(predict, base, cored, pairs, 0.01)
+    space = ParamSpace(case.profile, NullBounds.physical())
+    sigma = np.linspace(0.01, 0.03, diff.n_freq)
+    x = np.clip(np.random.default_rng(1).normal(0, 0.3, len(space.bounds.lower)),
+                space.bounds.lower, space.bounds.upper)
+    full = residual_function(predict, diff, space, sigma)(x)
+    for k in range(diff.n_freq if what == "mode" else diff.dpsi.shape[0]):
+        d, s = (diff.without_mode(k), np.delete(sigma, k)) if what == "mode" else \
+            (diff.without_point(k), sigma)
+        keep = np.ones(full.size, bool)
+        keep[left_out_rows(diff, what, k)] = False
+        np.testing.assert_array_equal(residual_function(predict, d, space, s)(x), full[keep])
+
+
+def test_predicted_leave_outs_read_as_their_refits(monkeypatch):
+    """The first-order leave-outs (``linearised``) of a core every mode sees are taken only
+    where they survive by far, and read as the refits do: the same survival, F within 10 %,
+    the diameter within 0.02 in; with ``LINEAR_MARGIN`` 0 every leave-out is refitted."""
+    case = random_case(np.random.default_rng(23), "none")
+    base, _, cored = _modes(case, 23)
+    v = inspect_retest(case.profile, case.reference, base, cored, with_map=False)
+    monkeypatch.setattr(robustness, "LINEAR_MARGIN", 0.0)
+    w = inspect_retest(case.profile, case.reference, base, cored, with_map=False)
+    assert v.altered is w.altered is True
+    fast, slow = v.details.fit.leave_one_out["cases"], w.details.fit.leave_one_out["cases"]
+    assert all(c["refitted"] for c in slow)
+    assert sum(not c["refitted"] for c in fast) >= len(fast) // 2
+    for a, b in zip(fast, slow, strict=True):
+        assert a["survives"] == b["survives"]
+        assert a["F"] == pytest.approx(b["F"], rel=0.1)
+        d = a["reading"]["core_diameter_m"] - b["reading"]["core_diameter_m"]
+        assert abs(d) < 0.02 * IN_TO_M
