@@ -169,7 +169,7 @@ def time_serial(runs: int, demo: bool = False) -> None:
     print(f"batlab fit of the same re-test: median wall {fit_wall:.2f} s, median CPU "
           f"{fit_cpu:.2f} s")
     print(f"{args[0]} / fit: wall {wall / fit_wall:.2f}, CPU {cpu / fit_cpu:.2f} "
-          f"(issue 39's target: wall at most {target:g})")
+          f"(target, issues 39 and 51: wall at most {target:g})")
 
 
 def main() -> int:
