@@ -222,7 +222,7 @@ def _judged(fits: tuple[ChangeFit, ChangeFit], diff: Differences, space: ParamSp
 
 
 def _predicted(diff: Differences, reduced: Differences, what: str, k: int,
-               space: ParamSpace, family: str, null: ChangeFit, fit: ChangeFit,
+               space: ParamSpace, fspace, family: str, null: ChangeFit, fit: ChangeFit,
                finding: Finding, false_alarm: float, predict):
     """Return the leave-out predicted to first order, or None.
 
@@ -230,7 +230,6 @@ def _predicted(diff: Differences, reduced: Differences, what: str, k: int,
     docstring); None when it must be refitted.
     """
     rows = left_out_rows(diff, what, k)
-    fspace = space if family == "core" else segment_space(space, family)
     shape = (reduced.n_freq, reduced.dpsi.size)
     fits = (linearised(null, rows, space.bounds.lower, space.bounds.upper, space, *shape),
             linearised(fit, rows, fspace.lower(), fspace.upper(), fspace, *shape))
@@ -294,7 +293,7 @@ def leave_one_out(predict, diff: Differences, space: ParamSpace, sigma_rel: np.n
     current = all(np.allclose(residual_function(predict, diff, sp, sigma)(f.x), f.residual,
                               rtol=1e-9, atol=1e-12) for f, sp in ((null, space), (fit, fspace)))
     predicted = [None if not current else  # fitted with another noise: refit every leave-out
-                 _predicted(diff, reduced(job)[0], *job, space, family, null, fit, finding,
+                 _predicted(diff, reduced(job)[0], *job, space, fspace, family, null, fit, finding,
                             false_alarm, predict) for job in jobs]
 
     def refit(job):
