@@ -39,10 +39,11 @@ from updating.model.assembly import (
     with_core,
     with_cores,
 )
-from updating.model.modes import solve_modes
+from updating.model.modes import rayleigh_freq_hz
 from updating.model.profile import Profile
 from updating.model.reference import BatReference
 from updating.model.sections import Core
+from updating.model.sensitivity import FullModes, full_modes
 
 
 @dataclass(frozen=True)
@@ -199,6 +200,9 @@ SUM_CACHE = 8
 KEY_CACHE = 4096
 """Segments' cache keys and wood masses a predictor keeps (``ChangePredictor._local_key``,
 ``wood_mass_kg``): small entries, asked for at every state of a fit."""
+STATE_CACHE = 4
+"""States whose matrices and every mode a predictor keeps (``ChangePredictor.state``): about
+0.5 MB each, asked for again by the Jacobian right after the residual."""
 DERIVED_CACHE = 256
 """States whose modes or derivatives a predictor keeps (``ChangePredictor.derived``): a
 refit evaluates some 20 states, and the next leave-out starts where the last one did (about
@@ -229,6 +233,7 @@ class ChangePredictor:
         self._keys: dict = {}
         self._sums: dict = {}
         self._derived: dict = {}
+        self._states: dict = {}
 
     def at_sensor(self, sensor_x_m: float) -> ChangePredictor:
         """Return the same bat with its accelerometer elsewhere.
@@ -512,11 +517,27 @@ class ChangePredictor:
         Read-only arrays, kept for the last few states (``derived``).
         """
         def solve() -> tuple[np.ndarray, np.ndarray]:
-            state = self.matrices(p)
-            modes = solve_modes(state.K, state.M, None, self.n_solve)
-            return modes.freq_hz, self.observe(state, modes.shapes)
+            state, modes = self.state(p)
+            vec = modes.vectors[:, :self.n_solve]
+            return rayleigh_freq_hz(state.K, state.M, vec), self.observe(state, vec)
 
         return self.derived(("modes", p), solve)
+
+    def state(self, p: ChangeParams) -> tuple[StateMatrices, FullModes]:
+        """Return the matrices of the bat changed by ``p`` and every mode of them.
+
+        Kept for the last ``STATE_CACHE`` states: a fit asks for the Jacobian where it has
+        just evaluated the residual (``sensitivity.predicted_change`` needs every mode, the
+        residual the lowest ``n_solve``), so one eigen-solution of all modes serves both.
+        """
+        out = self._states.pop(p, None)
+        if out is None:
+            if len(self._states) >= STATE_CACHE:
+                del self._states[next(iter(self._states))]  # the least recently used
+            state = self.matrices(p)
+            out = (state, full_modes(state.K, state.M))
+        self._states[p] = out
+        return out
 
     def derived(self, key, compute: Callable[[], tuple]) -> tuple:
         """Return ``compute()``, kept per ``key`` for the ``DERIVED_CACHE`` keys last used.

@@ -23,7 +23,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from updating.inspect.model import ChangeParams, ChangePredictor
-from updating.model.sensitivity import full_modes, mode_derivatives
+from updating.model.sensitivity import mode_derivatives
 
 
 @dataclass(frozen=True)
@@ -74,8 +74,7 @@ def predicted_change(predict: ChangePredictor, params: ChangeParams,
 def _predicted_change(predict: ChangePredictor, params: ChangeParams,
                       steps: list[tuple[ChangeParams, float]]) -> PredictedChange:
     """``predicted_change`` computed."""
-    base = predict.matrices(params)
-    modes = full_modes(base.K, base.M)
+    base, modes = predict.state(params)
     m = predict.n_solve
     dK, dM, dv = predict.matrix_steps(params, base, steps)
     v0 = base.sensor_vector()
