@@ -45,7 +45,6 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 from scipy.optimize import lsq_linear
-from scipy.stats import chi2
 
 from updating.correlate.measured import MeasuredModes
 from updating.model.assembly import BatModel, build_model
@@ -54,6 +53,7 @@ from updating.model.modes import model_modes
 from updating.model.profile import Profile
 from updating.model.reference import BatReference
 from updating.model.units import IN_TO_M
+from updating.tails import chi2_isf, chi2_sf
 
 LEVEL = 1e-3
 """Family-wise significance level of the flat from the splits."""
@@ -366,15 +366,15 @@ def read_plane_split(profile: Profile, reference: BatReference, baseline: Measur
     chi1, _ = _flat_fits(d, w.S, _patterns(w, regions, H_REF_M))
     stat = max(chi0 - float(chi1.min()), 0.0)
     n_reg = len(regions)
-    p = float(min(1.0, n_reg * chi2.sf(stat, 1)))
-    critical = float(chi2.isf(LEVEL / n_reg, 1))
+    p = float(min(1.0, n_reg * chi2_sf(stat, 1)))
+    critical = float(chi2_isf(LEVEL / n_reg, 1))
     detect = _detectable_depth(w, regions, critical)
     # the reading: MODEL_REL of the whole change (the flat's pattern's error too)
     d, w = _whiten(m, change, np.hypot(meas, MODEL_REL * change))
     P = _patterns(w, regions, H_REF_M)
     chi1, amp = _flat_fits(d, w.S, P)
     best = int(np.argmin(chi1))
-    fits = bool(chi2.sf(chi1[best], max(len(d) - 3, 1)) >= LEVEL)
+    fits = bool(chi2_sf(chi1[best], max(len(d) - 3, 1)) >= LEVEL)
     common = dict(statistic=float(stat), p_value=p, critical=critical, fits=fits,
                   ratio_drift=(float(u0[0]), float(u0[1])), detectable_depth_m=detect)
     if p >= LEVEL or not fits:
