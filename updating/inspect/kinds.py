@@ -90,6 +90,14 @@ def segment_space(space: ParamSpace, family: str) -> SegmentSpace:
     return SegmentSpace(space.profile, space.bounds, family, space.sensor_mount_m)
 
 
+def family_space(space: ParamSpace, family: str) -> ParamSpace | SegmentSpace:
+    """Return the parameter space of ``family``.
+
+    The core's ``space`` itself, else the segment family's on its null (``segment_space``).
+    """
+    return space if family == "core" else segment_space(space, family)
+
+
 def refit_family(predict, diff: Differences, space: ParamSpace, family: str,
                  sigma_rel: SigmaRel, x0: np.ndarray) -> ChangeFit:
     """Refit one family (``core`` or a segment family) from ``x0`` with the noise given.
@@ -97,7 +105,7 @@ def refit_family(predict, diff: Differences, space: ParamSpace, family: str,
     The refits of a fitted family: with another noise estimate, or on fewer data (a mode or
     a point left out); ``x0`` is clipped into the family's bounds.
     """
-    fspace = space if family == "core" else segment_space(space, family)
+    fspace = family_space(space, family)
     lo, hi = fspace.lower(), fspace.upper()
     return fit_bounded(residual_function(predict, diff, fspace, sigma_rel), np.clip(x0, lo, hi),
                        lo, hi, fspace, diff, MAX_NFEV_CORE)

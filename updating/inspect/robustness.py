@@ -49,7 +49,7 @@ from updating.inspect.hypotheses import (
     fit_null,
     residual_function,
 )
-from updating.inspect.kinds import N_PARAMS, read_finding, refit_family, segment_space
+from updating.inspect.kinds import N_PARAMS, family_space, read_finding, refit_family
 from updating.inspect.local_change import N_SEGMENT
 from updating.inspect.nested import nested_f
 from updating.inspect.parallel import fork_map
@@ -289,7 +289,7 @@ def leave_one_out(predict, diff: Differences, space: ParamSpace, sigma_rel: np.n
             return diff.without_mode(k), np.delete(sigma, k)
         return diff.without_point(k), sigma
 
-    fspace = space if family == "core" else segment_space(space, family)
+    fspace = family_space(space, family)
     current = all(np.allclose(residual_function(predict, diff, sp, sigma)(f.x), f.residual,
                               rtol=1e-9, atol=1e-12) for f, sp in ((null, space), (fit, fspace)))
     predicted = [None if not current else  # fitted with another noise: refit every leave-out
