@@ -202,3 +202,30 @@ def test_kept_modes_are_read_only_and_per_accelerometer():
                           predict.n_solve)
     assert not np.array_equal(moved(p)[1], phi)
     np.testing.assert_array_equal(moved(p)[1], new(p)[1])
+
+
+def test_a_state_is_solved_once_for_its_residual_and_its_jacobian(monkeypatch):
+    """The residual at x and then the Jacobian at x (as trust-region reflective asks for them)
+    solve the eigen-problem once, for every mode; the residual's frequencies and shapes are
+    those of the lowest modes solved alone (the selective driver), to round-off."""
+    import updating.inspect.model as model_module
+    from updating.model.modes import solve_modes
+
+    predict, diff, space, rng = _fit_problem(31, True)
+    x = np.concatenate([_random_null(space, rng), _family_tail("core", rng)])
+    params = space.params(x)
+    state = predict.matrices(params)
+    alone = solve_modes(state.K, state.M, None, predict.n_solve)
+    calls = []
+    real = model_module.full_modes
+    monkeypatch.setattr(model_module, "full_modes",
+                        lambda K, M: calls.append(1) or real(K, M))
+    fun = residual_function(predict, diff, space, 0.01)
+    fun(x)
+    fun.jacobian(x, space.upper()[:x.size])
+    assert len(calls) == 1
+    freq, shapes = predict(params)
+    assert np.allclose(freq, alone.freq_hz, rtol=1e-10, atol=1e-9)
+    want = predict.observe(state, alone.shapes)
+    sign = np.sign(np.sum(shapes * want, axis=0))
+    assert np.allclose(shapes * sign, want, rtol=1e-7, atol=1e-9 * np.abs(want).max())
