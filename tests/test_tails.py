@@ -49,8 +49,8 @@ def test_chi2_isf_is_scipy_stats_and_inverts_sf(q, df):
 
 
 def test_the_inspection_imports_no_scipy_stats():
-    """scipy.stats' import is 0.7 s of an inspection's start; only a statistic beyond a
-    calibration's stored values (``pareto_tail``) loads it."""
+    """scipy.stats' import is 0.7 s of an inspection's start; neither the planes' chi^2
+    tails nor a calibration's Pareto tail (``fit_pareto``) needs it."""
     code = ("import sys; import batlab.pipeline.inspection, updating.inspect.run, "
             "updating.inspect.plane_split_verdict; print('scipy.stats' in sys.modules)")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,

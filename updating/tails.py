@@ -203,8 +203,8 @@ def fit_pareto(excess) -> ParetoFit:
 
     def theta_of(t):  # t in [-1, 1] -> theta in [lo, hi], fine near 0 and both ends
         t = np.asarray(t, dtype=float)
-        return np.where(t < 0, -lo * np.expm1(np.abs(t) * np.log1p(1.0)) * np.sign(t),
-                        mean ** -1 * np.expm1(t * np.log1p(hi * mean)))
+        return np.where(t < 0, lo * np.expm1(-t * np.log(2.0)),
+                        np.expm1(t * np.log1p(hi * mean)) / mean)
 
     def loglik(theta):
         theta = np.atleast_1d(np.asarray(theta, dtype=float))
