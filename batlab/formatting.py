@@ -99,9 +99,14 @@ def chance_words(ch: dict | None) -> str | None:
             if ch.get("extrapolated") is not None:
                 text += (f"; beyond that range a generalized-Pareto tail fit extrapolates "
                          f"{ch['extrapolated']:.1g} (an extrapolation, not a measurement)")
-            return text
-        return (f"{CHANCE}: {share(float(ch['value']))} {where}, {b:,} of which differed at "
-                "least as much")
+        else:
+            text = (f"{CHANCE}: {share(float(ch['value']))} {where}, {b:,} of which differed "
+                    "at least as much")
+        if ch.get("decided_on") == "nominal" and ch.get("nominal") is not None:
+            text += (f"; decided on the F distribution's nominal {percent(float(ch['nominal']))}"
+                     f": {n:,} re-tests are too few to measure a chance as small as the "
+                     "decision's level")
+        return text
     text = f"{CHANCE}: unmeasured, {ch.get('unmeasured') or 'no calibration'}"
     if ch.get("nominal") is not None:
         text += (f"; the F distribution's nominal {percent(float(ch['nominal']))} is not a "
@@ -128,8 +133,13 @@ def false_alarm_words(fa) -> str | None:
     if not isinstance(fa, dict):
         return (f"called altered below a nominal {percent(float(fa))} (false-alarm rate "
                 "unmeasured)")
-    level = "" if fa.get("level") is None else \
-        f"; called altered below the F test's nominal {percent(float(fa['level']))}"
+    if fa.get("level") is None:
+        level = ""
+    elif fa.get("decided_on") == "calibration":
+        level = (f"; called altered below a chance of {percent(float(fa['level']))} as "
+                 "measured on the calibration")
+    else:
+        level = f"; called altered below the F test's nominal {percent(float(fa['level']))}"
     if fa.get("source") == "calibration":
         k, n = int(fa["false_alarms"]), int(fa["n"])
         seen = "none" if k == 0 else f"{k:,} ({share(k / n)})"

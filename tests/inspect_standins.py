@@ -50,11 +50,12 @@ def fake_calibrate(profile, meta, baseline_modes, suspension_hz=None):
 
 
 def fake_inspect(profile, reference, baseline, retest, false_alarm, conditions=None,
-                 registered=None, with_map=True, retest_profile=None):
+                 registered=None, with_map=True, retest_profile=None, clean_F=None):
     """Altered when the modes shift unevenly (beyond a uniform drift); 1 in elements; the
     'core' sits in the last 10 in, its size from the largest uneven shift. A re-test profile
     is joined as the real inspection joins it (``caliper_verdict.with_calipers``: pure
-    numpy, fast)."""
+    numpy, fast). A calibration's ``clean_F`` is not read: the stand-in decides on its own
+    rule (its verdict says it decided on the nominal chance)."""
     from updating.inspect.caliper_verdict import with_calipers
 
     return with_calipers(_fake_modal(profile, baseline, retest, false_alarm), profile,

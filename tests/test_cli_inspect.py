@@ -95,7 +95,7 @@ def _recording(monkeypatch):
     seen = []
 
     def rec(profile, reference, baseline, retest, false_alarm, conditions=None,
-            registered=None, with_map=True, retest_profile=None):
+            registered=None, with_map=True, retest_profile=None, clean_F=None):
         seen.append((conditions, registered))
         return fake_inspect(profile, reference, baseline, retest, false_alarm,
                             retest_profile=retest_profile)

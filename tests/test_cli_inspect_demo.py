@@ -26,6 +26,10 @@ def test_demo_writes_everything(tmp_path, monkeypatch, capsys):
     assert res["region_in"][1] == pytest.approx(33.0, abs=1.0)
     assert res["core_diameter_in"] == pytest.approx(1.0, abs=0.15)
     assert res["fill_density_ratio"] == pytest.approx(0.3, abs=0.12)
+    # the shipped calibration of the built-in bat decides (3,000 re-tests can show a chance
+    # below 0.1 %), and its false-alarm count bounds that decision (its cut is the stricter)
+    assert res["chance"]["decided_on"] == res["false_alarm_rate"]["decided_on"] == "calibration"
+    assert res["false_alarm_rate"]["source"] == "calibration"
     assert "simulating" in cap.err and "report" in cap.err
     for name in ("profile.csv", "meta.json", "baseline.uff", "retest.uff", "registry.sqlite",
                  "report/index.html"):

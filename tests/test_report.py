@@ -54,11 +54,12 @@ def test_report_is_self_contained(result, tmp_path):
     page = path.read_text()
     assert "Inspection of bat HX-2001" in page
     assert "Bat HX-2001 has been altered: a bore about 1.00 in across from 24.0 to 33.0 in" in page
-    # no registry to read a calibration from: the box says it plainly, the evidence table
-    # says once that the chance is unmeasured and gives the nominal 1 - 0.999 beside it
+    # no calibration of the sample's model (none stored, none shipped): the box says it
+    # plainly, the evidence table says once that the chance is unmeasured and gives the
+    # nominal 1 - 0.999 beside it
     box = page.split("<div class='verdict altered'>")[1].split("</div>")[0]
     assert "unmeasured" not in box and "nominal" not in box
-    assert page.count("unmeasured <span class='note'>(no calibration was") == 1
+    assert page.count("unmeasured <span class='note'>(no calibration of bat model") == 1
     assert ("<span class='n'>0.1 %</span> <span class='note'>(p = <span class='n'>0.001</span>)"
             in page)
     assert "confidence" not in page.lower()

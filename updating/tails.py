@@ -5,8 +5,9 @@
 importing ``scipy.stats`` (0.3-0.7 s of a command's start-up); the inspection's F test, the
 planes' test of a flat and the diagnosis's naming of causes read them here.
 ``measured_chance`` is the chance a statistic's value has among the
-stored values of clean re-tests (a bat model's calibration), ``pareto_tail`` its
-extrapolation beyond them (``fit_pareto``).
+stored values of clean re-tests (a bat model's calibration), ``measured_cut`` the value past
+which that chance is below a level, ``pareto_tail`` its extrapolation beyond them
+(``fit_pareto``).
 """
 
 from __future__ import annotations
@@ -14,12 +15,21 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.special import chdtrc, chdtri, fdtrc, gammaincinv
+from scipy.special import chdtrc, chdtri, fdtrc, fdtri, gammaincinv
 
 
 def f_sf(F: float, dfn: int, dfd: int) -> float:
     """Return P(F_{dfn, dfd} > F), the F distribution's survival function at F >= 0."""
     return float(fdtrc(dfn, dfd, F))
+
+
+def f_isf(p: float, dfn: int, dfd: int) -> float:
+    """Return F with P(F_{dfn, dfd} > F) = p, the survival function's inverse.
+
+    ``fdtri`` (the distribution function's inverse) at 1 - p: exact to round-off for the
+    decision's levels (1e-3 and above); not for p below about 1e-12.
+    """
+    return float(fdtri(dfn, dfd, 1.0 - p))
 
 
 def chi2_sf(x: float, df: int) -> float:
@@ -95,6 +105,42 @@ def measured_chance(statistic: float, null) -> MeasuredChance:
         raise ValueError(f"statistic {statistic!r}: no chance of a value that is not finite")
     exceeding = int(np.count_nonzero(values >= statistic))  # NaN >= x is False
     return MeasuredChance((1 + exceeding) / (values.size + 1), exceeding, int(values.size))
+
+
+def measured_cut(null, level: float) -> float:
+    """Return the value past which a statistic's measured chance is below ``level``.
+
+    ``measured_chance`` gives (1 + b) / (n + 1), b the stored values at least as large, so
+    it is below ``level`` exactly when b <= k = ceil(level (n + 1) - 1) - 1: when the
+    statistic exceeds the (k + 1)-th largest stored value (NaN never counts). The n stored
+    re-tests cannot show a chance below ``level`` when 1 / (n + 1) >= level (k < 0).
+
+    Parameters
+    ----------
+    null : array_like
+        The stored clean re-tests' statistics (NaN: none; counted in n).
+    level : float
+        The chance to be below, in (0, 1).
+
+    Returns
+    -------
+    float
+        The cut: the measured chance of s is below ``level`` iff s > cut; inf when no value
+        can be, -inf when every value is (fewer than k + 1 finite stored values).
+
+    Examples
+    --------
+    >>> measured_cut(np.arange(3000.0), 1e-3)  # 3 of 3,000: b <= 2 exceeds 2997
+    2997.0
+    >>> measured_cut(np.arange(999.0), 1e-3)  # 1 / 1,000 is not below 1e-3
+    inf
+    """
+    values = np.asarray(null, dtype=float).ravel()
+    k = int(np.ceil(level * (values.size + 1) - 1.0)) - 1
+    if k < 0:
+        return float("inf")
+    finite = np.sort(values[np.isfinite(values)])[::-1]
+    return float(finite[k]) if k < finite.size else float("-inf")
 
 
 TAIL_FRACTION = 0.1

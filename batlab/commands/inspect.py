@@ -155,8 +155,8 @@ def run(args: argparse.Namespace) -> int:
             result = pipeline.inspect_files(args.profile, args.meta, args.baseline, retest,
                                             args.false_alarm, progress, args.retest_meta,
                                             with_map=bool(args.out or args.plots),
-                                            retest_profile_path=args.retest_profile)
-            result = pipeline.with_statement(result, conn, why)
+                                            retest_profile_path=args.retest_profile,
+                                            conn=conn, unmeasured_why=why)
         _print(args, pipeline.result_dict(result), readable)
         if args.out or args.plots:
             prov = pipeline.provenance(baseline_sha256=pipeline.file_sha256(args.baseline),

@@ -7,7 +7,10 @@ calibration) once per worker process (``registration`` caches it). Re-test ``i``
 is drawn from child ``i`` (``child_seed``), simulated, written as a test file and read back,
 fitted and judged as ``batlab inspect --serial`` judges it (``pipeline.fit_file``,
 ``pipeline.judge``) with its retest.json; no subprocess, no registry write, and no MSSO
-element map (only a report draws it; the verdict is the same without it).
+element map (only a report draws it; the verdict is the same without it). The decision
+reads the F distribution's chance, not a stored calibration's: a calibration measures F,
+which no decision moves, and its false-alarm count is the nominal decision's
+(``pipeline.chance.rows_bound_decision`` says where it bounds the measured one).
 
 A long calibration can be resumed from its rows file (``read_rows``): the last stored
 re-test is inspected again first and must give its stored status and F (``check_resumed``),

@@ -14,8 +14,14 @@ verdict and the latest calibration of its model into the two things a verdict st
 - ``false_alarm_rate``: the calibration's measured rate (k of n called altered) and its 95 %
   Clopper-Pearson bound, when it was run at the inspection's decision level; else unmeasured.
 
-The decision itself (``status``) is the method's (``updating.inspect``); the chance is stated
-beside it. Light: numpy; ``updating.tails`` when a calibration is used.
+The decision (``status``) is the method's (``updating.inspect``), on the same calibration:
+``calibration_for`` finds it before the inspection, whose decision reads the chance measured
+on its clean re-tests' F (``decision.decided_chance``; ``chance.decided_on`` "calibration")
+when there are enough of them to show a chance below the decision's level (1,000 or more at
+0.1 %), else the nominal (``decided_on`` "nominal"). The calibration's false-alarm count
+was made by the nominal decision; it bounds the measured one only where the measured chance
+calls fewer bats beyond drift (``rows_bound_decision``), and the rate is said unmeasured
+where it does not. Light: numpy; ``updating.tails`` when a calibration is used.
 """
 
 from __future__ import annotations
@@ -30,7 +36,7 @@ import numpy as np
 
 from updating.model.units import IN_TO_M
 
-__all__ = ["model_name", "statement", "with_statement"]
+__all__ = ["calibration_for", "clean_statistics", "model_name", "statement", "stated"]
 
 STATISTIC = "F"
 """The statistic a calibration stores and the chance ranks by (the verdict's ``statistic``)."""
@@ -89,6 +95,54 @@ def null_statistics(calibration) -> np.ndarray:
     return np.array([np.nan if v is None else float(v) for v in values], dtype=float)
 
 
+def clean_statistics(calibration) -> np.ndarray | None:
+    """Return the clean re-tests' F the decision measures its chance on (None: nominal).
+
+    ``null_statistics`` of a calibration, None without one (``updating.inspect.inspect``'s
+    ``clean_F``).
+    """
+    return None if calibration is None else null_statistics(calibration)
+
+
+def rows_bound_decision(calibration, level: float, dof) -> bool:
+    """Tell whether a calibration's false-alarm count bounds the measured decision's.
+
+    Its re-tests were judged on the nominal chance. The decision's outcome "altered" needs
+    the change significant, and only that reads the chance, so the nominal decision's alarms
+    include the measured one's wherever the measured chance calls no F significant that the
+    nominal leaves below it: where the F past which the stored re-tests measure a chance
+    below the level (``updating.tails.measured_cut``) is at least the F distribution's
+    critical value at this inspection's degrees of freedom (``updating.tails.f_isf``).
+
+    Parameters
+    ----------
+    calibration : StoredCalibration
+        The calibration the decision read.
+    level : float
+        The decision's false-alarm rate.
+    dof : sequence of int or None
+        The inspection's (q, N - p_1); None: not known (False).
+
+    Returns
+    -------
+    bool
+    """
+    from updating.inspect.decision import CLEAR_LEVEL
+    from updating.tails import f_isf, measured_cut
+
+    if not dof or min(int(d) for d in dof) < 1:
+        return False
+    alpha = min(CLEAR_LEVEL, level)
+    return measured_cut(null_statistics(calibration), alpha) >= f_isf(alpha, int(dof[0]),
+                                                                        int(dof[1]))
+
+
+def decided_on(verdict) -> str:
+    """Return where a verdict's decision read its chance ("calibration" or "nominal")."""
+    fit = None if verdict.details is None else verdict.details.fit
+    return "nominal" if fit is None else str(getattr(fit, "decided_on", "nominal"))
+
+
 def unusable(calibration, model: str | None) -> str | None:
     """Return why a calibration cannot state this release's chance (None: it can).
 
@@ -138,9 +192,11 @@ def statement(verdict, model: str | None, calibration=None,
     Returns
     -------
     dict
-        ``{"chance": {...}, "false_alarm_rate": {...}}`` in JSON types.
+        ``{"chance": {...}, "false_alarm_rate": {...}}`` in JSON types; ``chance.decided_on``
+        says which chance the decision read (module docstring).
     """
     nominal = nominal_p(verdict)
+    decision = decided_on(verdict)
     level = float(verdict.false_alarm_rate)
     stat = float(verdict.statistic) if verdict.statistic is not None else math.nan
     if calibration is not None:
@@ -151,10 +207,12 @@ def statement(verdict, model: str | None, calibration=None,
         why = unmeasured_why or (f"no calibration of bat model {model} is stored"
                                  if model else "no calibration was looked up")
         chance = {"value": nominal, "source": "nominal", "calibration": None,
-                  "nominal": nominal, "model": model, "unmeasured": why}
+                  "nominal": nominal, "model": model, "unmeasured": why,
+                  "decided_on": decision}
         return {"chance": chance, "false_alarm_rate": {
             "source": "unmeasured", "false_alarms": None, "n": None, "measured": None,
-            "upper95": None, "level": level, "model": model, "unmeasured": why}}
+            "upper95": None, "level": level, "model": model, "unmeasured": why,
+            "decided_on": decision}}
     from updating.tails import measured_chance, pareto_tail
 
     null = null_statistics(calibration)
@@ -167,9 +225,17 @@ def statement(verdict, model: str | None, calibration=None,
     chance = {"value": value, "source": "calibration",
               "calibration": _calibration_dict(calibration, exceeding), "nominal": nominal,
               "model": model, "beyond_measured": exceeding == 0 if exceeding is not None
-              else None, "extrapolated": tail}
+              else None, "extrapolated": tail, "decided_on": decision}
     run_level = calibration.summary.get("false_alarm")
-    if run_level is not None and math.isclose(float(run_level), level):
+    fit = None if verdict.details is None else verdict.details.fit
+    if decision == "calibration" and not rows_bound_decision(
+            calibration, level, None if fit is None else fit.dof):
+        rate = {"source": "unmeasured", "false_alarms": None, "n": None, "measured": None,
+                "upper95": None, "level": level, "model": model,
+                "unmeasured": f"the calibration of bat model {model} judged its re-tests on "
+                              "the F distribution's chance, and the measured chance this "
+                              "verdict was decided on calls more of them beyond drift"}
+    elif run_level is not None and math.isclose(float(run_level), level):
         k, n = calibration.false_alarms, calibration.n
         rate = {"source": "calibration", "false_alarms": k, "n": n, "measured": k / n,
                 "upper95": calibration.false_alarm_upper95, "level": level, "model": model}
@@ -178,36 +244,41 @@ def statement(verdict, model: str | None, calibration=None,
                 "upper95": None, "level": level, "model": model,
                 "unmeasured": f"the calibration of bat model {model} was run at a decision "
                               f"level of {run_level}, this inspection's is {level:g}"}
-    return {"chance": chance, "false_alarm_rate": rate}
+    return {"chance": chance, "false_alarm_rate": {**rate, "decided_on": decision}}
 
 
-def with_statement(result, conn=None, unmeasured_why: str | None = None):
-    """Return an inspection's result with its chance stated (``statement``).
+def calibration_for(conn, model: str | None, unmeasured_why: str | None = None):
+    """Return (the calibration an inspection of a ``model`` bat reads, why there is none).
 
-    The calibration is the latest of the bat's model in the registry, unless a key record
-    there revoked or retired the key that signed an imported one; else the one batlab ships
-    (``registry.calibration_files.shipped_calibration``), if any.
+    The registry's latest of the model, unless a key record there revoked or retired the
+    key that signed an imported one; else the one batlab ships
+    (``registry.calibration_files.shipped_calibration``), if any. Looked up before the
+    inspection: its decision reads the chance measured on it (``clean_statistics``) and
+    ``stated`` states it.
 
     Parameters
     ----------
-    result : InspectionResult
-        The inspection (its ``model`` names the calibration).
     conn : sa.Connection or None
-        The registry whose latest calibration of the model is used; None: no registry, the
-        chance is stated from a shipped calibration or is nominal and said unmeasured
-        (``unmeasured_why``).
+        The registry; None: the shipped calibration only.
+    model : str or None
+        The bat's model (None: none looked up).
     unmeasured_why : str or None
         Why no registry was read, in words.
 
     Returns
     -------
-    InspectionResult
-        The result with ``stated``.
+    calibration : StoredCalibration or None
+    why : str or None
+        Why there is none, in words.
     """
-    calibration = None
-    if result.model:
-        calibration, why = _calibration_of(conn, result.model)
-        unmeasured_why = why or unmeasured_why
+    if not model:
+        return None, unmeasured_why
+    calibration, why = _calibration_of(conn, model)
+    return calibration, why or unmeasured_why
+
+
+def stated(result, calibration, unmeasured_why: str | None = None):
+    """Return an inspection's result with its chance stated from ``calibration`` (``statement``)."""
     return replace(result, stated=statement(result.verdict, result.model, calibration,
                                             unmeasured_why))
 

@@ -17,7 +17,7 @@ from pathlib import Path
 
 import numpy as np
 
-from batlab.pipeline.chance import model_name
+from batlab.pipeline.chance import calibration_for, clean_statistics, model_name, stated
 from batlab.pipeline.files import (
     Progress,
     numeric_failure,
@@ -113,7 +113,7 @@ class InspectionResult:
         The bat's model.
     stated : dict or None
         The verdict's chance and false-alarm rate (``batlab.pipeline.chance.statement``,
-        by ``with_statement``); None: nominal, no calibration looked up.
+        by ``chance.stated``); None: nominal, no calibration looked up.
     survey : CaliperSurvey or None
         The re-test's caliper profile it was judged with (stored likewise).
     """
@@ -194,7 +194,8 @@ def calibrate_baseline(profile: Profile, meta: BatMeta, baseline: FittedTest) ->
 
 
 def judge(case: InspectionCase, false_alarm: float,
-          conditions: RetestConditions | None, with_map: bool = True) -> InspectionResult:
+          conditions: RetestConditions | None, with_map: bool = True,
+          calibration=None) -> InspectionResult:
     """Judge a case: the method's one call (``updating.inspect.run.inspect``).
 
     Parameters
@@ -208,6 +209,10 @@ def judge(case: InspectionCase, false_alarm: float,
     with_map : bool
         Compute the MSSO element map the report draws (False: the same verdict, sooner;
         a report of the stored verdict computes it then, ``stored.with_element_map``).
+    calibration : StoredCalibration or None
+        The calibration of the bat's model (``chance.calibration_for``): the decision reads
+        the chance measured on its clean re-tests; None: the F distribution's. Not stated
+        here (``chance.stated``).
 
     Returns
     -------
@@ -216,7 +221,7 @@ def judge(case: InspectionCase, false_alarm: float,
     """
     verdict = inspect(case.profile, case.reference, case.baseline.modes, case.retest.modes,
                       false_alarm, conditions, case.registered, with_map=with_map,
-                      retest_profile=case.survey)
+                      retest_profile=case.survey, clean_F=clean_statistics(calibration))
     return InspectionResult(case.serial, case.profile, case.reference, case.baseline,
                             case.retest, verdict, case.reference_seq, case.weight_kg,
                             case.retest_content, conditions, case.model,
@@ -259,7 +264,7 @@ def stateless_case(profile_path, meta_path, baseline_path, retest_path,
 def inspect_files(
     profile_path, meta_path, baseline_path, retest_path, false_alarm: float = 0.01,
     progress: Progress = quiet, retest_meta_path=None, with_map: bool = True,
-    retest_profile_path=None,
+    retest_profile_path=None, conn=None, unmeasured_why: str | None = None,
 ) -> InspectionResult:
     """Inspect a re-test statelessly: the steps of `register`, then the re-test against it.
 
@@ -277,14 +282,21 @@ def inspect_files(
         Compute the MSSO element map (what a report draws; ``judge``).
     retest_profile_path : str or os.PathLike or None
         The optional retest_profile.csv (the re-test's caliper profile).
+    conn : sa.Connection or None
+        A registry to read the bat model's calibration from (else batlab's shipped one).
+    unmeasured_why : str or None
+        Why no registry was read, in words.
 
     Returns
     -------
     InspectionResult
-        The verdict and what it was judged on.
+        The verdict and what it was judged on, decided on and stated with the bat model's
+        calibration (``chance.calibration_for``), or the nominal chance without one.
     """
     conditions = read_conditions(retest_meta_path)
     case = stateless_case(profile_path, meta_path, baseline_path, retest_path, progress,
                           retest_profile_path)
+    calibration, why = calibration_for(conn, case.model, unmeasured_why)
     progress("inspecting the re-test against the reference")
-    return judge(case, false_alarm, conditions, with_map)
+    return stated(judge(case, false_alarm, conditions, with_map, calibration), calibration,
+                  why)

@@ -12,7 +12,7 @@ from pathlib import Path
 import sqlalchemy as sa
 
 from batlab import registry as reg
-from batlab.pipeline.chance import model_name, with_statement
+from batlab.pipeline.chance import calibration_for, model_name, stated
 from batlab.pipeline.files import (
     Progress,
     frf_from_bytes,
@@ -351,8 +351,8 @@ def inspect_registered(
     Returns
     -------
     InspectionResult
-        The verdict and what it was judged on, its chance stated from the registry's
-        latest calibration of the bat's model (``with_statement``; nothing stored:
+        The verdict and what it was judged on, decided on and stated with the registry's
+        latest calibration of the bat's model (``chance.calibration_for``; nothing stored:
         ``store_inspection``).
     """
     conditions = read_conditions(retest_meta_path)
@@ -362,5 +362,7 @@ def inspect_registered(
         raise ValueError(f"{retest_meta_path}: {why}")
     case = registered_case(conn, serial, retest_path, refit_baseline, progress, baseline_fit,
                            retest_profile_path)
+    calibration, why = calibration_for(conn, case.model)
     progress("inspecting the re-test against the registered reference")
-    return with_statement(judge(case, false_alarm, conditions, with_map), conn)
+    return stated(judge(case, false_alarm, conditions, with_map, calibration), calibration,
+                  why)

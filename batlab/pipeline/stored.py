@@ -15,6 +15,7 @@ from pathlib import Path
 import sqlalchemy as sa
 
 from batlab import registry as reg
+from batlab.pipeline.chance import calibration_for
 from batlab.pipeline.files import Progress, file_sha256, quiet
 from batlab.pipeline.inspection import InspectionCase, InspectionResult, judge
 from batlab.pipeline.records import ReportInputs, same_judgement, verdict_record
@@ -324,11 +325,13 @@ def stored_report_inputs(
     inputs = ReportInputs(serial, case.profile, case.reference, case.baseline, case.retest,
                           stored.verdict, bat.meta, provenance(conn, stored=stored),
                           (stored.inputs or {}).get("retest_conditions"))
-    return with_element_map(inputs, case, stored.inputs or {}, progress)
+    decided = (stored.verdict.get("details") or {}).get("decided_on") == "calibration"
+    calibration = calibration_for(conn, case.model)[0] if decided else None
+    return with_element_map(inputs, case, stored.inputs or {}, progress, calibration)
 
 
 def with_element_map(inputs: ReportInputs, case: InspectionCase, stored_inputs: dict,
-                     progress: Progress = quiet) -> ReportInputs:
+                     progress: Progress = quiet, calibration=None) -> ReportInputs:
     """Return a stored inspection's report inputs with its MSSO element map (module docstring).
 
     Parameters
@@ -341,6 +344,9 @@ def with_element_map(inputs: ReportInputs, case: InspectionCase, stored_inputs: 
         The inspection's stored inputs (false-alarm rate, retest.json's conditions).
     progress : Progress
         Receives one-line messages.
+    calibration : StoredCalibration or None
+        The calibration the stored verdict was decided on (its ``decided_on``), which the
+        second judgement decides on too; None: the nominal chance.
 
     Returns
     -------
@@ -363,7 +369,8 @@ def with_element_map(inputs: ReportInputs, case: InspectionCase, stored_inputs: 
         progress("judging the stored tests again for the element map (an inspection without "
                  "a report does not compute it)")
         again = verdict_record(inputs.serial, judge(
-            case, float(stored_inputs.get("false_alarm", 0.01)), conditions).verdict)
+            case, float(stored_inputs.get("false_alarm", 0.01)), conditions,
+            calibration=calibration).verdict)
         if same_judgement(v["status"], v.get("statistic"), again["status"],
                           again.get("statistic")):
             return replace(inputs, verdict={**v, "details": {

@@ -8,7 +8,10 @@ outcome and its reasons:
 
 "Significant" is a chance below ``CLEAR_LEVEL`` of the test with the noise H0 leaves: a
 change beyond drift, never acquitted; "beyond" is significant and large against the noise
-the best local change leaves (``is_large``: F at ``F_FLOOR`` or more).
+the best local change leaves (``is_large``: F at ``F_FLOOR`` or more). That chance is
+measured where a calibration of the bat's model is stored (``decided_chance``: among its
+clean re-tests' F) and the F distribution's where none is, or where it holds too few
+re-tests to show a chance below the level.
 
 =====================  ==============================================  ============
 rule                   when                                            altered
@@ -60,6 +63,7 @@ import numpy as np
 from updating.inspect.finding import Finding, describe
 from updating.inspect.kind_table import UNEXPLAINED, Kind, kind_of
 from updating.inspect.words import chance, what_to_check
+from updating.tails import measured_chance, measured_cut
 
 CLEAR_LEVEL = 1e-3
 """The smallest chance of the nested test (with the noise H0 leaves, which on unaltered bats
@@ -103,6 +107,51 @@ def is_significant(p_value: float, false_alarm: float) -> bool:
         ``p_value < min(CLEAR_LEVEL, false_alarm)``.
     """
     return p_value < min(CLEAR_LEVEL, false_alarm)
+
+
+def decided_chance(F: float, p_nominal: float, clean_F: np.ndarray | None,
+                   false_alarm: float) -> tuple[float, str]:
+    """Return the chance the decision reads for a test's F, and where it comes from.
+
+    Measured where a calibration of the bat's model is stored: (1 + b) / (n + 1), b of its n
+    clean re-tests' F at least this F (``updating.tails.measured_chance``; Davison &
+    Hinkley 1997, eq. 4.11), when n re-tests can show a chance below the decision's level
+    (1 / (n + 1) below ``min(CLEAR_LEVEL, false_alarm)``: n of 1,000 or more at the default
+    levels). Else the F distribution's p-value, ``p_nominal``: without a calibration, or with
+    too few re-tests to measure a chance that small (a 64-re-test calibration's smallest
+    chance is 1 / 65).
+
+    Parameters
+    ----------
+    F : float
+        The test's statistic.
+    p_nominal : float
+        Its p-value from the F distribution.
+    clean_F : numpy.ndarray or None
+        The calibration's clean re-tests' F (NaN: a re-test without a test), or None.
+    false_alarm : float
+        The decision's false-alarm rate.
+
+    Returns
+    -------
+    chance : float
+        The chance.
+    source : str
+        "calibration" or "nominal".
+
+    Examples
+    --------
+    >>> decided_chance(6.0, 2e-4, None, 0.01)
+    (0.0002, 'nominal')
+    >>> decided_chance(6.0, 2e-4, np.linspace(0.0, 5.0, 3000), 0.01)  # beyond all 3,000
+    (0.0003332222592469177, 'calibration')
+    >>> decided_chance(6.0, 2e-4, np.linspace(0.0, 5.0, 64), 0.01)  # 1 / 65 > 1e-3
+    (0.0002, 'nominal')
+    """
+    if (clean_F is None or not np.isfinite(F)
+            or np.isinf(measured_cut(clean_F, min(CLEAR_LEVEL, false_alarm)))):
+        return float(p_nominal), "nominal"
+    return measured_chance(F, clean_F).value, "calibration"
 
 
 def is_large(F_fit: float, p_fit: float, false_alarm: float) -> bool:
@@ -152,9 +201,11 @@ class Evidence:
     Attributes
     ----------
     F, p_value : float
-        The nested test (H1 against H0).
+        The nested test (H1 against H0): F and its F distribution's p-value (the reasons
+        are worded with it; ``batlab`` restates them with the chance it states).
     significant : bool
-        The change is beyond drift (``is_significant``).
+        The change is beyond drift (``is_significant`` of the decided chance,
+        ``decided_chance``).
     large : bool
         Large against the noise the best local change leaves (``is_large``), significant
         or not.
@@ -184,6 +235,9 @@ class Evidence:
         What the finding rests on alone: the modes and points whose leave-out it does not
         survive (``robustness.leave_one_out``), each with the F left without it; empty when
         it survives every leave-out or was not checked.
+    decided_on : str
+        Where the chance ``significant`` read comes from: "calibration" (measured on the
+        bat model's clean re-tests) or "nominal" (``decided_chance``).
     """
 
     F: float
@@ -201,6 +255,7 @@ class Evidence:
     drift_beyond_bounds: bool = False
     F_fit: float = float("nan")
     rests_on: tuple[str, ...] = ()
+    decided_on: str = "nominal"
 
     @property
     def beyond(self) -> bool:

@@ -220,6 +220,9 @@ class FitEvidence:
     F_fit
         The nested test's F with the noise the best local change leaves (the change's size;
         ``statistic`` and ``p_value`` are the test with the noise H0 leaves).
+    decided_on
+        Where the chance the decision read came from: "calibration" (measured on the bat
+        model's clean re-tests) or "nominal" (``p_value``; ``decision.decided_chance``).
     """
 
     statistic: str
@@ -249,6 +252,7 @@ class FitEvidence:
     leave_one_out: dict[str, Any] = field(default_factory=dict)
     modes_left_out: tuple[str, ...] = ()
     F_fit: float = math.nan
+    decided_on: str = "nominal"
 
 
 @dataclass(frozen=True)
@@ -316,7 +320,8 @@ class InspectionDetails:
             "empty_m": f.empty_m, "local_change": dict(f.local_change),
             "kind_scores": dict(f.kind_scores), "time_s": self.time_s,
             "leave_one_out": dict(f.leave_one_out),
-            "modes_left_out": list(f.modes_left_out), "F_fit": f.F_fit, **split,
+            "modes_left_out": list(f.modes_left_out), "F_fit": f.F_fit,
+            "decided_on": f.decided_on, **split,
         }
 
     @classmethod
@@ -359,7 +364,8 @@ class InspectionDetails:
             local_change=dict(d.get("local_change") or {}),
             kind_scores=dict(d.get("kind_scores") or {}),
             leave_one_out=dict(d.get("leave_one_out") or {}),
-            modes_left_out=tuple(d.get("modes_left_out") or ()), F_fit=_num(d.get("F_fit")))
+            modes_left_out=tuple(d.get("modes_left_out") or ()), F_fit=_num(d.get("F_fit")),
+            decided_on=str(d.get("decided_on") or "nominal"))
         return cls(n_modes, time_s, fit, split)
 
 

@@ -17,6 +17,7 @@ from updating.inspect.decision import (
     F_FLOOR,
     GRIP_MIN_G,
     Evidence,
+    decided_chance,
     is_large,
     is_significant,
 )
@@ -289,7 +290,8 @@ def _bounds_matter(predict, diff, space, hyp: Hypotheses, n: int,
 
 
 def _core_beyond_drift(predict, diff, space, hyp: Hypotheses, q: int, dof: int,
-                       false_alarm: float, held: tuple[str, ...]) -> float | None:
+                       false_alarm: float, held: tuple[str, ...],
+                       clean_F: np.ndarray | None = None) -> float | None:
     """Ask whether the core beats drift beyond the bounds.
 
     The null refitted with each ``held`` nuisance's range widened (priors kept;
@@ -301,9 +303,11 @@ def _core_beyond_drift(predict, diff, space, hyp: Hypotheses, q: int, dof: int,
     (``MoistureBound.beyond_decay_m``; ``ChangePredictor.with_end_decay``: a front 6 in
     deep, not 2, when nothing is recorded), under both noises (``fit_hypotheses``): F of
     the core against it when the change is still beyond that drift at the stated chance
-    (H0's noise: ``decision.is_significant``) and still large (H1's noise:
-    ``decision.is_large``), else None. A core fit beside a nuisance held at its bound is
-    told apart from that drift only when no drift that large explains the change.
+    (H0's noise: ``decision.is_significant`` of ``decision.decided_chance``, measured
+    against the calibration's ``clean_F`` when one is given: a wider H0 leaves a clean
+    bat a smaller F, so F's own clean re-tests bound its chance) and still large (H1's
+    noise: ``decision.is_large``), else None. A core fit beside a nuisance held at its
+    bound is told apart from that drift only when no drift that large explains the change.
     """
     relaxed = replace(space, bounds=space.bounds.relaxed(
         BEYOND_FACTOR, only=held, ranges=space.moisture.beyond_ranges()))
@@ -312,7 +316,8 @@ def _core_beyond_drift(predict, diff, space, hyp: Hypotheses, q: int, dof: int,
     wide = fit_null(deep, diff, relaxed, hyp.sigma_rel, x0=hyp.null.x)
     F, p = nested_f(wide.rss, min(hyp.full.rss, hyp.null.rss), q, dof)
     wide_h0 = fit_null(deep, diff, relaxed, hyp.sigma_h0, x0=hyp.null_h0.x)
-    _, p_h0 = nested_f(wide_h0.rss, min(hyp.full_h0.rss, hyp.null_h0.rss), q, dof)
+    F_h0, p_h0 = nested_f(wide_h0.rss, min(hyp.full_h0.rss, hyp.null_h0.rss), q, dof)
+    p_h0 = decided_chance(F_h0, p_h0, clean_F, false_alarm)[0]
     return F if is_significant(p_h0, false_alarm) and is_large(F, p, false_alarm) else None
 
 
@@ -364,7 +369,8 @@ enough for the two to be one substance (a layer's fitted ends move by about an i
 
 def weigh_evidence(predict: ChangePredictor, diff: Differences, space: ParamSpace,
                    hyp: Hypotheses, test: NestedTest, false_alarm: float,
-                   dlnw: float | None) -> tuple[Evidence, KindFits | None]:
+                   dlnw: float | None, clean_F: np.ndarray | None = None,
+                   ) -> tuple[Evidence, KindFits | None]:
     """Gather what the decision reads, running only the checks its rules need.
 
     When the change is significant, every kind is fitted and the best read
@@ -389,6 +395,9 @@ def weigh_evidence(predict: ChangePredictor, diff: Differences, space: ParamSpac
         The significance level.
     dlnw : float or None
         ln(W_retest / W_registered), None when unknown.
+    clean_F : numpy.ndarray or None
+        The clean re-tests' F of a stored calibration of the bat's model: the chance the
+        decision reads is measured on them (``decision.decided_chance``); None: nominal.
 
     Returns
     -------
@@ -397,7 +406,10 @@ def weigh_evidence(predict: ChangePredictor, diff: Differences, space: ParamSpac
     kinds : KindFits or None
         Every kind's fit and the finding, when the change is significant.
     """
-    significant = is_significant(test.p_value, false_alarm)
+    p_decided, decided_on = decided_chance(test.F, test.p_value, clean_F, false_alarm)
+    # a change the screen passed over (``families_needed``: nominal chance 5 % or more) has
+    # no kind read; no calibration makes it significant (one would sit far below nominal)
+    significant = is_significant(p_decided, false_alarm) and hyp.kinds is not None
     large = is_large(test.F_fit, test.p_fit, false_alarm)
     grip = _grip_in_null(hyp.null, test.n)
     kinds = finding = None
@@ -413,14 +425,15 @@ def weigh_evidence(predict: ChangePredictor, diff: Differences, space: ParamSpac
         large=large, F_fit=test.F_fit, finding=finding,
         finding_text="" if finding is None else describe(finding),
         held_null=tuple(NullBounds.held(hyp.null)), held_core=held_core, dlnw=dlnw,
-        grip=grip)
+        grip=grip, decided_on=decided_on)
     if significant:
         uniform = _uniform_explanation(predict, diff, space, hyp, test.q, test.dof,
                                        false_alarm)
         evidence = replace(evidence, uniform=uniform)
         if evidence.supported and evidence.held_core and uniform is None:
             evidence = replace(evidence, F_wide=_core_beyond_drift(
-                predict, diff, space, hyp, test.q, test.dof, false_alarm, held_core))
+                predict, diff, space, hyp, test.q, test.dof, false_alarm, held_core,
+                clean_F))
     elif evidence.held_null:
         evidence = replace(evidence, drift_beyond_bounds=_bounds_matter(
             predict, diff, space, hyp, test.n))

@@ -160,7 +160,7 @@ def inspect_retest(
     baseline_temperature_c: float | None = None,
     baseline_sensor_mass_kg: float | None = None, fill_modulus_ratio: float = 0.0,
     n_starts: int = 2, min_mac: float = 0.8, with_map: bool = True,
-    moisture: MoistureBound = NOMINAL,
+    moisture: MoistureBound = NOMINAL, clean_F: np.ndarray | None = None,
 ) -> Verdict:
     """Judge a re-test of a bat against its baseline test and reference (module docstring).
 
@@ -190,6 +190,10 @@ def inspect_retest(
         Compute the MSSO element map a report draws (``details.msso``; same verdict).
     moisture : MoistureBound
         H0's moisture as the tests' records bound it (``moisture_bounds``; NOMINAL: none).
+    clean_F : numpy.ndarray or None
+        F of the clean re-tests a stored calibration of the bat's model holds: the decision
+        reads the chance measured on them (``decision.decided_chance``); None: the F
+        distribution's.
 
     Returns
     -------
@@ -218,7 +222,8 @@ def inspect_retest(
                        float(retest.sensor_x_m - baseline.sensor_x_m), moisture)
     hyp = fit_hypotheses(predict, diff, space, n_starts)
     test = nested_test(diff, hyp)
-    evidence, kinds = weigh_evidence(predict, diff, space, hyp, test, false_alarm, dlnw)
+    evidence, kinds = weigh_evidence(predict, diff, space, hyp, test, false_alarm, dlnw,
+                                     clean_F)
     evidence, robust = _robustness(predict, diff, space, hyp, kinds, evidence, false_alarm,
                                    list(identity.labels), baseline.x_m)
     altered, reasons = decide(evidence)
@@ -237,7 +242,8 @@ def inspect_retest(
                            hyp.sigma_rel, diff.sigma_lnf, region)
     record = replace(fit_evidence(diff, space, hyp, test, evidence, reading, kinds, altered,
                                   factors.beta_shear, offset, msso), F_fit=float(test.F_fit),
-                     leave_one_out=robust.to_json_dict(), modes_left_out=identity.notes)
+                     leave_one_out=robust.to_json_dict(), modes_left_out=identity.notes,
+                     decided_on=evidence.decided_on)
     return Verdict(
         altered=altered, confidence=1.0 - test.p_value, false_alarm_rate=false_alarm,
         statistic=float(test.F),
@@ -305,7 +311,8 @@ def inspect(profile: Profile, reference: BatReference, baseline: MeasuredModes,
             retest: MeasuredModes, false_alarm: float = 0.01,
             conditions: RetestConditions | None = None,
             registered: RetestConditions | None = None, with_map: bool = True,
-            retest_profile: CaliperSurvey | None = None) -> Verdict:
+            retest_profile: CaliperSurvey | None = None,
+            clean_F: np.ndarray | None = None) -> Verdict:
     """Judge a re-test against the bat's reference: the method's one entry.
 
     Parameters
@@ -330,6 +337,9 @@ def inspect(profile: Profile, reference: BatReference, baseline: MeasuredModes,
         Compute the MSSO element map for the evidence (``inspect_retest``).
     retest_profile : CaliperSurvey or None
         The re-test's caliper profile, joined with the verdict (``caliper_verdict``).
+    clean_F : numpy.ndarray or None
+        F of a stored calibration's clean re-tests of the bat's model: the decision's chance
+        is measured on them (``inspect_retest``); None: the F distribution's.
 
     Returns
     -------
@@ -343,6 +353,7 @@ def inspect(profile: Profile, reference: BatReference, baseline: MeasuredModes,
                              conditions=conditions, registered_weight_kg=reg.weight_kg,
                              baseline_temperature_c=reg.temperature_c,
                              baseline_sensor_mass_kg=reg.sensor_mass_kg, with_map=with_map,
-                             moisture=moisture_bound(reg, conditions, profile))
+                             moisture=moisture_bound(reg, conditions, profile),
+                             clean_F=clean_F)
     verdict = with_calipers(verdict, profile, retest_profile, reference.rho_kg_m3)
     return with_plane_split(verdict, profile, reference, baseline, retest)
