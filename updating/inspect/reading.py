@@ -235,7 +235,8 @@ def fit_evidence(diff: Differences, space: ParamSpace, hyp: Hypotheses, test: Ne
         local_change=dict(zip(("start_in", "length_in", "mass_change_rel",
                                "stiffness_change_rel"), map(float, full.x[N_NULL:]),
                               strict=True)),
-        kind_scores={} if kinds is None else {k: float(v) for k, v in kinds.scores.items()})
+        kind_scores={} if kinds is None else {k: float(v) for k, v in kinds.scores.items()},
+        decided_on=evidence.decided_on)
 
 
 def _element_source(family: str | None) -> str:

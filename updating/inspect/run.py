@@ -157,10 +157,9 @@ def inspect_retest(
     profile: Profile, reference: BatReference, baseline: MeasuredModes,
     retest: MeasuredModes, false_alarm: float = 0.01, *,
     conditions: RetestConditions | None = None, registered_weight_kg: float | None = None,
-    baseline_temperature_c: float | None = None,
-    baseline_sensor_mass_kg: float | None = None, fill_modulus_ratio: float = 0.0,
-    n_starts: int = 2, min_mac: float = 0.8, with_map: bool = True,
-    moisture: MoistureBound = NOMINAL, clean_F: np.ndarray | None = None,
+    baseline_temperature_c: float | None = None, baseline_sensor_mass_kg: float | None = None,
+    fill_modulus_ratio: float = 0.0, n_starts: int = 2, min_mac: float = 0.8,
+    with_map: bool = True, moisture: MoistureBound = NOMINAL, clean_F: np.ndarray | None = None,
 ) -> Verdict:
     """Judge a re-test of a bat against its baseline test and reference (module docstring).
 
@@ -191,9 +190,8 @@ def inspect_retest(
     moisture : MoistureBound
         H0's moisture as the tests' records bound it (``moisture_bounds``; NOMINAL: none).
     clean_F : numpy.ndarray or None
-        F of the clean re-tests a stored calibration of the bat's model holds: the decision
-        reads the chance measured on them (``decision.decided_chance``); None: the F
-        distribution's.
+        A calibration's clean re-tests' F: the decision's chance is measured on them
+        (``decision.decided_chance``); None: the F distribution's.
 
     Returns
     -------
@@ -222,8 +220,7 @@ def inspect_retest(
                        float(retest.sensor_x_m - baseline.sensor_x_m), moisture)
     hyp = fit_hypotheses(predict, diff, space, n_starts)
     test = nested_test(diff, hyp)
-    evidence, kinds = weigh_evidence(predict, diff, space, hyp, test, false_alarm, dlnw,
-                                     clean_F)
+    evidence, kinds = weigh_evidence(predict, diff, space, hyp, test, false_alarm, dlnw, clean_F)
     evidence, robust = _robustness(predict, diff, space, hyp, kinds, evidence, false_alarm,
                                    list(identity.labels), baseline.x_m)
     altered, reasons = decide(evidence)
@@ -236,14 +233,11 @@ def inspect_retest(
     # 6. the MSSO map, with the accepted model's drift (the null's scales would absorb a core)
     ps = reading.fit.params
     region = finding.region_m if altered else None
-    msso = ElementMap()
-    if with_map:
-        msso = element_map(profile, reference, baseline, retest, pairs, ps, offset,
-                           hyp.sigma_rel, diff.sigma_lnf, region)
+    msso = element_map(profile, reference, baseline, retest, pairs, ps, offset, hyp.sigma_rel,
+                       diff.sigma_lnf, region) if with_map else ElementMap()
     record = replace(fit_evidence(diff, space, hyp, test, evidence, reading, kinds, altered,
                                   factors.beta_shear, offset, msso), F_fit=float(test.F_fit),
-                     leave_one_out=robust.to_json_dict(), modes_left_out=identity.notes,
-                     decided_on=evidence.decided_on)
+                     leave_one_out=robust.to_json_dict(), modes_left_out=identity.notes)
     return Verdict(
         altered=altered, confidence=1.0 - test.p_value, false_alarm_rate=false_alarm,
         statistic=float(test.F),
