@@ -17,11 +17,16 @@ from dataclasses import replace
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from scipy.optimize import lsq_linear
 
 from batlab.pipeline.records import verdict_record
 from batlab.registry.records import decode_modes, encode_modes
 from updating.inspect.finding import Finding
 from updating.inspect.plane_split import (
+    RATIO_DRIFT,
+    _edge_fits,
     _patterns,
     read_plane_split,
     split_model,
@@ -175,3 +180,29 @@ def test_the_registry_record_keeps_the_reading_under_details():
     stored = json.loads(json.dumps(rec, allow_nan=False))["details"]["plane_split"]
     assert len(stored["pairs"]) == len(s.pairs) and stored["level"] == 1e-3
     assert stored["significant"] is False and stored["notes"] == list(s.notes)
+
+
+@settings(max_examples=40, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1), n=st.integers(4, 8), collinear=st.booleans(),
+       scale=st.floats(0.5, 60.0))
+def test_the_edge_fits_are_the_bounded_least_squares_optimum(seed, n, collinear, scale):
+    """Where the fit without bounds leaves the planes' drift outside its square, the edge
+    fits every region at once reach scipy's bounded least squares (lsq_linear) or a lower
+    chi^2, with its amplitude; the two planes' shear patterns nearly collinear, as a bat's
+    are, among the draws."""
+    rng = np.random.default_rng(seed)
+    S = scale * rng.standard_normal((n, 2))
+    if collinear:
+        S[:, 1] = -0.97 * S[:, 0] + 0.05 * scale * rng.standard_normal(n)
+    P, d = rng.standard_normal((12, n)), rng.standard_normal(n) * rng.uniform(0.01, 10.0)
+    free = np.array([np.linalg.lstsq(np.column_stack([p, S]), d, rcond=None)[0] for p in P])
+    out = np.any(np.abs(free[:, 1:]) > RATIO_DRIFT, axis=1)
+    chi, amp = _edge_fits(d, S, P[out], RATIO_DRIFT)
+    for i, p in enumerate(P[out]):
+        A = np.column_stack([p, S])
+        x = lsq_linear(A, d, bounds=(np.r_[-np.inf, -RATIO_DRIFT, -RATIO_DRIFT],
+                                     np.r_[np.inf, RATIO_DRIFT, RATIO_DRIFT])).x
+        ref = float(np.sum((d - A @ x) ** 2))
+        assert chi[i] <= ref * (1 + 1e-9) + 1e-12
+        assert chi[i] >= ref * (1 - 1e-4) - 1e-12  # lsq_linear stops within its tolerance
+        assert amp[i] == pytest.approx(x[0], rel=2e-3, abs=1e-9)

@@ -298,8 +298,8 @@ def _bounded_fit(A: np.ndarray, d: np.ndarray, n_free: int) -> tuple[float, np.n
 def _flat_fits(d: np.ndarray, S: np.ndarray, P: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Return (chi^2_1, a) per region of the whitened splits: a P + S u, |u| <= RATIO_DRIFT.
 
-    The unbounded fit for every region at once (S projected out); the bounded one
-    (``_bounded_fit``) where it leaves u outside the bounds.
+    The unbounded fit for every region at once (S projected out); where it leaves u outside
+    the bounds, the bounded one on the bounds' edges (``_edge_fits``), every region at once.
     """
     Q, _ = np.linalg.qr(S)
     d_perp, P_perp = d - Q @ (Q.T @ d), P - (P @ Q) @ Q.T
@@ -309,10 +309,56 @@ def _flat_fits(d: np.ndarray, S: np.ndarray, P: np.ndarray) -> tuple[np.ndarray,
     u = np.linalg.lstsq(S, (d[None, :] - amp[:, None] * P).T, rcond=None)[0].T
     chi = np.sum((d[None, :] - amp[:, None] * P - u @ S.T) ** 2, axis=1)
     chi[~ok] = np.inf
-    for i in np.flatnonzero(ok & np.any(np.abs(u) > RATIO_DRIFT, axis=1)):
-        chi[i], x = _bounded_fit(np.column_stack([P[i], S]), d, 1)
-        amp[i] = x[0]
+    out = np.flatnonzero(ok & np.any(np.abs(u) > RATIO_DRIFT, axis=1))
+    chi[out], amp[out] = _edge_fits(d, S, P[out], RATIO_DRIFT)
     return chi, amp
+
+
+def _edge_fits(d: np.ndarray, S: np.ndarray, P: np.ndarray,
+               bound: float) -> tuple[np.ndarray, np.ndarray]:
+    """(chi^2, a) per row of P of d ~ a P + S u, a free, u on the edge of |u_j| <= bound.
+
+    Where the fit without bounds leaves u outside the square, the bounded fit, a convex
+    quadratic in u once a is eliminated (d and S projected off the row's pattern p:
+    R = I - p p^T / |p|^2), has its minimum on the square's edge: on each side the other
+    coordinate's one-dimensional least squares clipped to the side (the corners included).
+    The least of the four sides, every row at once; exact, as ``lsq_linear`` is to its
+    tolerance. S has the two planes' columns.
+
+    Parameters
+    ----------
+    d : numpy.ndarray
+        (n,) the whitened changes of the splits.
+    S : numpy.ndarray
+        (n, 2) the two planes' drift patterns.
+    P : numpy.ndarray
+        (N, n) the flats' patterns, none of them zero.
+    bound : float
+        The bound on |u_j| (``RATIO_DRIFT``).
+
+    Returns
+    -------
+    chi2, amplitude : numpy.ndarray
+        (N,) each.
+    """
+    def off_p(v: np.ndarray) -> np.ndarray:  # (N, n): v projected off each row's pattern
+        return v[None, :] - P * ((P @ v) / pp)[:, None]
+
+    pp = np.sum(P**2, axis=1)
+    Rd, RS = off_p(d), [off_p(S[:, j]) for j in range(2)]
+    best_chi = np.full(P.shape[0], np.inf)
+    best_u = np.zeros((P.shape[0], 2))
+    for j, side in ((0, -bound), (0, bound), (1, -bound), (1, bound)):
+        k = 1 - j
+        rest = Rd - side * RS[j]
+        norm = np.sum(RS[k] ** 2, axis=1)
+        uk = np.clip(np.sum(RS[k] * rest, axis=1) / np.where(norm > 0, norm, 1.0),
+                     -bound, bound)
+        chi = np.sum((rest - uk[:, None] * RS[k]) ** 2, axis=1)
+        better = chi < best_chi
+        best_chi[better] = chi[better]
+        best_u[better, j], best_u[better, k] = side, uk[better]
+    return best_chi, (P @ d - np.sum(P * (best_u @ S.T), axis=1)) / pp
 
 
 def _noncentrality(P: np.ndarray, S: np.ndarray) -> np.ndarray:
