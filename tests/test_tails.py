@@ -7,7 +7,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 import scipy.stats
-from hypothesis import given, settings
+from hypothesis import example, given, settings
 from hypothesis import strategies as st
 
 from updating.tails import chi2_isf, chi2_ppf, chi2_sf, f_sf, fit_pareto
@@ -59,17 +59,27 @@ def test_the_inspection_imports_no_scipy_stats():
 
 
 @settings(max_examples=25, deadline=None)
+@example(shape=-0.625, scale=1.5, n=30, seed=0)  # scipy below -1
+@example(shape=-0.5, scale=1.0, n=30, seed=0)  # ours was at the bound
 @given(shape=st.floats(-0.7, 1.0), scale=st.floats(0.1, 10.0), n=st.integers(30, 400),
        seed=st.integers(0, 2**16))
 def test_the_pareto_fit_is_the_maximum_scipy_stats_seeks(shape, scale, n, seed):
     """A generalized Pareto sample's fit reaches the likelihood of scipy.stats.genpareto's
-    own fit (location 0) or a higher one, and their tails beyond the sample agree."""
+    own fit (location 0) or a higher one, and their tails beyond the sample agree. Where
+    scipy's fit goes below a shape of -1 the likelihood has no maximum (it grows without
+    bound as the endpoint nears the largest excess): ours stops at -1, and its endpoint
+    covers the sample."""
     y = scipy.stats.genpareto.rvs(shape, scale=scale, size=n, random_state=seed)
     fit = fit_pareto(y)
     c, _, s = scipy.stats.genpareto.fit(y, floc=0.0)
     theirs = float(np.sum(scipy.stats.genpareto.logpdf(y, c, 0.0, s)))
     ours = float(np.sum(scipy.stats.genpareto.logpdf(y, fit.shape, 0.0, fit.scale)))
     assert ours == pytest.approx(fit.loglik, rel=1e-9, abs=1e-9)
+    assert fit.shape >= -1.0 - 1e-9
+    if fit.shape < 0:
+        assert fit.scale / -fit.shape >= float(np.max(y)) * (1 - 1e-12)
+    if c <= -1.0:
+        return
     assert ours >= theirs - 1e-6 * abs(theirs)
     if abs(ours - theirs) < 1e-6 * abs(theirs):  # the same maximum: the same tail
         far = float(np.max(y)) * 1.2
