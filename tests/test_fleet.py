@@ -153,6 +153,10 @@ def test_calibrate_on_a_local_cluster_resumed_the_same(capsys, tmp_path):
                                                           stored["record_seq"])
     assert cal["false_alarm_upper95"] == more["false_alarm_upper95"]
     assert verdict["code"] == code_version()
+    # 3 re-tests cannot show a chance below 0.1 %: stated from them, decided on the nominal
+    assert verdict["chance"]["decided_on"] == "nominal"
+    assert any("3 re-tests are too few to measure a chance as small as the decision's level"
+               in r for r in verdict["reasons"]), verdict["reasons"]
     three[2]["F"] = 2.0 * (three[2]["F"] or 1.0) + 1.0  # as if another seed had made it
     rows.write_text("".join(json.dumps(r) + "\n" for r in three))
     code = main(["fleet", "calibrate", "--profile", str(BUILTIN / "profile.csv"), "--meta",
