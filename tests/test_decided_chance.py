@@ -7,7 +7,6 @@ where it bounds the measured decision; the words say which chance decided."""
 from __future__ import annotations
 
 import math
-from types import SimpleNamespace
 
 import numpy as np
 import pytest
@@ -55,19 +54,15 @@ def test_f_isf_inverts_the_survival_function():
             assert f_sf(f_isf(p, q, dof), q, dof) == pytest.approx(p, rel=1e-8)
 
 
-def _calibration(null):
-    return SimpleNamespace(null={"F": list(null)}, statistic="F")
-
-
 def test_the_rows_bound_the_measured_decision_only_where_it_is_the_stricter():
     """The nominal decision's alarms include the measured one's exactly when the measured
     cut is at or past the F distribution's critical value at the inspection's dof."""
     crit = f_isf(CLEAR_LEVEL, 4, 95)  # 5.04
     heavy = np.r_[np.full(3, crit + 1.0), np.linspace(0.0, 1.0, 2997)]  # cut at crit + 1
     light = np.r_[np.full(3, crit - 1.0), np.linspace(0.0, 1.0, 2997)]  # cut below crit
-    assert rows_bound_decision(_calibration(heavy), 0.01, (4, 95))
-    assert not rows_bound_decision(_calibration(light), 0.01, (4, 95))
-    assert not rows_bound_decision(_calibration(heavy), 0.01, None)
+    assert rows_bound_decision(heavy, 0.01, (4, 95))
+    assert not rows_bound_decision(light, 0.01, (4, 95))
+    assert not rows_bound_decision(heavy, 0.01, None)
 
 
 def test_the_words_say_which_chance_decided():

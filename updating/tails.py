@@ -107,6 +107,15 @@ def measured_chance(statistic: float, null) -> MeasuredChance:
     return MeasuredChance((1 + exceeding) / (values.size + 1), exceeding, int(values.size))
 
 
+def can_measure_below(n: int, level: float) -> bool:
+    """Tell whether n stored re-tests can show a measured chance below ``level``.
+
+    The smallest chance they show is 1 / (n + 1) (``measured_chance``); it is below
+    ``level`` when level (n + 1) > 1: from n = 1,000 at 1e-3.
+    """
+    return level * (n + 1) > 1.0
+
+
 def measured_cut(null, level: float) -> float:
     """Return the value past which a statistic's measured chance is below ``level``.
 
@@ -136,9 +145,9 @@ def measured_cut(null, level: float) -> float:
     inf
     """
     values = np.asarray(null, dtype=float).ravel()
-    k = int(np.ceil(level * (values.size + 1) - 1.0)) - 1
-    if k < 0:
+    if not can_measure_below(values.size, level):
         return float("inf")
+    k = int(np.ceil(level * (values.size + 1) - 1.0)) - 1
     finite = np.sort(values[np.isfinite(values)])[::-1]
     return float(finite[k]) if k < finite.size else float("-inf")
 

@@ -36,7 +36,7 @@ import numpy as np
 
 from updating.model.units import IN_TO_M
 
-__all__ = ["calibration_for", "clean_statistics", "model_name", "statement", "stated"]
+__all__ = ["calibration_for", "model_name", "statement", "stated"]
 
 STATISTIC = "F"
 """The statistic a calibration stores and the chance ranks by (the verdict's ``statistic``)."""
@@ -95,16 +95,7 @@ def null_statistics(calibration) -> np.ndarray:
     return np.array([np.nan if v is None else float(v) for v in values], dtype=float)
 
 
-def clean_statistics(calibration) -> np.ndarray | None:
-    """Return the clean re-tests' F the decision measures its chance on (None: nominal).
-
-    ``null_statistics`` of a calibration, None without one (``updating.inspect.inspect``'s
-    ``clean_F``).
-    """
-    return None if calibration is None else null_statistics(calibration)
-
-
-def rows_bound_decision(calibration, level: float, dof) -> bool:
+def rows_bound_decision(null: np.ndarray, level: float, dof) -> bool:
     """Tell whether a calibration's false-alarm count bounds the measured decision's.
 
     Its re-tests were judged on the nominal chance. The decision's outcome "altered" needs
@@ -116,8 +107,8 @@ def rows_bound_decision(calibration, level: float, dof) -> bool:
 
     Parameters
     ----------
-    calibration : StoredCalibration
-        The calibration the decision read.
+    null : numpy.ndarray
+        The clean re-tests' F of the calibration the decision read (``null_statistics``).
     level : float
         The decision's false-alarm rate.
     dof : sequence of int or None
@@ -133,14 +124,7 @@ def rows_bound_decision(calibration, level: float, dof) -> bool:
     if not dof or min(int(d) for d in dof) < 1:
         return False
     alpha = min(CLEAR_LEVEL, level)
-    return measured_cut(null_statistics(calibration), alpha) >= f_isf(alpha, int(dof[0]),
-                                                                        int(dof[1]))
-
-
-def decided_on(verdict) -> str:
-    """Return where a verdict's decision read its chance ("calibration" or "nominal")."""
-    fit = None if verdict.details is None else verdict.details.fit
-    return "nominal" if fit is None else str(getattr(fit, "decided_on", "nominal"))
+    return measured_cut(null, alpha) >= f_isf(alpha, int(dof[0]), int(dof[1]))
 
 
 def unusable(calibration, model: str | None) -> str | None:
@@ -196,7 +180,8 @@ def statement(verdict, model: str | None, calibration=None,
         says which chance the decision read (module docstring).
     """
     nominal = nominal_p(verdict)
-    decision = decided_on(verdict)
+    fit = None if verdict.details is None else verdict.details.fit
+    decision = "nominal" if fit is None else fit.decided_on
     level = float(verdict.false_alarm_rate)
     stat = float(verdict.statistic) if verdict.statistic is not None else math.nan
     if calibration is not None:
@@ -227,9 +212,8 @@ def statement(verdict, model: str | None, calibration=None,
               "model": model, "beyond_measured": exceeding == 0 if exceeding is not None
               else None, "extrapolated": tail, "decided_on": decision}
     run_level = calibration.summary.get("false_alarm")
-    fit = None if verdict.details is None else verdict.details.fit
     if decision == "calibration" and not rows_bound_decision(
-            calibration, level, None if fit is None else fit.dof):
+            null, level, None if fit is None else fit.dof):
         rate = {"source": "unmeasured", "false_alarms": None, "n": None, "measured": None,
                 "upper95": None, "level": level, "model": model,
                 "unmeasured": f"the calibration of bat model {model} judged its re-tests on "
@@ -253,7 +237,7 @@ def calibration_for(conn, model: str | None, unmeasured_why: str | None = None):
     The registry's latest of the model, unless a key record there revoked or retired the
     key that signed an imported one; else the one batlab ships
     (``registry.calibration_files.shipped_calibration``), if any. Looked up before the
-    inspection: its decision reads the chance measured on it (``clean_statistics``) and
+    inspection: its decision reads the chance measured on it (``null_statistics``) and
     ``stated`` states it.
 
     Parameters

@@ -17,7 +17,7 @@ from pathlib import Path
 
 import numpy as np
 
-from batlab.pipeline.chance import calibration_for, clean_statistics, model_name, stated
+from batlab.pipeline.chance import calibration_for, model_name, null_statistics, stated
 from batlab.pipeline.files import (
     Progress,
     numeric_failure,
@@ -221,7 +221,8 @@ def judge(case: InspectionCase, false_alarm: float,
     """
     verdict = inspect(case.profile, case.reference, case.baseline.modes, case.retest.modes,
                       false_alarm, conditions, case.registered, with_map=with_map,
-                      retest_profile=case.survey, clean_F=clean_statistics(calibration))
+                      retest_profile=case.survey,
+                      clean_F=None if calibration is None else null_statistics(calibration))
     return InspectionResult(case.serial, case.profile, case.reference, case.baseline,
                             case.retest, verdict, case.reference_seq, case.weight_kg,
                             case.retest_content, conditions, case.model,

@@ -63,7 +63,7 @@ import numpy as np
 from updating.inspect.finding import Finding, describe
 from updating.inspect.kind_table import UNEXPLAINED, Kind, kind_of
 from updating.inspect.words import chance, what_to_check
-from updating.tails import measured_chance, measured_cut
+from updating.tails import can_measure_below, measured_chance
 
 CLEAR_LEVEL = 1e-3
 """The smallest chance of the nested test (with the noise H0 leaves, which on unaltered bats
@@ -149,7 +149,7 @@ def decided_chance(F: float, p_nominal: float, clean_F: np.ndarray | None,
     (0.0002, 'nominal')
     """
     if (clean_F is None or not np.isfinite(F)
-            or np.isinf(measured_cut(clean_F, min(CLEAR_LEVEL, false_alarm)))):
+            or not can_measure_below(np.size(clean_F), min(CLEAR_LEVEL, false_alarm))):
         return float(p_nominal), "nominal"
     return measured_chance(F, clean_F).value, "calibration"
 
